@@ -1,0 +1,4 @@
+//! `restir`: the domain-agnostic GRIS / ReSTIR core (DESIGN §3).
+
+pub mod rng;
+pub mod stats;

@@ -1,0 +1,1 @@
+//! Statistics for unbiasedness tests (DESIGN §3, "Statistics").

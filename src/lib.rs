@@ -1,0 +1,6 @@
+//! reshift: ReSTIR with pluggable shift mappings, built around subsurface scattering.
+//!
+//! This facade re-exports the workspace crates; see `docs/architecture.md` for the layout.
+
+pub use restir;
+pub use sss;

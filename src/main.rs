@@ -1,0 +1,3 @@
+fn main() {
+    println!("reshift: the CLI is not built yet");
+}

@@ -1,0 +1,12 @@
+//! `sss`: the subsurface-scattering path space (DESIGN §4): diffusion profiles, materials,
+//! geometry and BVH, scenes, lights and camera, BSSRDF importance sampling, and the integrators
+//! (path-tracing baseline, progressive reference, volumetric random walk).
+
+pub mod error;
+pub mod geometry;
+pub mod material;
+pub mod profile;
+pub mod random_walk;
+pub mod scene;
+
+pub use error::InputError;

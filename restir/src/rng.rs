@@ -28,7 +28,12 @@ pub fn splitmix64(x: u64) -> u64 {
 
 impl StreamKey {
     pub const fn new(pixel: u32, frame: u32, pass: u32, purpose: u32) -> Self {
-        Self { pixel, frame, pass, purpose }
+        Self {
+            pixel,
+            frame,
+            pass,
+            purpose,
+        }
     }
 
     /// The PCG32 `(state, stream)` pair for this key under the run seed `seed`.

@@ -1,0 +1,105 @@
+//! Check 4: the resampling MIS weights of a shift + scheme form a partition of unity.
+
+use super::{CheckName, CheckReport, PASS_CHECK};
+use crate::mis::{Bias, MAX_DOMAINS, MisScheme};
+use crate::rng::StreamKey;
+use crate::shift::{CandidateSampler, Domain, Shift};
+
+/// A receiver, the domains it reuses from, their confidences (`confidences[0]` = receiver's),
+/// and the points of the receiver to test, drawn by `sampler`.
+pub struct MisCase<'a, D: Domain> {
+    pub receiver: &'a D,
+    pub others: Vec<&'a D>,
+    pub confidences: Vec<f32>,
+    pub sampler: &'a dyn CandidateSampler<D>,
+    pub samples: usize,
+    pub seed: u64,
+}
+
+/// Check 4: at every sampled `y` with `p̂_r(y) > 0`,
+/// (a) `m_j(y) = 0` for every domain `j` whose back-shift `T_{r→j}(y)` fails, and
+/// (b) `Σ_j m_j(y) = 1` within `tolerance`, summed over the domains that can produce `y`
+///     (`p̂_{←j}(y) > 0`): weight given to a domain that cannot produce `y` is lost, so the
+///     estimate darkens. This is how `1/M` fails on differing supports.
+pub fn partition_of_unity<D, T, M>(
+    shift: &T,
+    mis: &M,
+    case: &MisCase<'_, D>,
+    tolerance: f64,
+) -> CheckReport
+where
+    D: Domain,
+    T: Shift<D> + ?Sized,
+    M: MisScheme + ?Sized,
+{
+    let n = case.others.len() + 1;
+    if n > MAX_DOMAINS || case.confidences.len() != n {
+        let note = format!(
+            "{n} domains with {} confidences (at most {MAX_DOMAINS})",
+            case.confidences.len()
+        );
+        return CheckReport::new(
+            CheckName::PartitionOfUnity,
+            false,
+            &[("domains", n as f64)],
+            note,
+        );
+    }
+    let key = StreamKey::new(0, 0, PASS_CHECK, 4);
+    let mut rng = key.stream(case.seed);
+    let (mut tested, mut weight_where_failed, mut max_error) = (0usize, 0usize, 0.0f64);
+    let mut note = String::new();
+    for _ in 0..case.samples {
+        let Some((y, _)) = case.sampler.sample(case.receiver, &mut rng) else {
+            continue;
+        };
+        let mut targets = [0.0f32; MAX_DOMAINS];
+        targets[0] = case.receiver.target(&y);
+        if targets[0] <= 0.0 {
+            continue;
+        }
+        tested += 1;
+        let mut failed = [false; MAX_DOMAINS];
+        for (j, other) in case.others.iter().enumerate() {
+            targets[j + 1] = shift.target_from(&y, case.receiver, other);
+            failed[j + 1] = shift.shift(&y, case.receiver, other).is_err();
+        }
+        let mut covered_sum = 0.0f64;
+        for j in 0..n {
+            let m = mis.weight(j, &targets[..n], &case.confidences);
+            if failed[j] && m != 0.0 {
+                weight_where_failed += 1;
+                if note.is_empty() {
+                    note = format!("m_{j} = {m:.4e} although T_(r→{j}) fails");
+                }
+            }
+            if targets[j] > 0.0 {
+                covered_sum += m as f64;
+            }
+        }
+        let error = (covered_sum - 1.0).abs();
+        if error > max_error {
+            max_error = error;
+            if error > tolerance && weight_where_failed == 0 {
+                note = format!("Σ m_j over domains that can produce y = {covered_sum:.6}");
+            }
+        }
+    }
+    if tested == 0 {
+        note = "no sample with p̂_r > 0: nothing was tested".into();
+    }
+    if mis.bias() != Bias::Unbiased {
+        note = format!("[{} declares: {}] {note}", mis.name(), mis.bias());
+    }
+    CheckReport::new(
+        CheckName::PartitionOfUnity,
+        tested > 0 && weight_where_failed == 0 && max_error <= tolerance,
+        &[
+            ("tested", tested as f64),
+            ("weight_where_shift_fails", weight_where_failed as f64),
+            ("max_sum_error", max_error),
+            ("tolerance", tolerance),
+        ],
+        note,
+    )
+}

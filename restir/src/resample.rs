@@ -1,0 +1,478 @@
+//! The resampling driver: candidate generation (RIS in one domain) and the GRIS combination of
+//! a canonical reservoir with neighbour reservoirs through any shift and MIS scheme
+//! [001 Alg. 2], streaming with no allocation.
+
+use std::fmt;
+
+use crate::mis::{MAX_DOMAINS, MisScheme};
+use crate::reservoir::{InvalidCandidate, Reservoir, Ris};
+use crate::rng::Stream;
+use crate::shift::{CandidateSampler, Domain, Shift};
+
+/// A reservoir together with the domain its sample lives in.
+pub struct Source<'a, D: Domain> {
+    pub domain: &'a D,
+    pub reservoir: &'a Reservoir<D::Sample>,
+}
+
+impl<D: Domain> Clone for Source<'_, D> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<D: Domain> Copy for Source<'_, D> {}
+
+/// Why a resampling step produced no reservoir.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ResampleError {
+    /// More than [`MAX_DOMAINS`] domains (receiver + neighbours) in one step.
+    TooManyDomains(usize),
+    /// A candidate sampler returned a density that is not finite and > 0.
+    BadPdf(f32),
+    /// A shift returned a Jacobian that is not finite and > 0 (it must return `Fail::Degenerate`).
+    BadJacobian { source: usize, jacobian: f32 },
+    /// A domain's target, a weight or a confidence was invalid; `source` is the domain index
+    /// (0 = receiver).
+    Candidate {
+        source: usize,
+        error: InvalidCandidate,
+    },
+}
+
+impl fmt::Display for ResampleError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::TooManyDomains(n) => {
+                write!(
+                    f,
+                    "{n} domains in one resampling step; at most {MAX_DOMAINS}"
+                )
+            }
+            Self::BadPdf(p) => write!(f, "candidate sampler returned pdf {p}; need finite > 0"),
+            Self::BadJacobian { source, jacobian } => {
+                write!(
+                    f,
+                    "shift from domain {source} returned Jacobian {jacobian}; need finite > 0"
+                )
+            }
+            Self::Candidate { source, error } => write!(f, "domain {source}: {error}"),
+        }
+    }
+}
+
+impl std::error::Error for ResampleError {}
+
+/// RIS of `count` fresh candidates in `domain` (identity shift, `m_i = 1/M`, `W_{X_i} = 1/p`,
+/// `c_i = 1`, so `c = M` [001 §2.2.2 (1)]). `count = 0` gives the empty reservoir.
+pub fn generate_candidates<D, C>(
+    domain: &D,
+    sampler: &C,
+    count: u32,
+    rng: &mut Stream,
+) -> Result<Reservoir<D::Sample>, ResampleError>
+where
+    D: Domain,
+    C: CandidateSampler<D> + ?Sized,
+{
+    let mut ris = Ris::new();
+    let inv_count = if count > 0 { 1.0 / count as f32 } else { 0.0 };
+    for _ in 0..count {
+        let drawn = sampler.sample(domain, rng);
+        let u = rng.next_f32();
+        let result = match drawn {
+            Some((x, pdf)) => {
+                if !(pdf.is_finite() && pdf > 0.0) {
+                    return Err(ResampleError::BadPdf(pdf));
+                }
+                let target = domain.target(&x);
+                // w_i = m_i p̂(x_i) W_{X_i} = p̂(x_i) / (M p(x_i))   [001 Eq. 6]
+                ris.update(x, target, inv_count * target / pdf, 1.0, u)
+            }
+            None => ris.skip(1.0),
+        };
+        result.map_err(|error| ResampleError::Candidate { source: 0, error })?;
+    }
+    Ok(ris.finish())
+}
+
+/// Combines the receiver's canonical reservoir with `neighbours` into the receiver's domain
+/// [001 Alg. 2], one uniform number per input from `rng`.
+///
+/// Weights follow DESIGN §9: `w_i = m_i(y_i) p̂_r(y_i) W_i J_i` with `y_i = T_{i→r}(x_i)`;
+/// `targets[j] = p̂_{←j}(y)` via [`Shift::target_from`], and `p̂_i(x_i) / J_i` for the
+/// sample's own domain. Confidences are used as given: cap them before the call.
+///
+/// Failure convention (seed 001's): a neighbour whose forward shift fails, or whose reservoir is
+/// empty, contributes weight 0 but its confidence is still added. This does not darken the
+/// estimate because the MIS weights of the other samples already give that domain
+/// `m_j(y) = 0` wherever its shift fails
+/// (test: `failed_forward_shifts_keep_confidence_and_do_not_darken`).
+pub fn resample<D, T, M>(
+    receiver: Source<'_, D>,
+    neighbours: &[Source<'_, D>],
+    shift: &T,
+    mis: &M,
+    rng: &mut Stream,
+) -> Result<Reservoir<D::Sample>, ResampleError>
+where
+    D: Domain,
+    T: Shift<D> + ?Sized,
+    M: MisScheme + ?Sized,
+{
+    let n = neighbours.len() + 1;
+    if n > MAX_DOMAINS {
+        return Err(ResampleError::TooManyDomains(n));
+    }
+    let domain_of = |j: usize| {
+        if j == 0 {
+            receiver.domain
+        } else {
+            neighbours[j - 1].domain
+        }
+    };
+    let mut confidences = [0.0f32; MAX_DOMAINS];
+    confidences[0] = receiver.reservoir.confidence;
+    for (c, nb) in confidences[1..n].iter_mut().zip(neighbours) {
+        *c = nb.reservoir.confidence;
+    }
+    let confidences = &confidences[..n];
+    let mut targets = [0.0f32; MAX_DOMAINS];
+    let mut ris = Ris::new();
+    let r = receiver.domain;
+
+    for i in 0..n {
+        let input = if i == 0 {
+            receiver.reservoir
+        } else {
+            neighbours[i - 1].reservoir
+        };
+        let u = rng.next_f32();
+        let wrap = |error| ResampleError::Candidate { source: i, error };
+        if !(input.ucw.is_finite() && input.ucw >= 0.0) {
+            return Err(wrap(InvalidCandidate::Ucw(input.ucw)));
+        }
+        let Some(x) = input.y else {
+            ris.skip(input.confidence).map_err(wrap)?;
+            continue;
+        };
+        let (y, jacobian, own_target) = if i == 0 {
+            (x, 1.0, None)
+        } else {
+            match shift.shift(&x, domain_of(i), r) {
+                Ok(s) => {
+                    if !(s.jacobian.is_finite() && s.jacobian > 0.0) {
+                        return Err(ResampleError::BadJacobian {
+                            source: i,
+                            jacobian: s.jacobian,
+                        });
+                    }
+                    (s.y, s.jacobian, Some(domain_of(i).target(&x) / s.jacobian))
+                }
+                Err(_) => {
+                    ris.skip(input.confidence).map_err(wrap)?;
+                    continue;
+                }
+            }
+        };
+        let target = r.target(&y);
+        if !(target.is_finite() && target >= 0.0) {
+            return Err(wrap(InvalidCandidate::Target(target)));
+        }
+        let m = if target > 0.0 && input.ucw > 0.0 {
+            let targets = &mut targets[..n];
+            targets.fill(0.0);
+            targets[0] = target;
+            if let Some(t) = own_target {
+                targets[i] = t;
+            }
+            if mis.needs_all_targets(i) {
+                for (j, t) in targets.iter_mut().enumerate().skip(1) {
+                    if j != i {
+                        *t = shift.target_from(&y, r, domain_of(j));
+                    }
+                }
+            }
+            mis.weight(i, targets, confidences)
+        } else {
+            0.0
+        };
+        // w_i = m_i(y_i) p̂_r(y_i) W_i J_i   [001 Eq. 6]
+        ris.update(
+            y,
+            target,
+            m * target * input.ucw * jacobian,
+            input.confidence,
+            u,
+        )
+        .map_err(wrap)?;
+    }
+    Ok(ris.finish())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mis::{ConfidenceOnly, DefensivePairwise, Gbh, Pairwise};
+    use crate::rng::StreamKey;
+    use crate::shift::{Fail, Shifted};
+    use crate::stats::{Summary, Verdict, equivalence};
+    use crate::toy::shifts::Translation;
+    use crate::toy::{LinearSampler, Point, Supports, ToyPixel};
+
+    /// δ on the relative bias, α (CI confidence 1 − α), and replicas of the tests below.
+    const DELTA: f64 = 0.03;
+    const ALPHA: f64 = 1e-3;
+    const N: usize = 20_000;
+
+    fn pixel(centre: [f32; 2]) -> ToyPixel {
+        ToyPixel {
+            centre,
+            ..ToyPixel::new(0, 0, 1, Supports::Equal)
+        }
+    }
+
+    fn verdict(estimates: &[f64], reference: f64) -> crate::stats::Equivalence {
+        equivalence(
+            &Summary::from_samples(estimates),
+            &Summary::exact(reference),
+            DELTA,
+            1.0 - ALPHA,
+        )
+    }
+
+    /// A sampler that draws uniformly but reports the linear density (a lying pdf).
+    struct LyingSampler;
+
+    impl CandidateSampler<ToyPixel> for LyingSampler {
+        fn sample(&self, _: &ToyPixel, rng: &mut Stream) -> Option<(Point, f32)> {
+            let x = [rng.next_f32(), rng.next_f32()];
+            Some((x, LinearSampler::density(&x)))
+        }
+        fn pdf(&self, _: &ToyPixel, x: &Point) -> f32 {
+            LinearSampler::density(x)
+        }
+    }
+
+    /// E[f(Y)·W] = ∫f for RIS of M = 1 and 4 candidates (N = 20 000, δ = 3%, α = 1e-3).
+    /// Negative control: a sampler whose reported pdf is not its density is found biased.
+    #[test]
+    fn candidate_ris_is_unbiased_and_a_lying_pdf_is_caught() {
+        let d = pixel([0.4, 0.6]);
+        let run = |sampler: &dyn CandidateSampler<ToyPixel>, m: u32| -> Vec<f64> {
+            (0..N)
+                .map(|i| {
+                    let mut rng = StreamKey::new(0, 0, 0, 0).stream(i as u64);
+                    let r = generate_candidates(&d, sampler, m, &mut rng).unwrap();
+                    assert_eq!(r.confidence, m as f32);
+                    r.y.map_or(0.0, |y| d.integrand(&y) as f64 * r.ucw as f64)
+                })
+                .collect()
+        };
+        for m in [1, 4] {
+            let good = verdict(&run(&LinearSampler, m), d.integrand_integral());
+            assert_eq!(good.verdict, Verdict::Unbiased, "M = {m}: {good}");
+            let bad = verdict(&run(&LyingSampler, m), d.integrand_integral());
+            assert_eq!(
+                bad.verdict,
+                Verdict::Biased,
+                "negative control, M = {m}: {bad}"
+            );
+        }
+    }
+
+    /// Seed 001's convention: a neighbour whose forward shift fails adds weight 0 but its
+    /// confidence. With translation by (0.35, −0.25) about half the neighbour's samples fail,
+    /// and the estimate stays unbiased under GBH, pairwise and defensive pairwise (N = 20 000,
+    /// δ = 3%, α = 1e-3): the other samples' MIS weights already give the failing domain 0.
+    /// Negative control: `1/M` weights in the same setup darken the estimate (CI below −δ).
+    #[test]
+    fn failed_forward_shifts_keep_confidence_and_do_not_darken() {
+        let receiver = pixel([0.3, 0.6]);
+        let neighbour = pixel([0.65, 0.35]);
+        let run = |mis: &dyn MisScheme| -> (Vec<f64>, usize) {
+            let mut failures = 0;
+            let estimates = (0..N)
+                .map(|i| {
+                    let key = |purpose| StreamKey::new(0, 0, 0, purpose).stream(i as u64);
+                    let canonical =
+                        generate_candidates(&receiver, &LinearSampler, 1, &mut key(0)).unwrap();
+                    let other =
+                        generate_candidates(&neighbour, &LinearSampler, 4, &mut key(1)).unwrap();
+                    if let Some(x) = other.y {
+                        failures += Translation.shift(&x, &neighbour, &receiver).is_err() as usize;
+                    }
+                    let r = resample(
+                        Source {
+                            domain: &receiver,
+                            reservoir: &canonical,
+                        },
+                        &[Source {
+                            domain: &neighbour,
+                            reservoir: &other,
+                        }],
+                        &Translation,
+                        mis,
+                        &mut key(2),
+                    )
+                    .unwrap();
+                    assert_eq!(r.confidence, 5.0);
+                    r.y.map_or(0.0, |y| receiver.integrand(&y) as f64 * r.ucw as f64)
+                })
+                .collect();
+            (estimates, failures)
+        };
+        let reference = receiver.integrand_integral();
+        for mis in [&Gbh as &dyn MisScheme, &Pairwise, &DefensivePairwise] {
+            let (estimates, failures) = run(mis);
+            assert!(
+                failures > N / 5,
+                "only {failures} of {N} forward shifts failed"
+            );
+            let e = verdict(&estimates, reference);
+            assert_eq!(e.verdict, Verdict::Unbiased, "{}: {e}", mis.name());
+        }
+        let dark = verdict(&run(&ConfidenceOnly).0, reference);
+        assert!(
+            dark.verdict == Verdict::Biased && dark.ci_high < -DELTA,
+            "negative control: {dark}"
+        );
+    }
+
+    /// A domain whose target is NaN, a shift with a NaN Jacobian, a sampler with pdf 0.
+    struct Broken;
+
+    impl Domain for Broken {
+        type Sample = f32;
+        fn target(&self, x: &f32) -> f32 {
+            if *x > 0.5 { f32::NAN } else { 1.0 }
+        }
+    }
+
+    impl Shift<Broken> for Broken {
+        fn shift(&self, x: &f32, _: &Broken, _: &Broken) -> Result<Shifted<f32>, Fail> {
+            Ok(Shifted {
+                y: *x,
+                jacobian: f32::NAN,
+            })
+        }
+    }
+
+    struct Fixed(f32, f32);
+
+    impl CandidateSampler<Broken> for Fixed {
+        fn sample(&self, _: &Broken, _: &mut Stream) -> Option<(f32, f32)> {
+            Some((self.0, self.1))
+        }
+        fn pdf(&self, _: &Broken, _: &f32) -> f32 {
+            self.1
+        }
+    }
+
+    #[test]
+    fn bad_input_gives_typed_errors_or_defined_results() {
+        let mut rng = StreamKey::default().stream(0);
+        let empty = generate_candidates(&Broken, &Fixed(0.2, 1.0), 0, &mut rng).unwrap();
+        assert_eq!(empty, Reservoir::empty());
+        for pdf in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+            let got = generate_candidates(&Broken, &Fixed(0.2, pdf), 2, &mut rng);
+            assert!(
+                matches!(got, Err(ResampleError::BadPdf(_))),
+                "pdf {pdf}: {got:?}"
+            );
+        }
+        let got = generate_candidates(&Broken, &Fixed(0.7, 1.0), 1, &mut rng);
+        assert!(
+            matches!(got, Err(ResampleError::Candidate { source: 0, .. })),
+            "{got:?}"
+        );
+
+        let good = Reservoir {
+            y: Some(0.2f32),
+            ucw: 1.0,
+            confidence: 1.0,
+        };
+        let receiver = Source {
+            domain: &Broken,
+            reservoir: &good,
+        };
+        let got = resample(receiver, &[receiver], &Broken, &Gbh, &mut rng);
+        assert!(
+            matches!(got, Err(ResampleError::BadJacobian { source: 1, .. })),
+            "{got:?}"
+        );
+        let many = vec![receiver; MAX_DOMAINS];
+        let got = resample(receiver, &many, &Broken, &Gbh, &mut rng);
+        assert_eq!(got, Err(ResampleError::TooManyDomains(MAX_DOMAINS + 1)));
+
+        let toy = pixel([0.5, 0.5]);
+        let canonical = Reservoir {
+            y: Some([0.5f32, 0.5]),
+            ucw: 1.0,
+            confidence: 1.0,
+        };
+        for bad in [
+            Reservoir {
+                y: Some([0.5f32, 0.5]),
+                ucw: f32::NAN,
+                confidence: 1.0,
+            },
+            Reservoir {
+                y: Some([0.5f32, 0.5]),
+                ucw: -1.0,
+                confidence: 1.0,
+            },
+            Reservoir {
+                y: Some([0.5f32, 0.5]),
+                ucw: 1.0,
+                confidence: f32::NAN,
+            },
+            Reservoir {
+                y: None,
+                ucw: 0.0,
+                confidence: -3.0,
+            },
+        ] {
+            let got = resample(
+                Source {
+                    domain: &toy,
+                    reservoir: &canonical,
+                },
+                &[Source {
+                    domain: &toy,
+                    reservoir: &bad,
+                }],
+                &Translation,
+                &DefensivePairwise,
+                &mut rng,
+            );
+            assert!(
+                matches!(got, Err(ResampleError::Candidate { source: 1, .. })),
+                "{bad:?}: {got:?}"
+            );
+        }
+        let zero = Reservoir {
+            y: Some([0.5f32, 0.5]),
+            ucw: 1.0,
+            confidence: 0.0,
+        };
+        let got = resample(
+            Source {
+                domain: &toy,
+                reservoir: &zero,
+            },
+            &[Source {
+                domain: &toy,
+                reservoir: &zero,
+            }],
+            &Translation,
+            &Gbh,
+            &mut rng,
+        )
+        .unwrap();
+        assert!(
+            got.ucw.is_finite() && got.confidence == 0.0,
+            "zero confidences: {got:?}"
+        );
+    }
+}

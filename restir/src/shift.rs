@@ -1,0 +1,74 @@
+//! Domains, shift mappings and candidate samplers: the three things a user plugs into GRIS
+//! (DESIGN §3). Everything here is `f32`, like the per-pixel kernels that mirror it on the GPU.
+
+use crate::rng::Stream;
+
+/// One integration domain Ω (a pixel at a frame) with its target function `p̂`.
+pub trait Domain: Sync {
+    /// A point of Ω, small enough to be stored in a reservoir.
+    type Sample: Copy + Send + Sync;
+
+    /// `p̂(x) ≥ 0`, and exactly 0 outside the support.
+    fn target(&self, x: &Self::Sample) -> f32;
+}
+
+/// Why a shift produced no sample. Every failure gives the shifted candidate weight 0.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Fail {
+    /// The inverse map has no solution for this point.
+    NotInvertible,
+    /// The shifted point lies outside the destination domain.
+    OutOfSupport,
+    /// A visibility test of the shift failed.
+    Occluded,
+    /// The Jacobian is 0 or not finite (a singular point of the map).
+    Degenerate,
+    /// A rule of the shift rejects the pair (it must reject in both directions).
+    Rejected,
+}
+
+/// A shifted sample `y = T(x)` and `J = |T'(x)|` in the measure of `p̂`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Shifted<S> {
+    pub y: S,
+    pub jacobian: f32,
+}
+
+/// A shift mapping `T_{src→dst}`.
+///
+/// Deterministic given the two domains: a shift that needs randomness draws it from a
+/// `StreamKey` its domains carry. For a bijective shift `shift(y, dst, src)` undoes
+/// `shift(x, src, dst)`, and a point fails in one direction exactly when its image would fail
+/// in the other (`restir::check` tests both).
+pub trait Shift<D: Domain>: Sync {
+    fn shift(&self, x: &D::Sample, src: &D, dst: &D) -> Result<Shifted<D::Sample>, Fail>;
+
+    /// `p̂_{←j}(y) = p̂_j(T_{r→j}(y)) · |T'_{r→j}(y)|`, 0 when the back-shift fails
+    /// (DESIGN §9, [001 Eq. 7]). A shift with a cheaper exact way to evaluate this may override
+    /// it; `restir::check::partition_of_unity` catches overrides that ignore failures.
+    fn target_from(&self, y: &D::Sample, receiver: &D, other: &D) -> f32 {
+        match self.shift(y, receiver, other) {
+            Ok(back) => other.target(&back.y) * back.jacobian,
+            Err(_) => 0.0,
+        }
+    }
+}
+
+/// Local coordinates of a sample in the measure of `p̂`, so that `restir::check` can perturb a
+/// sample and compare the shift's analytic Jacobian with central differences.
+pub trait LocalCoords: Domain {
+    /// Number of coordinates (the dimension of `p̂`'s measure).
+    fn dim(&self) -> usize;
+    /// Writes the coordinates of `x` into `out[..dim]`.
+    fn to_local(&self, x: &Self::Sample, out: &mut [f64]);
+    /// The sample at `coords`, or `None` outside the domain.
+    fn sample_at_local(&self, coords: &[f64]) -> Option<Self::Sample>;
+}
+
+/// Draws fresh candidates in one domain with a known density (pbrt style: sample paired with pdf).
+pub trait CandidateSampler<D: Domain>: Sync {
+    /// A sample and its density `p(x) > 0` in `p̂`'s measure, or `None` when no sample was made.
+    fn sample(&self, domain: &D, rng: &mut Stream) -> Option<(D::Sample, f32)>;
+    /// The density [`CandidateSampler::sample`] draws `x` with.
+    fn pdf(&self, domain: &D, x: &D::Sample) -> f32;
+}

@@ -1,1 +1,0 @@
-//! Statistics for unbiasedness tests (DESIGN §3, "Statistics").

@@ -2,8 +2,10 @@
 //! geometry and BVH, scenes, lights and camera, BSSRDF importance sampling, and the integrators
 //! (path-tracing baseline, progressive reference, volumetric random walk).
 
+pub mod bssrdf;
 pub mod error;
 pub mod geometry;
+pub mod integrator;
 pub mod material;
 pub mod profile;
 pub mod random_walk;

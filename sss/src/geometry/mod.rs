@@ -1,1 +1,20 @@
-//! See DESIGN §4.
+//! Geometry (DESIGN §4): triangle meshes, procedural shapes, OBJ/PLY loading, and the BVH with
+//! closest-hit, any-hit and all-hits-on-object queries.
+//!
+//! Ray conventions: hits satisfy `t_min < t < t_max` (open at both ends, so `t_min = hit.t`
+//! continues past a hit); `t` is in units of `dir` (not normalised); ties in `t` go to the lower
+//! global triangle id. For the GPU twin, [`Geometry::bvh`] exposes the obvhs CWBVH as built
+//! (80-byte `CwBvhNode`s and the leaf-slot → triangle-id map `primitive_indices`).
+
+pub mod bvh;
+pub mod frame;
+pub mod load;
+pub mod mesh;
+pub mod ray;
+pub mod shapes;
+
+pub use bvh::Geometry;
+pub use frame::Frame;
+pub use load::load_mesh;
+pub use mesh::TriangleMesh;
+pub use ray::{Hit, Ray};

@@ -1,1 +1,25 @@
-//! See DESIGN §4.
+//! Materials (DESIGN §4): translucent objects with the Burley BSSRDF, Lambert backgrounds, and
+//! the measured presets of Jensen et al. 2001.
+
+pub mod color;
+pub mod measured;
+pub mod translucent;
+
+use glam::Vec3;
+
+pub use measured::{MEASURED_NAMES, measured};
+pub use translucent::{Translucent, fresnel_transmission};
+
+/// An opaque Lambertian surface (backgrounds, floors).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lambert {
+    /// Diffuse reflectance per channel, in [0, 1].
+    pub albedo: Vec3,
+}
+
+/// The material of a scene object.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Material {
+    Translucent(Translucent),
+    Lambert(Lambert),
+}

@@ -1,1 +1,82 @@
-//! See DESIGN §4.
+//! Scenes (DESIGN §4): the TOML scene format (`docs/scene-format.md`), camera with its 16-frame
+//! trajectory and jitter, lights with power-proportional selection, the G-buffer, and the
+//! built-in evaluation scenes of seed 001 §6 (`scenes/*.toml`).
+
+mod builtin;
+mod camera;
+mod format;
+mod gbuffer;
+mod light;
+mod load;
+mod many_lights;
+
+use std::path::Path;
+
+pub use camera::{Camera, FRAMES};
+pub use gbuffer::{GBuffer, GPixel};
+pub use light::{DIRECTIONAL_DISTANCE, Light, LightSample, Lights, luminance};
+pub use many_lights::ManyLights;
+
+use crate::InputError;
+use crate::geometry::Geometry;
+use crate::material::Material;
+
+/// A scene object; its index in [`Scene::objects`] is its object id in [`Scene::geometry`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Object {
+    pub name: String,
+    /// Index into [`Scene::materials`].
+    pub material: u32,
+}
+
+/// A loaded scene. Area lights are not in `geometry` (they neither occlude nor appear in camera
+/// rays) unless the scene file adds objects with matching geometry.
+pub struct Scene {
+    /// The file stem of the scene file.
+    pub name: String,
+    pub camera: Camera,
+    pub materials: Vec<Material>,
+    pub objects: Vec<Object>,
+    pub geometry: Geometry,
+    pub lights: Lights,
+    /// Degenerate triangles (zero area, non-finite) removed from the objects' meshes.
+    pub dropped_degenerate: usize,
+}
+
+impl Scene {
+    /// The built-in scenes: `(name, one-line description)`.
+    pub const BUILTIN: &[(&str, &str)] = builtin::BUILTIN;
+
+    /// Loads a scene file; mesh paths are relative to its folder.
+    pub fn load(path: &Path) -> Result<Scene, InputError> {
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            InputError::new(
+                path,
+                "(file)",
+                format!("{:?}", path.display().to_string()),
+                e.to_string(),
+            )
+        })?;
+        Scene::from_toml_str(&text, path)
+    }
+
+    /// Parses scene text; `origin` names the file in errors and anchors relative mesh paths.
+    pub fn from_toml_str(text: &str, origin: &Path) -> Result<Scene, InputError> {
+        load::scene_from_toml(text, origin)
+    }
+
+    /// The built-in scene `name` (see [`Scene::BUILTIN`]), or `None` for an unknown name.
+    pub fn builtin(name: &str) -> Option<Scene> {
+        let text = builtin::source(name)?;
+        let origin = Path::new("scenes").join(format!("{name}.toml"));
+        // Built-in files are tested to parse; a failure here is a bug in the shipped file.
+        Some(
+            Scene::from_toml_str(text, &origin)
+                .unwrap_or_else(|e| panic!("built-in scene {name}: {e}")),
+        )
+    }
+
+    pub fn material_of_object(&self, object: u32) -> &Material {
+        &self.materials[self.objects[object as usize].material as usize]
+    }
+}

@@ -1,0 +1,75 @@
+//! Negative controls: deliberately wrong shifts that the conformance tests must detect. Each
+//! is biased; never use one to render.
+
+use restir::shift::{Fail, Shift, Shifted};
+
+use crate::delayed::{Checks, replay};
+use crate::domain::SssDomain;
+use crate::hybrid::Hybrid;
+use crate::sample::SssSample;
+
+/// Delayed reconnection with `J = 1` instead of [001 Eq. 11] (still bijective, so its Jacobians
+/// are trivially reciprocal; finite differences and unbiasedness catch it).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct DelayedWithoutJacobian;
+
+impl Shift<SssDomain<'_>> for DelayedWithoutJacobian {
+    fn shift(
+        &self,
+        x: &SssSample,
+        src: &SssDomain,
+        dst: &SssDomain,
+    ) -> Result<Shifted<SssSample>, Fail> {
+        replay(
+            x,
+            src,
+            dst,
+            Checks {
+                jacobian: false,
+                ..Checks::ALL
+            },
+        )
+        .map(|(s, _)| s)
+    }
+}
+
+/// Delayed reconnection without the y2–x3 visibility test: light leaks into shadows.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct DelayedWithoutVisibility;
+
+impl Shift<SssDomain<'_>> for DelayedWithoutVisibility {
+    fn shift(
+        &self,
+        x: &SssSample,
+        src: &SssDomain,
+        dst: &SssDomain,
+    ) -> Result<Shifted<SssSample>, Fail> {
+        replay(
+            x,
+            src,
+            dst,
+            Checks {
+                visibility: false,
+                ..Checks::ALL
+            },
+        )
+        .map(|(s, _)| s)
+    }
+}
+
+/// The hybrid shift with seed 001's thresholds for the source's material
+/// ([`Hybrid::for_material`]), choosing by the base path only, without testing the criterion on
+/// the offset path: not a bijection (a round trip can take the other branch).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct HybridIgnoringCriterion;
+
+impl Shift<SssDomain<'_>> for HybridIgnoringCriterion {
+    fn shift(
+        &self,
+        x: &SssSample,
+        src: &SssDomain,
+        dst: &SssDomain,
+    ) -> Result<Shifted<SssSample>, Fail> {
+        Hybrid::for_material(src.material()).shift_checked(x, src, dst, false)
+    }
+}

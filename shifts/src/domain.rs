@@ -1,0 +1,264 @@
+//! One integration domain of ReSTIR SSS: a pixel at a frame, with its exit point x1 (DESIGN §4,
+//! §9). It evaluates the unshadowed contribution `f` and the target `p̂ = luminance(f)`, tests the
+//! x2–x3 segment, and keys the random streams that some shifts need.
+
+use std::fmt;
+
+use glam::{Vec3, Vec3A};
+use restir::rng::{Stream, StreamKey};
+use restir::shift::{Domain, LocalCoords};
+use sss::bssrdf::{self, EntryPoint, ExitPoint, TechniqueSelection};
+use sss::geometry::Ray;
+use sss::material::{Material, Translucent};
+use sss::scene::{DIRECTIONAL_DISTANCE, GPixel, Light, Scene};
+
+use crate::sample::SssSample;
+
+/// Offset of shadow-segment ends from x2 (along its geometric normal) and from x3 (scene units;
+/// the built-in scenes are about one unit across).
+const SHADOW_EPSILON: f32 = 1e-4;
+
+/// Stream purpose tags of the shifts, in the top two bits of [`StreamKey::purpose`]; the low 30
+/// bits hold the source pixel (see [`SssDomain::shift_stream`]).
+pub(crate) const PURPOSE_INVERSION: u32 = 0b10 << 30;
+pub(crate) const PURPOSE_PICK: u32 = 0b11 << 30;
+const SOURCE_PIXEL_MASK: u32 = (1 << 30) - 1;
+
+/// The direction toward the light vertex seen from x2, and what the light sends along it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightPath {
+    /// Unit direction x2 → x3 (ωi).
+    pub wi: Vec3,
+    /// `L_e` toward x2 (for delta lights the quantity that replaces it, see `sss::scene`).
+    pub radiance: Vec3,
+    /// The end of the shadow segment (x3, or a far point along ωi for a directional light).
+    pub shadow_target: Vec3,
+}
+
+/// One domain Ω: the pixel `pixel` (linear index) of frame `frame`, receiving in pass `pass`,
+/// under the run seed `seed`.
+///
+/// Shifts that need randomness draw it from the receiving domain's stream
+/// `StreamKey { pixel, frame, pass, purpose: TAG | (source pixel & 0x3FFF_FFFF) }.stream(seed)`,
+/// with `TAG = 0b10 << 30` for probabilistic inversion's γ and `0b11 << 30` for the uniform hit
+/// pick of an unknown intersection index (the pipeline's own purposes stay below 2³⁰). A shift
+/// is then deterministic given `(src, dst)`, and independent across receivers, passes and
+/// sources (for images of up to 2³⁰ pixels).
+#[derive(Clone, Copy)]
+pub struct SssDomain<'s> {
+    scene: &'s Scene,
+    material: Translucent,
+    x1: ExitPoint,
+    selection: TechniqueSelection,
+    pixel: u32,
+    frame: u32,
+    pass: u32,
+    seed: u64,
+}
+
+impl<'s> SssDomain<'s> {
+    /// The domain of G-buffer pixel `gpixel`; `None` if x1 is not on a translucent object.
+    /// BSSRDF IS uses seed 001's technique selection ([`TechniqueSelection::default`]).
+    pub fn new(
+        scene: &'s Scene,
+        gpixel: &GPixel,
+        pixel: u32,
+        frame: u32,
+        pass: u32,
+        seed: u64,
+    ) -> Option<Self> {
+        let object = scene.objects.get(gpixel.object as usize)?;
+        let Material::Translucent(material) = *scene.materials.get(object.material as usize)?
+        else {
+            return None;
+        };
+        let x1 = ExitPoint::new(
+            gpixel.position,
+            gpixel.geometric_normal,
+            gpixel.shading_normal,
+            gpixel.view,
+            gpixel.object,
+            &material,
+        );
+        let selection = TechniqueSelection::default();
+        Some(SssDomain {
+            scene,
+            material,
+            x1,
+            selection,
+            pixel,
+            frame,
+            pass,
+            seed,
+        })
+    }
+
+    /// The same domain with another technique selection (e.g. the channel CDF of seed 000).
+    pub fn with_selection(self, selection: TechniqueSelection) -> Self {
+        SssDomain { selection, ..self }
+    }
+
+    pub fn scene(&self) -> &'s Scene {
+        self.scene
+    }
+
+    pub fn material(&self) -> &Translucent {
+        &self.material
+    }
+
+    /// The exit point x1.
+    pub fn x1(&self) -> &ExitPoint {
+        &self.x1
+    }
+
+    pub fn selection(&self) -> &TechniqueSelection {
+        &self.selection
+    }
+
+    pub fn pixel(&self) -> u32 {
+        self.pixel
+    }
+
+    pub fn frame(&self) -> u32 {
+        self.frame
+    }
+
+    pub fn pass(&self) -> u32 {
+        self.pass
+    }
+
+    /// x2 of `y`; `None` if its triangle does not exist or lies on another object than x1.
+    pub fn entry_point(&self, y: &SssSample) -> Option<EntryPoint> {
+        let geometry = &self.scene.geometry;
+        if y.prim() >= geometry.triangle_count() || geometry.object_of(y.prim()) != y.object() {
+            return None;
+        }
+        (y.object() == self.x1.object).then(|| EntryPoint::new(geometry, y.prim(), y.bary()))
+    }
+
+    /// `p_disk(x2 | x1)` of this domain's x1 [`bssrdf::p_disk`].
+    pub fn p_disk(&self, x2: &EntryPoint) -> f32 {
+        bssrdf::p_disk(&self.x1, &self.selection, x2.position, x2.geometric_normal)
+    }
+
+    /// Direction and radiance from x2 toward the light vertex of `y`; `None` for an unknown light
+    /// or x3 = x2.
+    pub fn light_path(&self, x2: Vec3, y: &SssSample) -> Option<LightPath> {
+        let lights = &self.scene.lights;
+        if y.light() as usize >= lights.len() {
+            return None;
+        }
+        if let Light::Directional {
+            direction,
+            irradiance,
+        } = *lights.get(y.light())
+        {
+            let wi = -direction;
+            return Some(LightPath {
+                wi,
+                radiance: irradiance,
+                shadow_target: x2 + DIRECTIONAL_DISTANCE * wi,
+            });
+        }
+        let x3 = y.x3();
+        let wi = (x3 - x2).try_normalize()?;
+        let radiance = lights.radiance(y.light(), x3, x2);
+        Some(LightPath {
+            wi,
+            radiance,
+            shadow_target: x3,
+        })
+    }
+
+    /// `f(ȳ) = S · max(0, n2·ωi) · L_e`, unshadowed, RGB (DESIGN §9); 0 outside the support.
+    pub fn contribution(&self, y: &SssSample) -> Vec3 {
+        let Some(x2) = self.entry_point(y) else {
+            return Vec3::ZERO;
+        };
+        let Some(light) = self.light_path(x2.position, y) else {
+            return Vec3::ZERO;
+        };
+        let f = bssrdf::contribution(&self.material, &self.x1, &x2, light.wi, light.radiance);
+        if f.is_finite() { f } else { Vec3::ZERO }
+    }
+
+    /// Whether the segment x2–x3 of `y` is unoccluded (the shadow test of the canonical sample
+    /// and of delayed reconnection, DESIGN §9 "Visibility"). `false` outside the support.
+    pub fn visible(&self, y: &SssSample) -> bool {
+        let Some(x2) = self.entry_point(y) else {
+            return false;
+        };
+        let Some(light) = self.light_path(x2.position, y) else {
+            return false;
+        };
+        let n = x2.geometric_normal;
+        let side = if n.dot(light.wi) < 0.0 { -1.0 } else { 1.0 };
+        let from = x2.position + side * SHADOW_EPSILON * n;
+        // Stop short of x3 too, so geometry a scene places on an emitter does not shadow it.
+        let to = light.shadow_target - SHADOW_EPSILON * light.wi;
+        !self
+            .scene
+            .geometry
+            .occluded(&Ray::segment(Vec3A::from(from), Vec3A::from(to)))
+    }
+
+    /// The stream of a shift that receives into this domain from `source` (key in [`SssDomain`]).
+    pub(crate) fn shift_stream(&self, purpose: u32, source: &SssDomain) -> Stream {
+        let purpose = purpose | (source.pixel & SOURCE_PIXEL_MASK);
+        StreamKey::new(self.pixel, self.frame, self.pass, purpose).stream(self.seed)
+    }
+}
+
+impl fmt::Debug for SssDomain<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("SssDomain")
+            .field("scene", &self.scene.name)
+            .field("pixel", &self.pixel)
+            .field("frame", &self.frame)
+            .field("pass", &self.pass)
+            .field("x1", &self.x1.position)
+            .field("object", &self.x1.object)
+            .finish()
+    }
+}
+
+impl Domain for SssDomain<'_> {
+    type Sample = SssSample;
+
+    /// `p̂ = luminance(f)`, unshadowed (DESIGN §9).
+    fn target(&self, y: &SssSample) -> f32 {
+        bssrdf::target(self.contribution(y)).max(0.0)
+    }
+}
+
+/// Path-space coordinates for the conformance kit: x2's position and the stored x3 (6 numbers).
+/// Round trips compare these, so a shift that re-draws the random numbers (probabilistic
+/// inversion, [001 §4.2]) is checked on the path, not on its auxiliary random numbers.
+/// A position does not name a triangle, so [`LocalCoords::sample_at_local`] cannot rebuild a sample
+/// and returns `None`; the finite-difference Jacobian test uses a per-triangle chart instead
+/// (`shifts/tests`).
+impl LocalCoords for SssDomain<'_> {
+    fn dim(&self) -> usize {
+        6
+    }
+
+    /// NaN coordinates for a sample whose triangle does not exist.
+    fn to_local(&self, x: &SssSample, out: &mut [f64]) {
+        let geometry = &self.scene.geometry;
+        if x.prim() >= geometry.triangle_count() {
+            out.fill(f64::NAN);
+            return;
+        }
+        let x2 = geometry.position(x.prim(), x.bary());
+        for (o, v) in out
+            .iter_mut()
+            .zip(x2.to_array().into_iter().chain(x.x3().to_array()))
+        {
+            *o = v as f64;
+        }
+    }
+
+    fn sample_at_local(&self, _coords: &[f64]) -> Option<SssSample> {
+        None
+    }
+}

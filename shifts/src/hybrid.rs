@@ -1,0 +1,81 @@
+//! The hybrid shift [001 §4.1]: reconnection where x1 and x2 are far apart or differently
+//! oriented, delayed reconnection elsewhere, made bijective by testing the criterion on both
+//! paths (DESIGN §9 "Hybrid bijectivity").
+
+use restir::shift::{Fail, Shift, Shifted};
+use sss::bssrdf::{EntryPoint, ExitPoint};
+use sss::material::Translucent;
+
+use crate::delayed::{Checks, replay};
+use crate::domain::SssDomain;
+use crate::reconnection::reconnect;
+use crate::sample::SssSample;
+
+/// Hybrid shift with thresholds `κ_dist` (scene units) and `κ_orient` (cosine).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hybrid {
+    pub kappa_dist: f32,
+    pub kappa_orient: f32,
+}
+
+impl Hybrid {
+    /// Seed 001's defaults [001 §5.1]: `κ_dist = 2 · max_c d_c`, `κ_orient = 0.5`.
+    pub fn for_material(material: &Translucent) -> Hybrid {
+        Hybrid {
+            kappa_dist: 2.0 * material.d().max_element(),
+            kappa_orient: 0.5,
+        }
+    }
+
+    /// `connectable(x1, x2) ⇔ ‖x2 − x1‖ ≥ κ_dist ∨ n1·n2 ≤ κ_orient` (geometric normals; n1
+    /// faces the camera) [001 §4.1].
+    pub fn connectable(&self, x1: &ExitPoint, x2: &EntryPoint) -> bool {
+        (x2.position - x1.position).length() >= self.kappa_dist
+            || x1.frame.n.dot(x2.geometric_normal) <= self.kappa_orient
+    }
+
+    /// Whether the shift of `x` out of `src` uses reconnection (the diagnostic of seed 001
+    /// Fig. 4); `None` if x2 is not on `src`'s object.
+    pub fn uses_reconnection(&self, x: &SssSample, src: &SssDomain) -> Option<bool> {
+        src.entry_point(x).map(|x2| self.connectable(src.x1(), &x2))
+    }
+
+    /// The hybrid shift; `respect_offset = false` is the negative control that skips the test on
+    /// the offset path.
+    pub(crate) fn shift_checked(
+        &self,
+        x: &SssSample,
+        src: &SssDomain,
+        dst: &SssDomain,
+        respect_offset: bool,
+    ) -> Result<Shifted<SssSample>, Fail> {
+        let x2 = src.entry_point(x).ok_or(Fail::Rejected)?;
+        if self.connectable(src.x1(), &x2) {
+            let y = reconnect(x, dst)?;
+            if respect_offset && !self.connectable(dst.x1(), &x2) {
+                return Err(Fail::Rejected);
+            }
+            Ok(Shifted { y, jacobian: 1.0 })
+        } else {
+            let (shifted, y2) = replay(x, src, dst, Checks::ALL)?;
+            if respect_offset && self.connectable(dst.x1(), &y2) {
+                return Err(Fail::Rejected);
+            }
+            Ok(shifted)
+        }
+    }
+}
+
+/// Base connectable → reconnection, failing unless `connectable(y1, x2)`; base not connectable →
+/// delayed reconnection, failing if `connectable(y1, y2)`. Both paths of a pair then take the
+/// same branch, so the shift is a bijection.
+impl Shift<SssDomain<'_>> for Hybrid {
+    fn shift(
+        &self,
+        x: &SssSample,
+        src: &SssDomain,
+        dst: &SssDomain,
+    ) -> Result<Shifted<SssSample>, Fail> {
+        self.shift_checked(x, src, dst, true)
+    }
+}

@@ -1,0 +1,29 @@
+//! `shifts`: shift mappings on SSS paths `[x0, x1, x2, x3]` (DESIGN §5, §9; [001 §3.2, §4]).
+//!
+//! Every shift implements [`restir::shift::Shift`] over [`SssDomain`] (one pixel at a frame) and
+//! [`SssSample`] (the reservoir sample of [001 Alg. 3]):
+//!
+//! | shift | map | `J` |
+//! |---|---|---|
+//! | [`Identity`] | `x` | 1 |
+//! | [`Reconnection`] | `[y0, y1, x2, x3]` | 1 |
+//! | [`DelayedReconnection`] | replay at y1 → y2, keep x3 | [001 Eq. 11] |
+//! | [`Hybrid`] | reconnection or delayed by the criterion of [001 §4.1] | as chosen |
+//! | [`InvertingReconnection`] | reconnection + probabilistic inversion [001 Alg. 4] | 1 |
+//!
+//! [`broken`] holds the deliberately wrong shifts the conformance tests must catch.
+
+pub mod broken;
+mod delayed;
+mod domain;
+mod hybrid;
+mod inversion;
+mod reconnection;
+mod sample;
+
+pub use delayed::DelayedReconnection;
+pub use domain::{LightPath, SssDomain};
+pub use hybrid::Hybrid;
+pub use inversion::{IndexPolicy, InvertingReconnection, resolve_deferred_index};
+pub use reconnection::{Identity, Reconnection};
+pub use sample::{INDEX_UNKNOWN, SssSample};

@@ -1,0 +1,204 @@
+//! `reshift bias`: N replicas of one method against independent path-traced reference batches;
+//! per region the Welch test of zero bias (Holm across regions) and the equivalence verdict with
+//! tolerance δ (`experiments::bias`).
+
+use clap::Args;
+use experiments::bias::{BiasRow, Protocol, Table, bias_rows, luminance, reference_images, summarize};
+use experiments::compare::REFERENCE_SEED;
+use experiments::methods::Method;
+use experiments::regions::Regions;
+use restir::stats::Verdict;
+use serde_json::{Value, json};
+use sss::scene::GBuffer;
+
+use super::common::{
+    CliError, CliResult, interrupted, json_number, load_scene, parse_resolution, progress,
+    with_resolution,
+};
+
+#[derive(Args, Clone, Debug)]
+pub struct BiasArgs {
+    /// Built-in scene name or path to a scene .toml.
+    #[arg(long, default_value = "bumpy")]
+    pub scene: String,
+    /// The method under test, e.g. restir:hybrid.
+    #[arg(long)]
+    pub method: String,
+    /// Independent replicas (seeds 0..N).
+    #[arg(long, default_value_t = 32)]
+    pub replicas: u32,
+    /// Tolerance δ on the relative bias of a region mean.
+    #[arg(long, default_value_t = 0.03)]
+    pub delta: f64,
+    /// Family-wise level α (each CI has confidence 1 − α).
+    #[arg(long, default_value_t = 0.01)]
+    pub alpha: f64,
+    /// Frames of the camera trajectory; the last one is tested.
+    #[arg(long, default_value_t = 16)]
+    pub frames: u32,
+    /// Image size WxH.
+    #[arg(long, default_value = "32x24")]
+    pub resolution: String,
+    /// Independent path-traced reference batches.
+    #[arg(long, default_value_t = 32)]
+    pub reference_batches: u32,
+    /// Samples per pixel of one reference batch.
+    #[arg(long, default_value_t = 64)]
+    pub reference_batch_spp: u32,
+    /// Print JSON (schema `reshift-bias/1`) instead of the table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn command(args: &BiasArgs) -> CliResult<()> {
+    let method = Method::parse(&args.method)?;
+    if !(args.delta > 0.0 && args.delta.is_finite()) || !(args.alpha > 0.0 && args.alpha < 1.0) {
+        return Err(CliError(format!(
+            "need δ > 0 and 0 < α < 1 (got --delta {} --alpha {})",
+            args.delta, args.alpha
+        )));
+    }
+    if args.replicas < 2 || args.reference_batches < 2 || args.frames == 0 {
+        return Err(CliError(
+            "--replicas and --reference-batches must be ≥ 2, --frames ≥ 1".into(),
+        ));
+    }
+    let loaded = load_scene(&args.scene)?;
+    let scene = with_resolution(loaded.scene, Some(parse_resolution(&args.resolution)?));
+    let frame = args.frames - 1;
+    let regions = Regions::classify(&scene, &GBuffer::render(&scene, frame), REFERENCE_SEED);
+    let reference = reference_images(
+        &scene,
+        frame,
+        args.reference_batches,
+        args.reference_batch_spp,
+        REFERENCE_SEED,
+    )?;
+    let bar = progress(args.replicas as u64, &method.name());
+    let (mut images, mut nonfinite) = (Vec::new(), 0);
+    for seed in 0..args.replicas as u64 {
+        if interrupted() {
+            break;
+        }
+        let rendered = method.render(&scene, args.frames, seed)?;
+        nonfinite += rendered.nonfinite;
+        images.push(rendered.image.pixels.iter().map(|&p| luminance(p)).collect::<Vec<f64>>());
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let stopped = images.len() < args.replicas as usize;
+    if images.len() < 2 {
+        return Err(CliError("interrupted before 2 replicas finished".into()));
+    }
+    let protocol = Protocol {
+        delta: args.delta,
+        alpha: args.alpha,
+    };
+    let rows = bias_rows(
+        &method.name(),
+        &summarize(&images, &regions),
+        &summarize(&reference.luminance, &regions),
+        &protocol,
+    );
+    if args.json {
+        let value = bias_json(args, &scene.name, &rows, [nonfinite, reference.nonfinite], images.len(), stopped);
+        println!("{}", serde_json::to_string_pretty(&value).expect("JSON values"));
+    } else {
+        println!(
+            "# bias of {} on {} ({}, frame {frame}): N = {} replicas vs {} reference batches × {} spp, δ = {}%, α = {}\n",
+            method,
+            scene.name,
+            args.resolution,
+            images.len(),
+            args.reference_batches,
+            args.reference_batch_spp,
+            100.0 * args.delta,
+            args.alpha
+        );
+        println!("{}", Table(&rows));
+        println!(
+            "verdict: {} ({} non-finite values in replicas, {} in the reference)",
+            overall(&rows),
+            nonfinite,
+            reference.nonfinite
+        );
+    }
+    if stopped {
+        return Err(CliError(format!(
+            "interrupted after {} of {} replicas",
+            images.len(),
+            args.replicas
+        )));
+    }
+    Ok(())
+}
+
+/// Over regions: biased if any region is, unbiased if all are, else inconclusive.
+fn overall(rows: &[BiasRow]) -> &'static str {
+    if rows.iter().any(|r| r.verdict == Verdict::Biased) {
+        "biased"
+    } else if !rows.is_empty() && rows.iter().all(|r| r.verdict == Verdict::Unbiased) {
+        "unbiased"
+    } else {
+        "inconclusive"
+    }
+}
+
+fn verdict_name(v: Verdict) -> &'static str {
+    match v {
+        Verdict::Unbiased => "unbiased",
+        Verdict::Biased => "biased",
+        Verdict::Inconclusive => "inconclusive",
+    }
+}
+
+/// JSON of the bias test (schema `reshift-bias/1`, docs/results-schema.md).
+fn bias_json(
+    args: &BiasArgs,
+    scene: &str,
+    rows: &[BiasRow],
+    [replica_nonfinite, reference_nonfinite]: [u64; 2],
+    replicas: usize,
+    interrupted: bool,
+) -> Value {
+    let verdict = overall(rows);
+    let rows: Vec<Value> = rows
+        .iter()
+        .map(|r| {
+            let e = &r.equivalence;
+            json!({
+                "region": r.region.name(),
+                "pixels": r.pixels,
+                "n": e.n,
+                "mean": json_number(r.estimate.mean),
+                "reference_mean": json_number(r.reference.mean),
+                "reference_std_err": json_number(r.reference.std_err),
+                "relative_bias": json_number(e.relative_bias),
+                "ci_low": json_number(e.ci_low),
+                "ci_high": json_number(e.ci_high),
+                "p_zero_bias": json_number(e.p_zero_bias),
+                "holm_rejected": r.holm_rejected,
+                "verdict": verdict_name(r.verdict),
+            })
+        })
+        .collect();
+    json!({
+        "schema": "reshift-bias/1",
+        "scene": scene,
+        "method": args.method,
+        "resolution": args.resolution,
+        "frames": args.frames,
+        "replicas": replicas,
+        "delta": args.delta,
+        "alpha": args.alpha,
+        "reference": {
+            "batches": args.reference_batches,
+            "spp_per_batch": args.reference_batch_spp,
+            "seed": REFERENCE_SEED,
+        },
+        "nonfinite": { "replicas": replica_nonfinite, "reference": reference_nonfinite },
+        "interrupted": interrupted,
+        "verdict": verdict,
+        "rows": rows,
+    })
+}

@@ -1,0 +1,572 @@
+//! The progressive reference renderer (DESIGN §4, §7): the baseline estimator ([`super::pt`]) run
+//! in independent batches, with per-pixel sums and sums of squares of the batch means, so every
+//! pixel has a standard error; checkpoint / resume; shards by batch range; merge.
+//!
+//! Batch `b` is samples `b·K .. (b+1)·K` of the baseline (K = `spp_per_batch`), so a batch's
+//! random numbers depend only on `(seed, frame, pixel, b)`. Sums are [`ExactSum`]s: merging shards
+//! or resuming a checkpoint gives the same bits as one uninterrupted, unsharded run.
+//!
+//! # Checkpoint format (little-endian)
+//!
+//! | field | type |
+//! |---|---|
+//! | magic `RSSSREF1` | 8 bytes |
+//! | width, height, frame | u32 ×3 |
+//! | seed | u64 |
+//! | spp_per_batch, batches (planned total), start, next, end | u32 ×5 |
+//! | hit policy (0 = uniform one, 1 = all) | u8 |
+//! | P(axis) ×3, P(channel) ×3 | f32 ×6 |
+//! | nonfinite | u64 |
+//! | scene name: length, UTF-8 bytes | u32, bytes |
+//! | per pixel (row-major): Σm per RGB, then Σm² per RGB, each 4 limbs | u64 ×24 |
+//!
+//! `start..next` are the batches accumulated so far, `start..end` the ones this run owns.
+
+use std::ops::Range;
+use std::path::Path;
+
+use glam::DVec3;
+
+use super::exact::ExactSum;
+use super::pt::{self, HitPolicy, PtSettings};
+use crate::InputError;
+use crate::bssrdf::TechniqueSelection;
+use crate::scene::{GBuffer, Scene};
+
+const MAGIC: &[u8; 8] = b"RSSSREF1";
+
+/// What a reference integrates; two references can be merged only if these agree.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReferenceConfig {
+    /// Scene name (recorded in checkpoints, checked on merge).
+    pub scene: String,
+    pub frame: u32,
+    pub seed: u64,
+    pub spp_per_batch: u32,
+    /// Planned number of batches of the whole (unsharded) reference.
+    pub batches: u32,
+    pub settings: PtSettings,
+}
+
+/// Shard `index` of `count`: the batches `⌊index·B/count⌋ .. ⌊(index+1)·B/count⌋`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    pub index: u32,
+    pub count: u32,
+}
+
+impl Shard {
+    pub const WHOLE: Shard = Shard { index: 0, count: 1 };
+
+    /// Parses `"i/n"` with `i < n`; `field` names the option in the error.
+    pub fn parse(text: &str, field: &str) -> Result<Shard, InputError> {
+        let bad =
+            |reason: &str| InputError::new("(command line)", field, format!("{text:?}"), reason);
+        let (i, n) = text.split_once('/').ok_or_else(|| bad("expected `i/n`"))?;
+        let index: u32 = i
+            .trim()
+            .parse()
+            .map_err(|_| bad("shard index is not an integer"))?;
+        let count: u32 = n
+            .trim()
+            .parse()
+            .map_err(|_| bad("shard count is not an integer"))?;
+        if count == 0 || index >= count {
+            return Err(bad("need 0 ≤ i < n"));
+        }
+        Ok(Shard { index, count })
+    }
+
+    pub fn batches(&self, total: u32) -> Range<u32> {
+        let at = |k: u32| (k as u64 * total as u64 / self.count as u64) as u32;
+        at(self.index)..at(self.index + 1)
+    }
+}
+
+/// A progressive reference over a G-buffer: exact sums of per-pixel batch means and their squares.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Reference {
+    pub config: ReferenceConfig,
+    pub width: u32,
+    pub height: u32,
+    /// First batch this run owns.
+    pub start: u32,
+    /// Next batch to render (`start..next` are accumulated).
+    pub next: u32,
+    /// One past the last batch this run owns.
+    pub end: u32,
+    /// Samples that were NaN or infinite (left out of their batch mean), plus batch means that
+    /// could not be accumulated exactly (see [`ExactSum::add`]). None are expected.
+    pub nonfinite: u64,
+    sum: Vec<[ExactSum; 3]>,
+    sum_sq: Vec<[ExactSum; 3]>,
+}
+
+impl Reference {
+    /// An empty reference for `shard` of `config` on a `width × height` image.
+    pub fn new(
+        config: ReferenceConfig,
+        width: u32,
+        height: u32,
+        shard: Shard,
+    ) -> Result<Reference, InputError> {
+        let bad = |field: &str, value: String, reason: &str| {
+            Err(InputError::new("(reference)", field, value, reason))
+        };
+        if config.spp_per_batch == 0 {
+            return bad("spp_per_batch", "0".into(), "must be ≥ 1");
+        }
+        if config.batches == 0 {
+            return bad("batches", "0".into(), "must be ≥ 1");
+        }
+        if config.batches as u64 * config.spp_per_batch as u64 > u32::MAX as u64 + 1 {
+            let value = format!("{} × {}", config.batches, config.spp_per_batch);
+            return bad(
+                "batches",
+                value,
+                "batches × spp_per_batch must not exceed 2³² samples per pixel",
+            );
+        }
+        let range = shard.batches(config.batches);
+        let pixels = width as usize * height as usize;
+        Ok(Reference {
+            config,
+            width,
+            height,
+            start: range.start,
+            next: range.start,
+            end: range.end,
+            nonfinite: 0,
+            sum: vec![[ExactSum::default(); 3]; pixels],
+            sum_sq: vec![[ExactSum::default(); 3]; pixels],
+        })
+    }
+
+    pub fn is_complete(&self) -> bool {
+        self.next == self.end
+    }
+
+    /// Number of batches accumulated.
+    pub fn batches_done(&self) -> u32 {
+        self.next - self.start
+    }
+
+    /// Renders up to `max_batches` more batches of `gbuffer` (which must be of
+    /// `config.frame`, same size); returns how many it rendered.
+    pub fn run(&mut self, scene: &Scene, gbuffer: &GBuffer, max_batches: u32) -> u32 {
+        assert_eq!(
+            (gbuffer.width, gbuffer.height),
+            (self.width, self.height),
+            "G-buffer size"
+        );
+        let stop = self.end.min(self.next.saturating_add(max_batches));
+        let k = self.config.spp_per_batch;
+        for batch in self.next..stop {
+            let image = pt::render(
+                scene,
+                gbuffer,
+                &self.config.settings,
+                self.config.seed,
+                batch * k,
+                k,
+            );
+            self.nonfinite += image.nonfinite;
+            for ((sum, sum_sq), m) in self.sum.iter_mut().zip(&mut self.sum_sq).zip(&image.pixels) {
+                for c in 0..3 {
+                    let accepted = sum[c].add(m[c]) && sum_sq[c].add(m[c] * m[c]);
+                    self.nonfinite += !accepted as u64;
+                }
+            }
+        }
+        let done = stop - self.next;
+        self.next = stop;
+        done
+    }
+
+    /// Per-pixel mean over the accumulated batches (0 before the first batch).
+    pub fn mean(&self) -> Vec<DVec3> {
+        let n = self.batches_done().max(1) as f64;
+        self.sum
+            .iter()
+            .map(|s| DVec3::from_array(s.map(|x| x.to_f64() / n)))
+            .collect()
+    }
+
+    /// Per-pixel standard error of the mean, from the spread of the batch means (∞ with < 2 batches).
+    pub fn std_err(&self) -> Vec<DVec3> {
+        let n = self.batches_done() as f64;
+        self.sum
+            .iter()
+            .zip(&self.sum_sq)
+            .map(|(s, q)| {
+                DVec3::from_array(std::array::from_fn(|c| {
+                    if n < 2.0 {
+                        return f64::INFINITY;
+                    }
+                    let mean = s[c].to_f64() / n;
+                    let variance = ((q[c].to_f64() - n * mean * mean) / (n - 1.0)).max(0.0);
+                    (variance / n).sqrt()
+                }))
+            })
+            .collect()
+    }
+
+    /// Sums complete shards of one reference (any order). The shards must share the
+    /// configuration and image size and cover a contiguous batch range without overlap.
+    pub fn merge(mut parts: Vec<Reference>) -> Result<Reference, InputError> {
+        let bad = |field: &str, value: String, reason: &str| {
+            Err(InputError::new("(merge)", field, value, reason))
+        };
+        parts.sort_by_key(|p| p.start);
+        let Some(first) = parts.first() else {
+            return bad("shards", "none".into(), "nothing to merge");
+        };
+        let mut merged = first.clone();
+        if !first.is_complete() {
+            return bad(
+                "shards",
+                format!(
+                    "{}..{} of {}..{}",
+                    first.start, first.next, first.start, first.end
+                ),
+                "shard is incomplete",
+            );
+        }
+        for part in &parts[1..] {
+            if part.config != merged.config
+                || (part.width, part.height) != (merged.width, merged.height)
+            {
+                return bad(
+                    "config",
+                    format!("{:?}", part.config),
+                    "shards of different references",
+                );
+            }
+            if !part.is_complete() {
+                return bad(
+                    "shards",
+                    format!(
+                        "{}..{} of {}..{}",
+                        part.start, part.next, part.start, part.end
+                    ),
+                    "shard is incomplete",
+                );
+            }
+            if part.start != merged.end {
+                return bad(
+                    "shards",
+                    format!("{}..{} after ..{}", part.start, part.end, merged.end),
+                    "batch ranges overlap or leave a gap",
+                );
+            }
+            for (a, b) in merged
+                .sum
+                .iter_mut()
+                .zip(&part.sum)
+                .chain(merged.sum_sq.iter_mut().zip(&part.sum_sq))
+            {
+                for c in 0..3 {
+                    a[c].add_exact(&b[c]);
+                }
+            }
+            merged.nonfinite += part.nonfinite;
+            merged.end = part.end;
+            merged.next = part.end;
+        }
+        Ok(merged)
+    }
+
+    /// Writes the checkpoint (format in the module documentation).
+    pub fn save(&self, path: &Path) -> std::io::Result<()> {
+        let c = &self.config;
+        let mut out = Vec::with_capacity(96 + c.scene.len() + self.sum.len() * 192);
+        out.extend_from_slice(MAGIC);
+        for v in [self.width, self.height, c.frame] {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        out.extend_from_slice(&c.seed.to_le_bytes());
+        for v in [c.spp_per_batch, c.batches, self.start, self.next, self.end] {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        out.push(match c.settings.hits {
+            HitPolicy::UniformOne => 0,
+            HitPolicy::All => 1,
+        });
+        for p in c
+            .settings
+            .selection
+            .axis
+            .iter()
+            .chain(&c.settings.selection.channel)
+        {
+            out.extend_from_slice(&p.to_le_bytes());
+        }
+        out.extend_from_slice(&self.nonfinite.to_le_bytes());
+        out.extend_from_slice(&(c.scene.len() as u32).to_le_bytes());
+        out.extend_from_slice(c.scene.as_bytes());
+        for (s, q) in self.sum.iter().zip(&self.sum_sq) {
+            for limb in s.iter().chain(q).flat_map(|x| x.0) {
+                out.extend_from_slice(&limb.to_le_bytes());
+            }
+        }
+        std::fs::write(path, out)
+    }
+
+    /// Reads a checkpoint written by [`Reference::save`].
+    pub fn load(path: &Path) -> Result<Reference, InputError> {
+        let bytes = std::fs::read(path).map_err(|e| {
+            InputError::new(
+                path,
+                "(file)",
+                format!("{:?}", path.display().to_string()),
+                e.to_string(),
+            )
+        })?;
+        let mut reader = Reader {
+            bytes: &bytes,
+            at: 0,
+            path,
+        };
+        let magic = reader.take(8, "magic")?;
+        if magic != MAGIC {
+            return Err(InputError::new(
+                path,
+                "magic",
+                format!("{magic:?}"),
+                "not a reshift reference checkpoint",
+            ));
+        }
+        let (width, height, frame) = (
+            reader.u32("width")?,
+            reader.u32("height")?,
+            reader.u32("frame")?,
+        );
+        let seed = reader.u64("seed")?;
+        let (spp_per_batch, batches) = (reader.u32("spp_per_batch")?, reader.u32("batches")?);
+        let (start, next, end) = (
+            reader.u32("start")?,
+            reader.u32("next")?,
+            reader.u32("end")?,
+        );
+        let hits = match reader.take(1, "hit_policy")?[0] {
+            0 => HitPolicy::UniformOne,
+            1 => HitPolicy::All,
+            other => {
+                return Err(InputError::new(
+                    path,
+                    "hit_policy",
+                    other.to_string(),
+                    "expected 0 or 1",
+                ));
+            }
+        };
+        let mut probabilities = [0.0f32; 6];
+        for p in &mut probabilities {
+            *p = f32::from_le_bytes(reader.take(4, "selection")?.try_into().unwrap());
+        }
+        let selection = TechniqueSelection {
+            axis: [probabilities[0], probabilities[1], probabilities[2]],
+            channel: [probabilities[3], probabilities[4], probabilities[5]],
+        };
+        let nonfinite = reader.u64("nonfinite")?;
+        let name_len = reader.u32("scene_name_length")? as usize;
+        let scene = String::from_utf8(reader.take(name_len, "scene_name")?.to_vec())
+            .map_err(|e| InputError::new(path, "scene_name", "(bytes)", e.to_string()))?;
+        if !(start <= next && next <= end && end <= batches) {
+            return Err(InputError::new(
+                path,
+                "start/next/end",
+                format!("{start}/{next}/{end} of {batches}"),
+                "inconsistent batch range",
+            ));
+        }
+        let config = ReferenceConfig {
+            scene,
+            frame,
+            seed,
+            spp_per_batch,
+            batches,
+            settings: PtSettings { hits, selection },
+        };
+        let mut reference =
+            Reference::new(config, width, height, Shard::WHOLE).map_err(|e| InputError {
+                file: path.to_path_buf(),
+                ..e
+            })?;
+        (
+            reference.start,
+            reference.next,
+            reference.end,
+            reference.nonfinite,
+        ) = (start, next, end, nonfinite);
+        for (s, q) in reference.sum.iter_mut().zip(reference.sum_sq.iter_mut()) {
+            for x in s.iter_mut().chain(q.iter_mut()) {
+                for limb in &mut x.0 {
+                    *limb = reader.u64("pixels")?;
+                }
+            }
+        }
+        if reader.at != bytes.len() {
+            return Err(InputError::new(
+                path,
+                "pixels",
+                format!("{} trailing bytes", bytes.len() - reader.at),
+                "file longer than its header says",
+            ));
+        }
+        Ok(reference)
+    }
+}
+
+/// A cursor over checkpoint bytes whose errors name the field being read.
+struct Reader<'a> {
+    bytes: &'a [u8],
+    at: usize,
+    path: &'a Path,
+}
+
+impl Reader<'_> {
+    fn take(&mut self, n: usize, field: &str) -> Result<&[u8], InputError> {
+        let slice = self.bytes.get(self.at..self.at + n).ok_or_else(|| {
+            InputError::new(
+                self.path,
+                field,
+                format!("offset {}", self.at),
+                "file ends early (truncated checkpoint)",
+            )
+        })?;
+        self.at += n;
+        Ok(slice)
+    }
+
+    fn u32(&mut self, field: &str) -> Result<u32, InputError> {
+        Ok(u32::from_le_bytes(self.take(4, field)?.try_into().unwrap()))
+    }
+
+    fn u64(&mut self, field: &str) -> Result<u64, InputError> {
+        Ok(u64::from_le_bytes(self.take(8, field)?.try_into().unwrap()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn small_bumpy() -> (Scene, GBuffer) {
+        let mut scene = Scene::builtin("bumpy").expect("built-in scene");
+        scene.camera = scene.camera.with_resolution(40, 30);
+        let gbuffer = GBuffer::render(&scene, 3);
+        (scene, gbuffer)
+    }
+
+    fn config(batches: u32) -> ReferenceConfig {
+        ReferenceConfig {
+            scene: "bumpy".into(),
+            frame: 3,
+            seed: 11,
+            spp_per_batch: 2,
+            batches,
+            settings: PtSettings::default(),
+        }
+    }
+
+    /// Three shards (rendered in any order, merged in shuffled order) equal one unsharded run bit for
+    /// bit; a run stopped after a checkpoint and resumed from the file equals an uninterrupted one.
+    #[test]
+    fn shards_merge_and_resume_bit_identically() {
+        let (scene, gbuffer) = small_bumpy();
+        let (w, h) = (gbuffer.width, gbuffer.height);
+        let mut whole = Reference::new(config(7), w, h, Shard::WHOLE).unwrap();
+        assert_eq!(whole.run(&scene, &gbuffer, u32::MAX), 7);
+        assert!(
+            whole.mean().iter().any(|m| m.max_element() > 0.0),
+            "reference is black"
+        );
+        assert_eq!(whole.nonfinite, 0);
+
+        let shards: Vec<Reference> = [2, 0, 1]
+            .into_iter()
+            .map(|i| {
+                let mut r = Reference::new(config(7), w, h, Shard { index: i, count: 3 }).unwrap();
+                r.run(&scene, &gbuffer, u32::MAX);
+                r
+            })
+            .collect();
+        let ranges: Vec<_> = shards.iter().map(|s| s.start..s.end).collect();
+        assert_eq!(ranges, [4..7, 0..2, 2..4]);
+        assert_eq!(Reference::merge(shards.clone()).unwrap(), whole);
+
+        let dir = std::env::temp_dir().join(format!("reshift-reference-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("checkpoint.bin");
+        let mut interrupted = Reference::new(config(7), w, h, Shard::WHOLE).unwrap();
+        assert_eq!(interrupted.run(&scene, &gbuffer, 3), 3);
+        interrupted.save(&path).unwrap();
+        let mut resumed = Reference::load(&path).unwrap();
+        assert_eq!(resumed, interrupted);
+        resumed.run(&scene, &gbuffer, u32::MAX);
+        assert_eq!(resumed, whole);
+
+        // Negative control: an f64 accumulation of the same batch means depends on grouping.
+        let batch =
+            |b: u32| pt::render(&scene, &gbuffer, &PtSettings::default(), 11, 2 * b, 2).pixels;
+        let means: Vec<Vec<DVec3>> = (0..7).map(batch).collect();
+        let sequential = means
+            .iter()
+            .fold(vec![DVec3::ZERO; means[0].len()], |acc, m| {
+                acc.iter().zip(m).map(|(a, b)| *a + *b).collect()
+            });
+        let grouped: Vec<DVec3> = (0..means[0].len())
+            .map(|p| {
+                (means[0][p] + means[1][p])
+                    + (means[2][p] + means[3][p])
+                    + (means[4][p] + means[5][p] + means[6][p])
+            })
+            .collect();
+        assert_ne!(
+            sequential, grouped,
+            "control: plain f64 sums happen to be associative here"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn bad_input_is_a_typed_error() {
+        assert!(Shard::parse("3/3", "--shard").is_err());
+        assert!(Shard::parse("1-2", "--shard").is_err());
+        assert_eq!(
+            Shard::parse(" 1/4", "--shard").unwrap(),
+            Shard { index: 1, count: 4 }
+        );
+        let zero = ReferenceConfig {
+            spp_per_batch: 0,
+            ..config(2)
+        };
+        let err = Reference::new(zero, 4, 4, Shard::WHOLE).unwrap_err();
+        assert_eq!(
+            (err.field.as_str(), err.value.as_str()),
+            ("spp_per_batch", "0")
+        );
+
+        let (scene, gbuffer) = small_bumpy();
+        let dir =
+            std::env::temp_dir().join(format!("reshift-reference-bad-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("checkpoint.bin");
+        let mut r = Reference::new(config(2), gbuffer.width, gbuffer.height, Shard::WHOLE).unwrap();
+        r.run(&scene, &gbuffer, 1);
+        r.save(&path).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        std::fs::write(&path, &bytes[..bytes.len() - 5]).unwrap();
+        let err = Reference::load(&path).unwrap_err();
+        assert_eq!(
+            (err.file.as_path(), err.field.as_str()),
+            (path.as_path(), "pixels")
+        );
+        std::fs::write(&path, b"not a checkpoint").unwrap();
+        assert_eq!(Reference::load(&path).unwrap_err().field, "magic");
+        let incomplete = Reference::merge(vec![r]).unwrap_err();
+        assert!(incomplete.reason.contains("incomplete"), "{incomplete}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

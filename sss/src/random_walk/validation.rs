@@ -1,0 +1,482 @@
+//! Validation of the walk kernel against analytic results and conservation laws (module doc of
+//! [`super`] states the analytic check). Replicas (independent batches of walks, each with its
+//! own streams) are the statistical unit.
+
+use glam::Vec3;
+use restir::rng::StreamKey;
+use restir::stats::{Equivalence, Summary, Verdict, equivalence};
+
+use crate::geometry::Geometry;
+use crate::geometry::shapes::icosphere;
+
+use super::boundary::{Boundary, HalfSpace, MeshBoundary, Sphere};
+use super::interface::sample_cosine;
+use super::medium::{Interface, Medium};
+use super::phase::{HenyeyGreenstein, ISOTROPIC, PhaseFunction, PhaseSample};
+use super::walk::{WalkEnd, WalkSettings, walk};
+
+/// Gauss–Legendre nodes and weights on [0, 1] (Newton iteration on `P_n`).
+fn gauss_legendre_01(n: usize) -> Vec<(f64, f64)> {
+    (1..=n)
+        .map(|i| {
+            let mut x = (std::f64::consts::PI * (i as f64 - 0.25) / (n as f64 + 0.5)).cos();
+            let mut derivative = 1.0;
+            for _ in 0..100 {
+                let (mut p0, mut p1) = (1.0, x);
+                for k in 2..=n {
+                    (p0, p1) = (
+                        p1,
+                        ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64,
+                    );
+                }
+                derivative = n as f64 * (x * p1 - p0) / (x * x - 1.0);
+                let step = p1 / derivative;
+                x -= step;
+                if step.abs() < 1e-15 {
+                    break;
+                }
+            }
+            let weight = 2.0 / ((1.0 - x * x) * derivative * derivative);
+            (0.5 * (1.0 + x), 0.5 * weight)
+        })
+        .collect()
+}
+
+/// The right-hand side `√(1 − α) + (α/2) Σ_j w_j μ_j H_j / (μ + μ_j)` of the H equation.
+fn h_inverse(alpha: f64, nodes: &[(f64, f64)], h: &[f64], mu: f64) -> f64 {
+    let integral: f64 = nodes
+        .iter()
+        .zip(h)
+        .map(|(&(m, w), &hm)| w * m * hm / (mu + m))
+        .sum();
+    (1.0 - alpha).sqrt() + 0.5 * alpha * integral
+}
+
+/// Chandrasekhar's H-function for isotropic scattering with albedo `alpha`, by fixed-point
+/// iteration of `1/H(μ) = √(1 − α) + (α/2) ∫₀¹ μ′H(μ′)/(μ + μ′) dμ′` on 64 Gauss–Legendre nodes.
+fn chandrasekhar_h(alpha: f64) -> impl Fn(f64) -> f64 {
+    let nodes = gauss_legendre_01(64);
+    let mut h = vec![1.0; nodes.len()];
+    for _ in 0..10_000 {
+        let next: Vec<f64> = nodes
+            .iter()
+            .map(|&(mu, _)| 1.0 / h_inverse(alpha, &nodes, &h, mu))
+            .collect();
+        let change = next
+            .iter()
+            .zip(&h)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        h = next;
+        if change < 1e-14 {
+            break;
+        }
+    }
+    move |mu| 1.0 / h_inverse(alpha, &nodes, &h, mu)
+}
+
+/// Diffuse reflectance `R(μ0) = 1 − H(μ0)√(1 − α)` (index-matched, semi-infinite, isotropic).
+fn reflectance_exact(alpha: f64, mu0: f64) -> f64 {
+    1.0 - chandrasekhar_h(alpha)(mu0) * (1.0 - alpha).sqrt()
+}
+
+/// Single-scattering part `R1(μ0) = (α/2)(1 − μ0 ln(1 + 1/μ0))`.
+fn single_scattering_exact(alpha: f64, mu0: f64) -> f64 {
+    0.5 * alpha * (1.0 - mu0 * (1.0 + 1.0 / mu0).ln())
+}
+
+/// Per replica and channel: mean exit weight of all walks (`R`) and of those that left after
+/// exactly one collision (`R1`), for a collimated beam at incidence cosine `mu0` on the
+/// half-space `z < 0`.
+fn reflectance_replicas<P: PhaseFunction>(
+    medium: &Medium<P>,
+    mu0: f32,
+    replicas: u32,
+    walks: u32,
+    seed: u64,
+) -> (Vec<[f64; 3]>, Vec<[f64; 3]>, u32) {
+    let boundary = HalfSpace {
+        point: Vec3::ZERO,
+        normal: Vec3::Z,
+    };
+    let dir = Vec3::new((1.0 - mu0 * mu0).sqrt(), 0.0, -mu0);
+    let settings = WalkSettings::default();
+    let (mut r_all, mut r_single, mut truncated) = (Vec::new(), Vec::new(), 0);
+    for replica in 0..replicas {
+        let (mut sum, mut sum_single) = ([0.0f64; 3], [0.0f64; 3]);
+        for i in 0..walks {
+            let mut stream = StreamKey::new(i, replica, 0xC4A2, 1).stream(seed);
+            match walk(&boundary, medium, Vec3::ZERO, dir, &settings, &mut stream) {
+                WalkEnd::Exited(exit) => {
+                    for c in 0..3 {
+                        sum[c] += exit.weight[c] as f64;
+                        if exit.scatter_count == 1 {
+                            sum_single[c] += exit.weight[c] as f64;
+                        }
+                    }
+                }
+                WalkEnd::Truncated => truncated += 1,
+                WalkEnd::Terminated => {}
+            }
+        }
+        r_all.push(sum.map(|s| s / walks as f64));
+        r_single.push(sum_single.map(|s| s / walks as f64));
+    }
+    (r_all, r_single, truncated)
+}
+
+fn channel_summary(replicas: &[[f64; 3]], c: usize) -> Summary {
+    Summary::from_samples(&replicas.iter().map(|r| r[c]).collect::<Vec<_>>())
+}
+
+/// Albedos (0.3, 0.8, 0.99) with extinctions (1, 2, 4): one chromatic medium checks three
+/// albedos and the hero-channel weights at once (R depends on α only: no length scale).
+fn chromatic_medium() -> Medium {
+    let sigma_t = Vec3::new(1.0, 2.0, 4.0);
+    let albedo = Vec3::new(0.3, 0.8, 0.99);
+    let sigma_s = albedo * sigma_t;
+    let path = std::path::Path::new("<test>");
+    Medium::new(
+        sigma_s,
+        sigma_t - sigma_s,
+        0.0,
+        Interface::IndexMatched,
+        path,
+        "medium",
+    )
+    .unwrap()
+}
+
+/// A deliberately wrong phase function: draws HG(g = 0.5) directions but reports the isotropic
+/// value and pdf, i.e. its sampling pdf is wrong (the negative control of the analytic check).
+struct WrongPdfPhase(HenyeyGreenstein);
+
+impl PhaseFunction for WrongPdfPhase {
+    fn eval(&self, _: Vec3, _: Vec3) -> f32 {
+        ISOTROPIC
+    }
+    fn sample(&self, dir_in: Vec3, u: [f32; 2]) -> PhaseSample {
+        PhaseSample {
+            value: ISOTROPIC,
+            pdf: ISOTROPIC,
+            ..self.0.sample(dir_in, u)
+        }
+    }
+    fn pdf(&self, _: Vec3, _: Vec3) -> f32 {
+        ISOTROPIC
+    }
+}
+
+// Analytic check: K = 24 replicas × 12 000 walks per incidence, μ0 ∈ {1, 0.5}; 12 comparisons
+// (3 albedos × {R, R1} × 2 μ0), each an equivalence test with δ = 3% relative at confidence
+// 1 − 0.01/12 (Bonferroni, family α = 0.01); every one must be `Unbiased`.
+const REPLICAS: u32 = 24;
+const WALKS: u32 = 12_000;
+const DELTA: f64 = 0.03;
+const CONFIDENCE: f64 = 1.0 - 0.01 / 12.0;
+
+fn check(what: &str, estimate: &Summary, exact: f64) -> Equivalence {
+    let e = equivalence(estimate, &Summary::exact(exact), DELTA, CONFIDENCE);
+    eprintln!(
+        "{what}: walk {:.5} ± {:.5}, exact {exact:.5}, rel. bias {:+.4} CI [{:+.4}, {:+.4}], p {:.3}, {:?}",
+        estimate.mean,
+        estimate.std_err,
+        e.relative_bias,
+        e.ci_low,
+        e.ci_high,
+        e.p_zero_bias,
+        e.verdict
+    );
+    e
+}
+
+#[test]
+fn chandrasekhar_reference_is_self_consistent() {
+    for alpha in [0.3, 0.8, 0.99] {
+        let h = chandrasekhar_h(alpha);
+        // The classical form H(μ) = 1 + (α/2) μ H(μ) ∫₀¹ H(μ′)/(μ + μ′) dμ′ holds for the solution
+        // of the form we iterate, and so does the zeroth moment (α/2) ∫₀¹ H = 1 − √(1 − α).
+        let nodes = gauss_legendre_01(64);
+        for mu in [0.5, 1.0] {
+            let integral: f64 = nodes.iter().map(|&(m, w)| w * h(m) / (mu + m)).sum();
+            let classical = 1.0 + 0.5 * alpha * mu * h(mu) * integral;
+            assert!(
+                (classical - h(mu)).abs() < 1e-6,
+                "α={alpha} μ={mu}: {classical} vs {}",
+                h(mu)
+            );
+        }
+        let moment: f64 = 0.5 * alpha * nodes.iter().map(|&(m, w)| w * h(m)).sum::<f64>();
+        assert!(
+            (moment - (1.0 - (1.0 - alpha).sqrt())).abs() < 1e-6,
+            "α={alpha}: moment {moment}"
+        );
+    }
+    // Conservative limit R = 1, and R → R1 as α → 0 (single scattering dominates).
+    assert!((reflectance_exact(1.0, 0.7) - 1.0).abs() < 1e-12);
+    for mu0 in [0.5, 1.0] {
+        let (r, r1) = (
+            reflectance_exact(1e-3, mu0),
+            single_scattering_exact(1e-3, mu0),
+        );
+        assert!((r / r1 - 1.0).abs() < 1e-3, "μ0={mu0}: R {r} vs R1 {r1}");
+    }
+}
+
+/// The walk's diffuse reflectance and single-scattering reflectance against Chandrasekhar.
+/// Negative control: the same test on a walk whose phase sampling pdf is wrong must be `Biased`.
+#[test]
+fn walk_matches_chandrasekhar_reflectance() {
+    let medium = chromatic_medium();
+    let albedo = medium.albedo();
+    for (k, mu0) in [1.0f32, 0.5].into_iter().enumerate() {
+        let (r_all, r_single, truncated) =
+            reflectance_replicas(&medium, mu0, REPLICAS, WALKS, 7 + k as u64);
+        assert_eq!(
+            truncated,
+            0,
+            "walks hit the cap of {}",
+            WalkSettings::default().max_bounces
+        );
+        for c in 0..3 {
+            let alpha = albedo[c] as f64;
+            for (what, replicas, exact) in [
+                ("R", &r_all, reflectance_exact(alpha, mu0 as f64)),
+                ("R1", &r_single, single_scattering_exact(alpha, mu0 as f64)),
+            ] {
+                let label = format!("{what}(μ0={mu0}) α={alpha:.2}");
+                let e = check(&label, &channel_summary(replicas, c), exact);
+                assert_eq!(
+                    e.verdict,
+                    Verdict::Unbiased,
+                    "{label}: {e:?} (δ = {DELTA}, confidence {CONFIDENCE}, K = {REPLICAS} × {WALKS} walks)"
+                );
+            }
+        }
+    }
+    let wrong = medium.with_phase(WrongPdfPhase(HenyeyGreenstein::new(0.5).unwrap()));
+    let (r_all, _, _) = reflectance_replicas(&wrong, 1.0, REPLICAS, WALKS, 7);
+    for c in 0..3 {
+        let alpha = albedo[c] as f64;
+        let label = format!("negative control R(μ0=1) α={alpha:.2}");
+        let e = check(
+            &label,
+            &channel_summary(&r_all, c),
+            reflectance_exact(alpha, 1.0),
+        );
+        assert_eq!(
+            e.verdict,
+            Verdict::Biased,
+            "{label} not detected: {e:?} (δ = {DELTA}, K = {REPLICAS} × {WALKS} walks)"
+        );
+    }
+}
+
+/// Exit statistics of walks entering a closed object at `x1` (outward normal `n1`) with
+/// cosine-distributed inward directions (entry weight 1).
+struct EnergyTally {
+    /// Per replica and channel: mean exiting weight per entering unit weight.
+    replicas: Vec<[f64; 3]>,
+    /// Walks that did not exit, or whose exit weight differs from 1 by more than 1e-5 in a channel.
+    not_unit: u32,
+    truncated: u32,
+    reflected_walks: u32,
+}
+
+fn energy_tally<B: Boundary + ?Sized>(
+    boundary: &B,
+    medium: &Medium,
+    x1: Vec3,
+    n1: Vec3,
+    replicas: u32,
+    walks: u32,
+    seed: u64,
+) -> EnergyTally {
+    let settings = WalkSettings::default();
+    let mut tally = EnergyTally {
+        replicas: Vec::new(),
+        not_unit: 0,
+        truncated: 0,
+        reflected_walks: 0,
+    };
+    for replica in 0..replicas {
+        let mut sum = [0.0f64; 3];
+        for i in 0..walks {
+            let mut stream = StreamKey::new(i, replica, 0xE4E2, 2).stream(seed);
+            let dir = sample_cosine(-n1, [stream.next_f32(), stream.next_f32()]);
+            let end = walk(boundary, medium, x1, dir, &settings, &mut stream);
+            let weight = match end {
+                WalkEnd::Exited(exit) => {
+                    tally.reflected_walks += (exit.reflection_count > 0) as u32;
+                    exit.weight
+                }
+                WalkEnd::Truncated => {
+                    tally.truncated += 1;
+                    Vec3::ZERO
+                }
+                WalkEnd::Terminated => Vec3::ZERO,
+            };
+            tally.not_unit += ((weight - Vec3::ONE).abs().max_element() > 1e-5) as u32;
+            for c in 0..3 {
+                sum[c] += weight[c] as f64;
+            }
+        }
+        tally.replicas.push(sum.map(|s| s / walks as f64));
+    }
+    tally
+}
+
+fn medium(sigma_s: Vec3, sigma_a: Vec3, g: f32, interface: Interface) -> Medium {
+    Medium::new(
+        sigma_s,
+        sigma_a,
+        g,
+        interface,
+        std::path::Path::new("<test>"),
+        "medium",
+    )
+    .unwrap()
+}
+
+/// Verdicts of "mean exit weight = 1" per channel: equivalence, δ = 1% relative, confidence
+/// 1 − 0.01/3 per channel (Bonferroni over 3 channels).
+fn energy_verdicts(tally: &EnergyTally, what: &str) -> [Verdict; 3] {
+    [0, 1, 2].map(|c| {
+        let e = equivalence(
+            &channel_summary(&tally.replicas, c),
+            &Summary::exact(1.0),
+            0.01,
+            1.0 - 0.01 / 3.0,
+        );
+        eprintln!(
+            "{what} channel {c}: exit/entry {:.5}, CI [{:+.4}, {:+.4}], {:?}",
+            1.0 + e.relative_bias,
+            e.ci_low,
+            e.ci_high,
+            e.verdict
+        );
+        e.verdict
+    })
+}
+
+/// Energy conservation at albedo 1 with an index-matched boundary, sphere (analytic) and closed
+/// mesh (BVH): gray medium, 8 × 2 500 walks, every walk exits with weight 1 (to 1e-5) and none
+/// reaches the cap (`DEFAULT_MAX_BOUNCES`); chromatic medium (σt = (6, 8, 10), hero weights),
+/// 16 × 5 000 walks: mean exit weight equivalent to 1 per channel (δ = 1%). Negative control:
+/// σa = 2% of σt loses energy, and both checks flag it.
+#[test]
+fn albedo_one_conserves_energy_index_matched() {
+    let sphere = Sphere {
+        center: Vec3::ZERO,
+        radius: 1.0,
+    };
+    let geometry = Geometry::new(&[icosphere(1.0, 2)]);
+    let mesh = MeshBoundary {
+        geometry: &geometry,
+        object: 0,
+        inward_winding: false,
+    };
+    let [v0, v1, v2] = geometry.vertices(0);
+    let (x_mesh, n_mesh) = ((v0 + v1 + v2) / 3.0, geometry.geometric_normal(0));
+    let boundaries: [(&str, &dyn Boundary, Vec3, Vec3); 2] = [
+        ("sphere", &sphere, Vec3::Z, Vec3::Z),
+        ("icosphere mesh", &mesh, x_mesh, n_mesh),
+    ];
+    let gray = medium(Vec3::splat(10.0), Vec3::ZERO, 0.7, Interface::IndexMatched);
+    let chromatic = medium(
+        Vec3::new(6.0, 8.0, 10.0),
+        Vec3::ZERO,
+        0.3,
+        Interface::IndexMatched,
+    );
+    let lossy = medium(
+        Vec3::splat(9.8),
+        Vec3::splat(0.2),
+        0.7,
+        Interface::IndexMatched,
+    );
+    for (name, boundary, x1, n1) in boundaries {
+        let tally = energy_tally(boundary, &gray, x1, n1, 8, 2_500, 1);
+        assert_eq!(
+            (tally.not_unit, tally.truncated),
+            (0, 0),
+            "{name}, gray: walks without unit exit weight / truncated"
+        );
+        let tally = energy_tally(boundary, &chromatic, x1, n1, 16, 5_000, 2);
+        assert_eq!(tally.truncated, 0, "{name}, chromatic: truncated walks");
+        assert_eq!(
+            energy_verdicts(&tally, name),
+            [Verdict::Unbiased; 3],
+            "{name}, chromatic: mean exit weight not shown within δ = 1% of 1 (confidence 1 − 0.01/3, 16 × 5 000 walks)"
+        );
+        let lossy = energy_tally(boundary, &lossy, x1, n1, 8, 2_500, 3);
+        assert!(
+            lossy.not_unit > 0,
+            "{name}: negative control (σa > 0) kept every walk's weight"
+        );
+        let verdicts = energy_verdicts(&lossy, &format!("{name}, negative control σa > 0"));
+        assert_eq!(
+            verdicts,
+            [Verdict::Biased; 3],
+            "{name}: negative control not flagged (δ = 1%, confidence 1 − 0.01/3, 8 × 2 500 walks)"
+        );
+    }
+}
+
+/// Smooth dielectric (η = 1.4) at albedo 1: Fresnel and total internal reflection only delay
+/// the exit. Sphere and closed mesh, gray medium, 8 × 2 500 walks: every walk exits with
+/// weight 1 and none hits the cap; at least a fifth of the walks were reflected internally
+/// (so the check exercises reflection). Negative control: σa = 2% of σt loses energy.
+#[test]
+fn albedo_one_conserves_energy_dielectric() {
+    let sphere = Sphere {
+        center: Vec3::ZERO,
+        radius: 1.0,
+    };
+    let geometry = Geometry::new(&[icosphere(1.0, 2)]);
+    let mesh = MeshBoundary {
+        geometry: &geometry,
+        object: 0,
+        inward_winding: false,
+    };
+    let [v0, v1, v2] = geometry.vertices(0);
+    let (x_mesh, n_mesh) = ((v0 + v1 + v2) / 3.0, geometry.geometric_normal(0));
+    let boundaries: [(&str, &dyn Boundary, Vec3, Vec3); 2] = [
+        ("sphere", &sphere, Vec3::Z, Vec3::Z),
+        ("icosphere mesh", &mesh, x_mesh, n_mesh),
+    ];
+    let dielectric = Interface::Dielectric { eta: 1.4 };
+    let gray = medium(Vec3::splat(10.0), Vec3::ZERO, 0.7, dielectric);
+    let lossy = medium(Vec3::splat(9.8), Vec3::splat(0.2), 0.7, dielectric);
+    for (name, boundary, x1, n1) in boundaries {
+        let tally = energy_tally(boundary, &gray, x1, n1, 8, 2_500, 4);
+        assert_eq!(
+            (tally.not_unit, tally.truncated),
+            (0, 0),
+            "{name}: walks without unit exit weight / truncated"
+        );
+        eprintln!(
+            "{name}: {} of 20 000 walks reflected internally",
+            tally.reflected_walks
+        );
+        assert!(
+            tally.reflected_walks > 4_000,
+            "{name}: only {} reflected walks",
+            tally.reflected_walks
+        );
+        let lossy = energy_tally(boundary, &lossy, x1, n1, 8, 2_500, 5);
+        assert!(
+            lossy.not_unit > 0,
+            "{name}: negative control (σa > 0) kept every walk's weight"
+        );
+        let verdicts = energy_verdicts(
+            &lossy,
+            &format!("{name} dielectric, negative control σa > 0"),
+        );
+        assert_eq!(
+            verdicts,
+            [Verdict::Biased; 3],
+            "{name}: negative control not flagged (δ = 1%, confidence 1 − 0.01/3, 8 × 2 500 walks)"
+        );
+    }
+}

@@ -1,0 +1,193 @@
+//! The scene file as written: serde structs for the TOML format (documented field by field in
+//! `docs/scene-format.md`). Unknown fields are rejected everywhere; semantic checks (ranges,
+//! names, files) happen in `load`.
+
+use serde::Deserialize;
+
+/// A whole scene file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    pub camera: CameraDesc,
+    #[serde(default)]
+    pub materials: Vec<MaterialDesc>,
+    #[serde(default)]
+    pub objects: Vec<ObjectDesc>,
+    #[serde(default)]
+    pub lights: Vec<LightDesc>,
+    pub many_lights: Option<ManyLightsDesc>,
+}
+
+/// `[camera]`: the start (`eye`, `target`) and end (`eye_end`, `target_end`, default: the start)
+/// of the linear trajectory over the 16 frames.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraDesc {
+    pub resolution: [u32; 2],
+    /// Vertical field of view in degrees.
+    pub vfov: f32,
+    pub eye: [f32; 3],
+    pub target: [f32; 3],
+    pub eye_end: Option<[f32; 3]>,
+    pub target_end: Option<[f32; 3]>,
+    pub up: Option<[f32; 3]>,
+    pub jitter: Option<bool>,
+}
+
+/// `[[materials]]`: `type = "translucent"` (parameters, or a measured `preset` with optional
+/// overrides) or `type = "lambert"` (albedo only).
+#[derive(Debug, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum MaterialDesc {
+    Translucent {
+        name: String,
+        preset: Option<String>,
+        albedo: Option<[f32; 3]>,
+        mfp: Option<[f32; 3]>,
+        scale: Option<f32>,
+        ior: Option<f32>,
+        g: Option<f32>,
+        fit: Option<FitDesc>,
+    },
+    Lambert {
+        name: String,
+        albedo: [f32; 3],
+    },
+}
+
+impl MaterialDesc {
+    pub fn name(&self) -> &str {
+        match self {
+            MaterialDesc::Translucent { name, .. } | MaterialDesc::Lambert { name, .. } => name,
+        }
+    }
+}
+
+/// `fit`: which Christensen–Burley fit relates `mfp` to `d`.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FitDesc {
+    Searchlight,
+    DiffuseTransmission,
+    Dmfp,
+}
+
+/// `[[objects]]`: a procedural `shape` or a `mesh` file, placed by `transform`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectDesc {
+    pub name: String,
+    pub material: String,
+    pub shape: Option<ShapeDesc>,
+    /// OBJ or PLY file, relative to the scene file's folder.
+    pub mesh: Option<String>,
+    #[serde(default)]
+    pub transform: TransformDesc,
+}
+
+/// `transform = { translate, rotate, scale }`: scale, then rotate about X, then Y, then Z
+/// (degrees), then translate.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TransformDesc {
+    pub translate: Option<[f32; 3]>,
+    pub rotate: Option<[f32; 3]>,
+    pub scale: Option<ScaleDesc>,
+}
+
+/// A uniform (`scale = 2`) or per-axis (`scale = [1, 2, 1]`) scale.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(untagged)]
+pub enum ScaleDesc {
+    Uniform(f32),
+    PerAxis([f32; 3]),
+}
+
+/// `shape = { type = …, … }`: the procedural shapes of `geometry::shapes`, centred at the origin.
+/// Tessellation fields are optional (defaults in `load`).
+#[derive(Debug, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ShapeDesc {
+    Sphere {
+        radius: f32,
+        segments: Option<u32>,
+        rings: Option<u32>,
+    },
+    /// `size`: full extents along x, y, z.
+    Box { size: [f32; 3] },
+    /// `size`: extents along x and z; `thickness` along y.
+    Slab { size: [f32; 2], thickness: f32 },
+    /// One-sided rectangle at y = 0 facing +y; `size`: extents along x and z.
+    Quad { size: [f32; 2] },
+    Torus {
+        major_radius: f32,
+        minor_radius: f32,
+        segments: Option<u32>,
+        sides: Option<u32>,
+    },
+    TorusKnot {
+        p: u32,
+        q: u32,
+        radius: f32,
+        tube_radius: f32,
+        segments: Option<u32>,
+        sides: Option<u32>,
+    },
+    BumpySphere {
+        radius: f32,
+        amplitude: f32,
+        frequency: f32,
+        seed: Option<u64>,
+        subdivisions: Option<u32>,
+    },
+}
+
+/// `[[lights]]`.
+#[derive(Debug, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum LightDesc {
+    Quad {
+        corner: [f32; 3],
+        edge_u: [f32; 3],
+        edge_v: [f32; 3],
+        radiance: [f32; 3],
+    },
+    Triangle {
+        vertices: [[f32; 3]; 3],
+        radiance: [f32; 3],
+    },
+    Sphere {
+        center: [f32; 3],
+        radius: f32,
+        radiance: [f32; 3],
+    },
+    Point {
+        position: [f32; 3],
+        intensity: [f32; 3],
+    },
+    Directional {
+        direction: [f32; 3],
+        irradiance: [f32; 3],
+    },
+}
+
+/// `[many_lights]`: `count` small sphere lights placed uniformly at random in the box `region`,
+/// sharing `total_power` equally, coloured `color` (normalised to unit luminance).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ManyLightsDesc {
+    pub count: u32,
+    pub seed: u64,
+    pub region: RegionDesc,
+    pub radius: f32,
+    pub total_power: f32,
+    pub color: Option<[f32; 3]>,
+}
+
+/// An axis-aligned box.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RegionDesc {
+    pub min: [f32; 3],
+    pub max: [f32; 3],
+}

@@ -1,0 +1,325 @@
+//! The `reshift` binary end to end: help, listings, bad input (one-line error, non-zero exit, no
+//! panic), `compare` and `bias` on every built-in scene with JSON validated against
+//! docs/results-schema.md, the reference cache, and sharded references merged bit for bit.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+use serde_json::Value;
+use sss::scene::Scene;
+
+fn reshift(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_reshift"))
+        .args(args)
+        .output()
+        .expect("run reshift")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A fresh folder for one test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("reshift-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
+fn ok(o: &Output) -> String {
+    assert!(o.status.success(), "exit {:?}\n{}", o.status, stderr(o));
+    stdout(o)
+}
+
+/// Exit status 1 and exactly one stderr line `reshift: …` containing `needle`, no panic.
+fn fails_with(args: &[&str], needle: &str) {
+    let o = reshift(args);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+    assert!(!err.contains("panicked"), "{args:?}: {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+    assert!(err.starts_with("reshift: "), "{args:?}: {err}");
+    assert!(err.contains(needle), "{args:?}: expected {needle:?} in {err}");
+}
+
+#[test]
+fn every_subcommand_has_help() {
+    for sub in [
+        "scenes", "methods", "render", "compare", "bias", "reference", "merge", "experiment", "toy",
+    ] {
+        let text = ok(&reshift(&[sub, "--help"]));
+        assert!(text.contains("Usage: reshift"), "{sub}: {text}");
+    }
+}
+
+#[test]
+fn scenes_and_methods_list_the_registries() {
+    let text = ok(&reshift(&["scenes"]));
+    assert_eq!(text.lines().count(), Scene::BUILTIN.len());
+    for (name, about) in Scene::BUILTIN {
+        assert!(text.contains(name) && text.contains(about), "{name}");
+    }
+    let json: Value = serde_json::from_str(&ok(&reshift(&["scenes", "--json"]))).unwrap();
+    assert_eq!(json.as_array().unwrap().len(), Scene::BUILTIN.len());
+    let methods = ok(&reshift(&["methods"]));
+    assert!(methods.contains("pt[:spp]") && methods.contains("restir:"), "{methods}");
+}
+
+#[test]
+fn bad_input_is_one_line_and_non_zero() {
+    let dir = scratch("bad");
+    let out = dir.join("out");
+    let out = out.to_str().unwrap();
+    fails_with(
+        &["render", "--scene", "nope", "--method", "pt", "--out", out],
+        "unknown scene",
+    );
+    fails_with(
+        &["render", "--scene", "bumpy", "--method", "bdpt", "--out", out],
+        "unknown method",
+    );
+    fails_with(
+        &["compare", "--methods", "pt,restir:nope", "--out", out],
+        "unknown preset",
+    );
+    // A malformed scene file.
+    let broken = dir.join("broken.toml");
+    std::fs::write(&broken, "[camera\nresolution = [").unwrap();
+    fails_with(
+        &["render", "--scene", broken.to_str().unwrap(), "--method", "pt", "--out", out],
+        "broken.toml",
+    );
+    // An output folder below a regular file cannot be created.
+    let file = dir.join("file");
+    std::fs::write(&file, "x").unwrap();
+    let below_file = file.join("sub");
+    fails_with(
+        &[
+            "render", "--scene", "bumpy", "--method", "pt", "--resolution", "8x6", "--out",
+            below_file.to_str().unwrap(),
+        ],
+        "output folder",
+    );
+    fails_with(
+        &["render", "--scene", "bumpy", "--method", "pt", "--resolution", "8by6", "--out", out],
+        "--resolution",
+    );
+    // A reference of the wrong size.
+    let reference = dir.join("small.rsref");
+    ok(&reshift(&[
+        "reference", "--scene", "bumpy", "--resolution", "8x6", "--spp", "4", "--batch-spp", "2",
+        "--out", reference.to_str().unwrap(),
+    ]));
+    fails_with(
+        &[
+            "compare", "--resolution", "16x12", "--replicas", "1", "--frames", "1", "--methods",
+            "pt", "--reference", reference.to_str().unwrap(), "--out", out,
+        ],
+        "8×6",
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn render_writes_exr_png_and_timing() {
+    let dir = scratch("render");
+    let json: Value = serde_json::from_str(&ok(&reshift(&[
+        "render", "--scene", "bumpy", "--method", "restir:hybrid", "--frames", "2",
+        "--resolution", "16x12", "--out", dir.to_str().unwrap(), "--json",
+    ])))
+    .unwrap();
+    assert_eq!(json["frames_rendered"], 2);
+    assert!(json["seconds_per_frame"].as_f64().unwrap() > 0.0);
+    for key in ["exr", "png"] {
+        let path = json[key].as_str().unwrap();
+        assert!(std::fs::metadata(path).unwrap().len() > 0, "{path}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Sharded references merged equal the unsharded reference bit for bit; a shard alone, or a
+/// different seed (the negative control), does not.
+#[test]
+fn sharded_reference_merges_bit_identically() {
+    let dir = scratch("shards");
+    let path = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let base = [
+        "reference", "--scene", "bumpy", "--resolution", "12x9", "--spp", "12", "--batch-spp", "2",
+    ];
+    let run = |extra: &[&str]| ok(&reshift(&[&base[..], extra].concat()));
+    run(&["--out", &path("whole.rsref")]);
+    for i in 0..3 {
+        run(&["--shard", &format!("{i}/3"), "--out", &path(&format!("s{i}.rsref"))]);
+    }
+    ok(&reshift(&[
+        "merge", &path("s2.rsref"), &path("s0.rsref"), &path("s1.rsref"), "--out",
+        &path("merged.rsref"),
+    ]));
+    run(&["--seed", "7", "--out", &path("other-seed.rsref")]);
+    let bytes = |name: &str| std::fs::read(dir.join(name)).unwrap();
+    assert_eq!(bytes("whole.rsref"), bytes("merged.rsref"));
+    assert_eq!(bytes("whole.rsref.exr"), bytes("merged.rsref.exr"));
+    assert_ne!(bytes("whole.rsref"), bytes("other-seed.rsref"));
+    assert_ne!(bytes("whole.rsref").len(), 0);
+    // Merging an incomplete set of shards with a shard of another reference fails cleanly.
+    fails_with(
+        &["merge", &path("s0.rsref"), &path("other-seed.rsref"), "--out", &path("bad.rsref")],
+        "merge",
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The JSON Schema blocks of docs/results-schema.md: compare, then bias.
+fn schemas() -> Vec<Value> {
+    let doc = include_str!("../docs/results-schema.md");
+    doc.split("```json")
+        .skip(1)
+        .map(|block| serde_json::from_str(block.split("```").next().unwrap()).expect("schema"))
+        .collect()
+}
+
+/// Validates `value` against the JSON Schema subset of docs/results-schema.md; returns the
+/// violations with their JSON paths.
+fn violations(schema: &Value, value: &Value, at: &str, out: &mut Vec<String>) {
+    if let Some(types) = schema.get("type") {
+        let types: Vec<&str> = match types {
+            Value::String(t) => vec![t.as_str()],
+            Value::Array(ts) => ts.iter().filter_map(Value::as_str).collect(),
+            _ => vec![],
+        };
+        let matches = |t: &str| match t {
+            "object" => value.is_object(),
+            "array" => value.is_array(),
+            "string" => value.is_string(),
+            "number" => value.is_number(),
+            "integer" => value.is_u64() || value.is_i64(),
+            "boolean" => value.is_boolean(),
+            "null" => value.is_null(),
+            _ => false,
+        };
+        if !types.iter().any(|t| matches(t)) {
+            out.push(format!("{at}: {value} is not {types:?}"));
+            return;
+        }
+    }
+    if let Some(allowed) = schema.get("enum").and_then(Value::as_array)
+        && !allowed.contains(value)
+    {
+        out.push(format!("{at}: {value} not in {allowed:?}"));
+    }
+    if let (Some(min), Some(v)) = (schema.get("minimum").and_then(Value::as_f64), value.as_f64())
+        && v < min
+    {
+        out.push(format!("{at}: {v} < {min}"));
+    }
+    if let Some(object) = value.as_object() {
+        let properties = schema.get("properties").and_then(Value::as_object);
+        for key in schema.get("required").and_then(Value::as_array).into_iter().flatten() {
+            if !object.contains_key(key.as_str().unwrap()) {
+                out.push(format!("{at}: missing {key}"));
+            }
+        }
+        for (key, v) in object {
+            match properties.and_then(|p| p.get(key)) {
+                Some(s) => violations(s, v, &format!("{at}.{key}"), out),
+                None if schema.get("additionalProperties") == Some(&Value::Bool(false)) => {
+                    out.push(format!("{at}: unexpected {key}"))
+                }
+                None => {}
+            }
+        }
+    }
+    if let (Some(items), Some(array)) = (schema.get("items"), value.as_array()) {
+        for (i, v) in array.iter().enumerate() {
+            violations(items, v, &format!("{at}[{i}]"), out);
+        }
+    }
+}
+
+fn assert_valid(schema: &Value, value: &Value, what: &str) {
+    let mut out = Vec::new();
+    violations(schema, value, "$", &mut out);
+    assert!(out.is_empty(), "{what}: {out:#?}");
+}
+
+/// The schema check must be able to fail: a result with a missing field, a wrong type, an
+/// unknown area and an extra field is rejected on each count (negative control).
+fn assert_schema_rejects_broken(schema: &Value, good: &Value) {
+    let mut broken = good.clone();
+    let object = broken.as_object_mut().unwrap();
+    object.remove("scene");
+    object.insert("replicas".into(), Value::String("four".into()));
+    object.insert("surprise".into(), Value::Bool(true));
+    broken["methods"][0]["areas"][0]["area"] = Value::String("everywhere".into());
+    let mut out = Vec::new();
+    violations(schema, &broken, "$", &mut out);
+    assert_eq!(out.len(), 4, "{out:#?}");
+}
+
+/// `compare` on every built-in scene at 16×12 (2 frames, 2 replicas, `pt` and two presets, a
+/// 2 × 8 spp reference): exits 0, writes every output, and its results.json validates against
+/// the schema. The second run on `bumpy` reuses the cached reference.
+#[test]
+fn compare_runs_on_every_builtin_scene_and_validates() {
+    let dir = scratch("compare");
+    let schema = &schemas()[0];
+    let cache = dir.join("cache");
+    for (name, _) in Scene::BUILTIN {
+        let out = dir.join(name);
+        let args = [
+            "compare", "--scene", name, "--methods", "pt:2,restir:hybrid,restir:sequential",
+            "--replicas", "2", "--frames", "2", "--resolution", "16x12", "--reference-spp", "16",
+            "--reference-batch-spp", "8", "--out", out.to_str().unwrap(), "--cache",
+            cache.to_str().unwrap(), "--json",
+        ];
+        let printed: Value = serde_json::from_str(&ok(&reshift(&args))).expect(name);
+        let written: Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap())
+                .unwrap();
+        assert_eq!(printed, written, "{name}");
+        assert_valid(schema, &written, name);
+        assert_eq!(written["reference"]["cached"], false, "{name}");
+        for method in written["methods"].as_array().unwrap() {
+            for image in method["images"].as_object().unwrap().values() {
+                assert!(out.join(image.as_str().unwrap()).is_file(), "{name}: {image}");
+            }
+        }
+        for file in ["table.md", "table.csv", "reference.exr", "reference.png"] {
+            assert!(out.join(file).is_file(), "{name}: {file}");
+        }
+        if *name == "bumpy" {
+            assert_schema_rejects_broken(schema, &written);
+            let again: Value = serde_json::from_str(&ok(&reshift(&args))).unwrap();
+            assert_eq!(again["reference"]["cached"], true);
+            assert_eq!(again["methods"][0]["areas"], written["methods"][0]["areas"]);
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `bias` on every built-in scene (16×12, 2 frames, N = 3 replicas of `restir:hybrid`, 3
+/// reference batches × 8 spp, δ = 3%, α = 0.01): exits 0 and its JSON validates. The verdicts
+/// at this N are not asserted (the statistical tests live in `experiments::bias`).
+#[test]
+fn bias_runs_on_every_builtin_scene_and_validates() {
+    let schema = &schemas()[1];
+    for (name, _) in Scene::BUILTIN {
+        let json: Value = serde_json::from_str(&ok(&reshift(&[
+            "bias", "--scene", name, "--method", "restir:hybrid", "--replicas", "3", "--frames",
+            "2", "--resolution", "16x12", "--reference-batches", "3", "--reference-batch-spp", "8",
+            "--json",
+        ])))
+        .expect(name);
+        assert_valid(schema, &json, name);
+        let mut broken = json.clone();
+        broken["verdict"] = Value::String("fine".into());
+        let mut out = Vec::new();
+        violations(schema, &broken, "$", &mut out);
+        assert_eq!(out.len(), 1, "negative control: {out:?}");
+    }
+}

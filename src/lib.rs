@@ -2,5 +2,7 @@
 //!
 //! This facade re-exports the workspace crates; see `docs/architecture.md` for the layout.
 
+pub use experiments;
 pub use restir;
+pub use shifts;
 pub use sss;

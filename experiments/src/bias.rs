@@ -31,7 +31,8 @@ pub fn luminance(rgb: Vec3) -> f64 {
 }
 
 /// Per-pixel luminance images of independent runs, and how many of their values were not
-/// finite (the pipeline and the path tracer write those as 0, a bias the tests must not hide).
+/// finite (the pipeline writes those as 0 and the path tracer leaves them out of its means: a
+/// bias either way, which a test must not hide).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Images {
     pub luminance: Vec<Vec<f64>>,
@@ -72,8 +73,9 @@ pub fn replica_images(
 
 /// The reference: `batches` independent batches of the path tracer (`sss::integrator::pt`, all
 /// hits per probe) at `frame`, `spp_per_batch` samples each; batch `b` is samples
-/// `b·spp_per_batch ..` under `seed`, so choose a seed no replica uses. More than 2³² samples
-/// per pixel (the sample index is a `u32`) is an input error.
+/// `b·spp_per_batch ..` under `seed`, so choose a seed no replica uses. Input errors: fewer than
+/// two batches (no standard error), no samples per batch, more than 2³² samples per pixel (the
+/// sample index is a `u32`).
 pub fn reference_images(
     scene: &Scene,
     frame: u32,
@@ -81,13 +83,26 @@ pub fn reference_images(
     spp_per_batch: u32,
     seed: u64,
 ) -> Result<Images, InputError> {
-    if batches as u64 * spp_per_batch as u64 > 1 << 32 {
-        return Err(InputError::new(
-            "(bias reference)",
+    let bad = |field: &str, value: String, reason: &str| {
+        Err(InputError::new("(bias reference)", field, value, reason))
+    };
+    if batches < 2 {
+        return bad(
             "batches",
-            format!("{batches} × {spp_per_batch}"),
+            batches.to_string(),
+            "need ≥ 2 for a standard error",
+        );
+    }
+    if spp_per_batch == 0 {
+        return bad("spp_per_batch", "0".into(), "must be ≥ 1");
+    }
+    if batches as u64 * spp_per_batch as u64 > 1 << 32 {
+        let value = format!("{batches} × {spp_per_batch}");
+        return bad(
+            "batches",
+            value,
             "batches × spp_per_batch must not exceed 2³² samples per pixel",
-        ));
+        );
     }
     let gbuffer = GBuffer::render(scene, frame);
     let settings = PtSettings::default();
@@ -420,6 +435,20 @@ mod tests {
             table.contains("| shadow +10% | shadowed | 36 | 64 |"),
             "{table}"
         );
+    }
+
+    #[test]
+    fn reference_settings_are_validated() {
+        let scene = Scene::builtin("half-shadow").expect("built-in");
+        let field = |b, k| {
+            reference_images(&scene, 0, b, k, 1)
+                .map(|_| ())
+                .unwrap_err()
+                .field
+        };
+        assert_eq!(field(1, 4), "batches");
+        assert_eq!(field(2, 0), "spp_per_batch");
+        assert_eq!(field(1 << 16, 1 << 17), "batches");
     }
 
     /// Holm, not the per-region level, decides "Biased": a p-value of 0.008 is significant at

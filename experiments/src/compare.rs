@@ -158,7 +158,11 @@ impl MethodResult {
             spp,
             replicas: replicas.len(),
             seconds_per_frame: replicas.iter().map(|r| r.seconds_per_frame).sum::<f64>() / k,
-            frames_rendered: replicas.iter().map(|r| r.frames_rendered).max().unwrap_or(0),
+            frames_rendered: replicas
+                .iter()
+                .map(|r| r.frames_rendered)
+                .max()
+                .unwrap_or(0),
             metrics,
             tonemapped_mse: tonemapped / k,
             nonfinite: replicas.iter().map(|r| r.nonfinite).sum(),
@@ -258,7 +262,11 @@ pub fn quantile(values: &[f64], q: f64) -> f64 {
 
 /// The per-pixel reference mean as linear RGB `f32` values (for image output).
 pub fn reference_pixels(reference: &Reference) -> Vec<glam::Vec3> {
-    reference.mean().iter().map(|p: &DVec3| p.as_vec3()).collect()
+    reference
+        .mean()
+        .iter()
+        .map(|p: &DVec3| p.as_vec3())
+        .collect()
 }
 
 #[cfg(test)]

@@ -17,9 +17,11 @@ pub mod methods;
 pub mod metrics;
 pub mod preset;
 pub mod purpose;
+pub mod random_walk_method;
 pub mod regions;
 pub mod reuse;
 pub mod tables;
+pub mod vulkan;
 
 use std::fmt;
 use std::time::Instant;

@@ -1,4 +1,5 @@
-//! The method registry of the CLI (DESIGN §7): `pt[:spp]` and `restir:<preset>`. A method
+//! The method registry of the CLI (DESIGN §7): `pt[:spp]`, `restir:<preset>` and
+//! `random-walk[:spp]`. A method
 //! renders the final frame of a scene's camera trajectory for one replica seed; adding a method
 //! or a family of methods is one entry of [`REGISTRY`].
 
@@ -9,7 +10,8 @@ use sss::integrator::pt::{self, PtSettings};
 use sss::scene::{GBuffer, Scene};
 
 use crate::image::Image;
-use crate::preset::{PRESET_NAMES, Preset};
+use crate::preset::{PRESET_NAMES, PassSpec, Preset, ShiftKind};
+use crate::random_walk_method;
 use crate::{PipelineError, RunConfig, run};
 
 /// The final frame of one replica of a method, and what it cost.
@@ -34,6 +36,9 @@ pub enum Method {
     /// The ReSTIR SSS pipeline with a preset; every frame of the trajectory is rendered
     /// (temporal reuse), the last one is kept.
     Restir(Preset),
+    /// The volumetric random walk on translucent pixels, the path tracer on the others
+    /// ([`random_walk_method`]); memoryless like `pt`.
+    RandomWalk { spp: u32 },
 }
 
 /// A method specification that could not be parsed.
@@ -71,19 +76,50 @@ pub const REGISTRY: &[Entry] = &[
     },
     Entry {
         family: "restir",
-        usage: "restir:<reconnection|delayed|hybrid|sequential|sequential-exact>",
-        about: "ReSTIR SSS with spatiotemporal reuse and the preset's shift mapping [001 §5.1]",
-        build: |arg| {
-            let name = arg.ok_or("needs a preset, e.g. restir:hybrid")?;
-            Preset::named(name).map(Method::Restir).ok_or_else(|| {
-                format!(
-                    "unknown preset {name:?}; known: {}",
-                    PRESET_NAMES.join(", ")
-                )
-            })
-        },
+        usage: "restir:<reconnection|delayed|hybrid|sequential|sequential-exact>[/temporal=<shift>]",
+        about: "ReSTIR SSS with spatiotemporal reuse and the preset's shift mapping [001 §5.1]; \
+                `/temporal=<shift>` swaps the temporal pass's shift (001 Fig. 10)",
+        build: restir,
+    },
+    Entry {
+        family: "random-walk",
+        usage: "random-walk[:spp]",
+        about: "volumetric random walk on translucent pixels (another transport model than the BSSRDF)",
+        build: |arg| Ok(Method::RandomWalk { spp: spp(arg)? }),
     },
 ];
+
+/// `restir:<preset>[/temporal=<shift>]`: a registered preset, optionally with the shift of its
+/// temporal pass replaced by the [`ShiftKind`] named `<shift>`.
+fn restir(arg: Option<&str>) -> Result<Method, String> {
+    let arg = arg.ok_or("needs a preset, e.g. restir:hybrid")?;
+    let (name, temporal) = match arg.split_once("/temporal=") {
+        Some((name, shift)) => (name, Some(shift)),
+        None => (arg, None),
+    };
+    let mut preset = Preset::named(name).ok_or_else(|| {
+        format!(
+            "unknown preset {name:?}; known: {}",
+            PRESET_NAMES.join(", ")
+        )
+    })?;
+    if let Some(wanted) = temporal {
+        let kind = ShiftKind::ALL
+            .into_iter()
+            .find(|k| k.name() == wanted)
+            .ok_or_else(|| {
+                let known: Vec<&str> = ShiftKind::ALL.iter().map(|k| k.name()).collect();
+                format!("unknown shift {wanted:?}; known: {}", known.join(", "))
+            })?;
+        for pass in &mut preset.passes {
+            if let PassSpec::Temporal { shift, .. } = pass {
+                *shift = kind;
+            }
+        }
+        preset.name = arg.to_string();
+    }
+    Ok(Method::Restir(preset))
+}
 
 /// `spp` of `family[:spp]`: 1 without an argument, else a positive integer.
 fn spp(arg: Option<&str>) -> Result<u32, String> {
@@ -91,7 +127,9 @@ fn spp(arg: Option<&str>) -> Result<u32, String> {
         None => Ok(1),
         Some(text) => match text.parse::<u32>() {
             Ok(n) if n > 0 => Ok(n),
-            _ => Err(format!("samples per pixel {text:?} is not a positive integer")),
+            _ => Err(format!(
+                "samples per pixel {text:?} is not a positive integer"
+            )),
         },
     }
 }
@@ -122,22 +160,24 @@ impl Method {
         match self {
             Method::Pt { spp } => format!("pt:{spp}"),
             Method::Restir(preset) => format!("restir:{}", preset.name),
+            Method::RandomWalk { spp } => format!("random-walk:{spp}"),
         }
     }
 
-    /// Samples per pixel per frame: the path tracer's `spp`, 1 candidate for ReSTIR.
+    /// Samples per pixel per frame: the path tracers' `spp`, 1 candidate for ReSTIR.
     pub fn spp(&self) -> u32 {
         match self {
-            Method::Pt { spp } => *spp,
+            Method::Pt { spp } | Method::RandomWalk { spp } => *spp,
             Method::Restir(_) => 1,
         }
     }
 
-    /// The same method with `spp` samples per pixel, for the path tracer; ReSTIR presets have a
+    /// The same method with `spp` samples per pixel, for the path tracers; ReSTIR presets have a
     /// fixed per-frame cost and are returned unchanged.
     pub fn with_spp(&self, spp: u32) -> Method {
         match self {
             Method::Pt { .. } => Method::Pt { spp },
+            Method::RandomWalk { .. } => Method::RandomWalk { spp },
             Method::Restir(_) => self.clone(),
         }
     }
@@ -184,6 +224,17 @@ impl Method {
                     nonfinite: image.nonfinite,
                 })
             }
+            Method::RandomWalk { spp } => {
+                let start = Instant::now();
+                let gbuffer = GBuffer::render(scene, last);
+                let (image, nonfinite) = random_walk_method::render(scene, &gbuffer, seed, *spp)?;
+                Ok(Rendered {
+                    image,
+                    seconds_per_frame: start.elapsed().as_secs_f64(),
+                    frames_rendered: 1,
+                    nonfinite,
+                })
+            }
         }
     }
 }
@@ -202,12 +253,41 @@ mod tests {
     fn registry_parses_every_family_and_rejects_the_rest() {
         assert_eq!(Method::parse("pt").unwrap(), Method::Pt { spp: 1 });
         assert_eq!(Method::parse("pt:8").unwrap(), Method::Pt { spp: 8 });
+        assert_eq!(
+            Method::parse("random-walk:2").unwrap(),
+            Method::RandomWalk { spp: 2 }
+        );
         for name in PRESET_NAMES {
             let method = Method::parse(&format!("restir:{name}")).unwrap();
             assert_eq!(method.name(), format!("restir:{name}"));
             assert_eq!(Method::parse(&method.name()).unwrap(), method);
         }
-        for bad in ["", "ptx", "pt:0", "pt:-1", "pt:x", "restir", "restir:nope", "bdpt:4"] {
+        let swapped = Method::parse("restir:sequential/temporal=delayed").unwrap();
+        assert_eq!(swapped.name(), "restir:sequential/temporal=delayed");
+        let Method::Restir(preset) = &swapped else {
+            panic!("{swapped:?}")
+        };
+        let temporal: Vec<_> = preset
+            .passes
+            .iter()
+            .filter_map(|p| match p {
+                PassSpec::Temporal { shift, .. } => Some(*shift),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(temporal, [ShiftKind::DelayedReconnection]);
+        for bad in [
+            "restir:sequential/temporal=nope",
+            "restir:nope/temporal=delayed",
+            "",
+            "ptx",
+            "pt:0",
+            "pt:-1",
+            "pt:x",
+            "restir",
+            "restir:nope",
+            "bdpt:4",
+        ] {
             let e = Method::parse(bad).expect_err(bad);
             assert_eq!(e.spec, bad);
         }

@@ -15,7 +15,7 @@
 //! Seed 001's own metric is [`tonemapped_mse`]: the MSE of Reinhard-tonemapped 8-bit sRGB frames
 //! (values /255), over whole frames.
 
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 use restir::stats::{Summary, student_t_quantile};
 
 use crate::bias::luminance;
@@ -128,7 +128,7 @@ pub fn area_metrics(
             }
             let bias = Summary::from_samples(&biases);
             let t = student_t_quantile(0.5 + 0.5 * BIAS_CONFIDENCE, (k - 1) as f64);
-            let bias_ci = (k >= 2).then(|| t * bias.std_err);
+            let bias_ci = (k >= 2).then_some(t * bias.std_err);
             let variance = (k >= 2).then(|| pixel_variance(replicas, &pixels) / channels);
             let reference_mse = pixels
                 .iter()
@@ -216,7 +216,7 @@ pub fn error_maps(image: &Image, reference: &[DVec3]) -> Option<(Vec<f64>, Vec<f
             .iter()
             .zip(reference)
             .map(|(&x, &r)| {
-                let abs = luminance(Vec3::from((x.as_dvec3() - r).abs().as_vec3()));
+                let abs = luminance((x.as_dvec3() - r).abs().as_vec3());
                 (abs, abs / (luminance(r.as_vec3()) + floor))
             })
             .unzip(),
@@ -227,6 +227,7 @@ pub fn error_maps(image: &Image, reference: &[DVec3]) -> Option<(Vec<f64>, Vec<f
 mod tests {
     use super::*;
     use crate::regions::VISIBILITY_SAMPLES;
+    use glam::Vec3;
     use restir::rng::StreamKey;
 
     /// 4 × 2: top row lit, bottom row shadowed.
@@ -259,7 +260,11 @@ mod tests {
             image(vec![Vec3::splat(1.5); 8]),
         ];
         let m = area_metrics(&pair, &reference, &std_err, &regions).unwrap();
-        assert_eq!(m.len(), 4, "image, translucent, lit, shadowed (no penumbra)");
+        assert_eq!(
+            m.len(),
+            4,
+            "image, translucent, lit, shadowed (no penumbra)"
+        );
         for a in &m {
             assert!((a.mse - 0.25).abs() < 1e-12, "{a:?}");
             assert!((a.rel_mse - 0.25 / 1.01).abs() < 1e-12, "{a:?}");

@@ -22,6 +22,7 @@ use std::fmt;
 use glam::{Vec3, Vec3A};
 use restir::rng::StreamKey;
 use sss::geometry::Ray;
+use sss::integrator::pt::SHADOW_EPSILON;
 use sss::material::Material;
 use sss::scene::{GBuffer, GPixel, Scene};
 
@@ -33,10 +34,6 @@ pub const VISIBILITY_SAMPLES: u32 = STRATA * STRATA;
 
 /// The `pass` of the classification's stream keys (ASCII "REGN"): apart from every pipeline pass.
 pub const REGIONS_PASS: u32 = 0x5245_474E;
-
-/// Shadow-ray origin offset along x1's geometric normal, in scene units (scenes are a few units
-/// across; the offset only has to clear the surface's own triangle).
-const SHADOW_OFFSET: f32 = 1e-4;
 
 /// A region of the image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -191,14 +188,15 @@ fn visible_light_samples(scene: &Scene, g: &GPixel, pixel: u32, frame: u32, seed
     visible
 }
 
-/// Whether the segment from x1 (lifted off its surface toward x3's side) to x3 hits geometry.
+/// Whether the segment from x1 (lifted off its surface toward x3's side by the path tracer's
+/// [`SHADOW_EPSILON`]) to x3 hits geometry.
 fn occluded(scene: &Scene, g: &GPixel, x3: Vec3) -> bool {
     let side = if g.geometric_normal.dot(x3 - g.position) < 0.0 {
         -1.0
     } else {
         1.0
     };
-    let origin = g.position + side * SHADOW_OFFSET * g.geometric_normal;
+    let origin = g.position + side * SHADOW_EPSILON * g.geometric_normal;
     scene
         .geometry
         .occluded(&Ray::segment(Vec3A::from(origin), Vec3A::from(x3)))

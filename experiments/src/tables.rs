@@ -141,8 +141,14 @@ mod tests {
         let results = [result("pt:1", 0.2), result("restir:hybrid", 0.1)];
         let md = markdown(&results);
         assert_eq!(md.lines().count(), 2 + 4, "{md}");
-        assert!(md.contains("| restir:hybrid | 1 | shadowed | 10 | 1.000e-1 | ×1.00 |"), "{md}");
-        assert!(md.contains("| pt:1 | 1 | image | 10 | 2.000e-1 | ×2.00 |"), "{md}");
+        assert!(
+            md.contains("| restir:hybrid | 1 | shadowed | 10 | 1.000e-1 | ×1.00 |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| pt:1 | 1 | image | 10 | 2.000e-1 | ×2.00 |"),
+            "{md}"
+        );
         assert!(md.contains("+2.00%"), "relative bias 0.01/0.5: {md}");
         let csv = csv(&results);
         let columns = CSV_HEADER.split(',').count();
@@ -151,6 +157,9 @@ mod tests {
             assert_eq!(line.split(',').count(), columns, "{line}");
         }
         // efficiency = 1 / (0.2 · 0.5) = 10; tonemapped RMSE = √0.25 = 0.5.
-        assert!(csv.lines().nth(1).unwrap().ends_with(",1e1,2.5e-1,5e-1"), "{csv}");
+        assert!(
+            csv.lines().nth(1).unwrap().ends_with(",1e1,2.5e-1,5e-1"),
+            "{csv}"
+        );
     }
 }

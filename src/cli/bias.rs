@@ -3,7 +3,9 @@
 //! tolerance δ (`experiments::bias`).
 
 use clap::Args;
-use experiments::bias::{BiasRow, Protocol, Table, bias_rows, luminance, reference_images, summarize};
+use experiments::bias::{
+    BiasRow, Protocol, Table, bias_rows, luminance, reference_images, summarize,
+};
 use experiments::compare::REFERENCE_SEED;
 use experiments::methods::Method;
 use experiments::regions::Regions;
@@ -25,7 +27,7 @@ pub struct BiasArgs {
     #[arg(long)]
     pub method: String,
     /// Independent replicas (seeds 0..N).
-    #[arg(long, default_value_t = 32)]
+    #[arg(long, default_value_t = 256)]
     pub replicas: u32,
     /// Tolerance δ on the relative bias of a region mean.
     #[arg(long, default_value_t = 0.03)]
@@ -37,7 +39,7 @@ pub struct BiasArgs {
     #[arg(long, default_value_t = 16)]
     pub frames: u32,
     /// Image size WxH.
-    #[arg(long, default_value = "32x24")]
+    #[arg(long, default_value = "64x48")]
     pub resolution: String,
     /// Independent path-traced reference batches.
     #[arg(long, default_value_t = 32)]
@@ -52,7 +54,8 @@ pub struct BiasArgs {
 
 pub fn command(args: &BiasArgs) -> CliResult<()> {
     let method = Method::parse(&args.method)?;
-    if !(args.delta > 0.0 && args.delta.is_finite()) || !(args.alpha > 0.0 && args.alpha < 1.0) {
+    let valid = args.delta > 0.0 && args.delta.is_finite() && args.alpha > 0.0 && args.alpha < 1.0;
+    if !valid {
         return Err(CliError(format!(
             "need δ > 0 and 0 < α < 1 (got --delta {} --alpha {})",
             args.delta, args.alpha
@@ -82,7 +85,14 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
         }
         let rendered = method.render(&scene, args.frames, seed)?;
         nonfinite += rendered.nonfinite;
-        images.push(rendered.image.pixels.iter().map(|&p| luminance(p)).collect::<Vec<f64>>());
+        images.push(
+            rendered
+                .image
+                .pixels
+                .iter()
+                .map(|&p| luminance(p))
+                .collect::<Vec<f64>>(),
+        );
         bar.inc(1);
     }
     bar.finish_and_clear();
@@ -101,8 +111,18 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
         &protocol,
     );
     if args.json {
-        let value = bias_json(args, &scene.name, &rows, [nonfinite, reference.nonfinite], images.len(), stopped);
-        println!("{}", serde_json::to_string_pretty(&value).expect("JSON values"));
+        let value = bias_json(
+            args,
+            &scene.name,
+            &rows,
+            [nonfinite, reference.nonfinite],
+            images.len(),
+            stopped,
+        );
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&value).expect("JSON values")
+        );
     } else {
         println!(
             "# bias of {} on {} ({}, frame {frame}): N = {} replicas vs {} reference batches × {} spp, δ = {}%, α = {}\n",

@@ -60,9 +60,8 @@ pub fn load_scene(spec: &str) -> CliResult<LoadedScene> {
     }
     let path = Path::new(spec);
     if spec.ends_with(".toml") || spec.contains('/') || path.exists() {
-        let text = std::fs::read(path).map_err(|e| {
-            InputError::new(path, "(file)", format!("{spec:?}"), e.to_string())
-        })?;
+        let text = std::fs::read(path)
+            .map_err(|e| InputError::new(path, "(file)", format!("{spec:?}"), e.to_string()))?;
         let scene = Scene::load(path)?;
         let key = format!("file-{}-{:016x}", scene.name, fnv1a(&text));
         return Ok(LoadedScene { scene, key });
@@ -93,7 +92,12 @@ pub fn parse_resolution(text: &str) -> CliResult<(u32, u32)> {
     let (w, h) = text
         .split_once(['x', 'X', '×'])
         .ok_or_else(|| bad("expected WxH, e.g. 64x48"))?;
-    let parse = |v: &str| v.trim().parse::<u32>().ok().filter(|&v| (1..=16384).contains(&v));
+    let parse = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|&v| (1..=16384).contains(&v))
+    };
     match (parse(w), parse(h)) {
         (Some(w), Some(h)) => Ok((w, h)),
         _ => Err(bad("width and height must be integers in 1..=16384")),
@@ -113,12 +117,7 @@ pub fn with_resolution(scene: Scene, resolution: Option<(u32, u32)>) -> Scene {
 
 /// Creates `dir` (and parents) and checks that a file can be written in it.
 pub fn output_dir(dir: &Path) -> CliResult<PathBuf> {
-    let fail = |e: std::io::Error| {
-        CliError(format!(
-            "output folder {}: {e}",
-            dir.display()
-        ))
-    };
+    let fail = |e: std::io::Error| CliError(format!("output folder {}: {e}", dir.display()));
     std::fs::create_dir_all(dir).map_err(fail)?;
     let probe = dir.join(".reshift-write-test");
     std::fs::write(&probe, b"").map_err(fail)?;
@@ -171,7 +170,13 @@ pub fn progress(len: u64, what: &str) -> ProgressBar {
 /// A file-name-safe form of a method name (`restir:hybrid` → `restir-hybrid`).
 pub fn file_stem(name: &str) -> String {
     name.chars()
-        .map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '.' { c } else { '-' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '.' {
+                c
+            } else {
+                '-'
+            }
+        })
         .collect()
 }
 

@@ -34,7 +34,7 @@ pub struct CompareArgs {
     #[arg(long, value_delimiter = ',', default_value = DEFAULT_METHODS)]
     pub methods: Vec<String>,
     /// Independent replicas per method (seeds 0..K).
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 8)]
     pub replicas: u32,
     /// Frames of the camera trajectory; errors are measured on the last one.
     #[arg(long, default_value_t = 16)]
@@ -42,11 +42,11 @@ pub struct CompareArgs {
     /// Every method at its own samples per pixel (the default).
     #[arg(long, conflicts_with = "equal_time")]
     pub equal_spp: bool,
-    /// Scale the path tracer's spp to this many seconds per frame (ReSTIR presets keep their cost).
+    /// Scale a bare `pt` to this many seconds per frame (`pt:N` and ReSTIR presets keep their cost).
     #[arg(long, value_name = "SECONDS")]
     pub equal_time: Option<f64>,
     /// Image size WxH.
-    #[arg(long, default_value = "64x48")]
+    #[arg(long, default_value = "128x96")]
     pub resolution: String,
     /// Output folder [default: out/compare-<scene>].
     #[arg(long)]
@@ -58,10 +58,10 @@ pub struct CompareArgs {
     #[arg(long)]
     pub reference: Option<PathBuf>,
     /// Samples per pixel of the reference (a multiple of --reference-batch-spp).
-    #[arg(long, default_value_t = 2048)]
+    #[arg(long, default_value_t = 8192)]
     pub reference_spp: u32,
     /// Samples per pixel of one reference batch.
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = 128)]
     pub reference_batch_spp: u32,
     /// Print results.json to stdout instead of the table.
     #[arg(long)]
@@ -80,7 +80,10 @@ pub struct Outcome {
 pub fn command(args: &CompareArgs) -> CliResult<()> {
     let outcome = run(args)?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&outcome.json).expect("JSON values"));
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&outcome.json).expect("JSON values")
+        );
     } else {
         println!("{}", outcome.markdown);
         println!(
@@ -110,7 +113,9 @@ pub fn run(args: &CompareArgs) -> CliResult<Outcome> {
     if let Some(t) = args.equal_time
         && !(t.is_finite() && t > 0.0)
     {
-        return Err(CliError(format!("--equal-time {t}: must be a positive number of seconds")));
+        return Err(CliError(format!(
+            "--equal-time {t}: must be a positive number of seconds"
+        )));
     }
     let resolution = parse_resolution(&args.resolution)?;
     let LoadedScene { scene, key } = load_scene(&args.scene)?;
@@ -128,7 +133,7 @@ pub fn run(args: &CompareArgs) -> CliResult<Outcome> {
 
     let budget = args.equal_time;
     let seconds_per_spp = match budget {
-        Some(_) if methods.iter().any(|(_, m)| matches!(m, Method::Pt { .. })) => {
+        Some(_) if methods.iter().any(|(spec, _)| spec == "pt") => {
             calibrate_pt(&scene, args.frames)?
         }
         _ => 0.0,
@@ -137,9 +142,10 @@ pub fn run(args: &CompareArgs) -> CliResult<Outcome> {
     let bar = progress(total, "replicas");
     let mut runs: Vec<(String, Method, Vec<Rendered>)> = Vec::new();
     'methods: for (spec, method) in &methods {
+        // `pt:N` pins its spp; a bare `pt` is scaled to the budget.
         let method = match budget {
-            Some(b) => equal_time_method(method, b, seconds_per_spp),
-            None => method.clone(),
+            Some(b) if !spec.contains(':') => equal_time_method(method, b, seconds_per_spp),
+            _ => method.clone(),
         };
         bar.set_message(method.name());
         let mut replicas = Vec::new();
@@ -163,7 +169,9 @@ pub fn run(args: &CompareArgs) -> CliResult<Outcome> {
         }
         let result =
             MethodResult::from_replicas(spec, method.spp(), replicas, &reference, &regions)
-                .ok_or_else(|| CliError(format!("{spec}: image size differs from the reference")))?;
+                .ok_or_else(|| {
+                    CliError(format!("{spec}: image size differs from the reference"))
+                })?;
         results.push(result);
     }
     let images = write_images(&out, &runs, &reference)?;
@@ -206,10 +214,18 @@ fn reference(
     if let Some(path) = &args.reference {
         let reference = Reference::load(path)?;
         check_reference(&reference, path, width, height, frame)?;
+        if reference.config.scene != scene.name {
+            return Err(CliError(format!(
+                "{}: a reference of scene {:?}, not {:?}",
+                path.display(),
+                reference.config.scene,
+                scene.name
+            )));
+        }
         return Ok((reference, path.clone(), true));
     }
     let batch = args.reference_batch_spp;
-    if batch == 0 || args.reference_spp < 2 * batch || args.reference_spp % batch != 0 {
+    if batch == 0 || args.reference_spp < 2 * batch || !args.reference_spp.is_multiple_of(batch) {
         return Err(CliError(format!(
             "--reference-spp {} must be a multiple ≥ 2× of --reference-batch-spp {batch}",
             args.reference_spp
@@ -232,7 +248,7 @@ fn reference(
     if reference.is_complete() {
         return Ok((reference, path, true));
     }
-    super::reference::accumulate(&mut reference, scene, &path, "reference")?;
+    super::reference::accumulate(&mut reference, scene, &path, "reference", None)?;
     if !reference.is_complete() {
         return Err(CliError(format!(
             "interrupted while computing the reference; checkpoint {} resumes next time",
@@ -247,7 +263,11 @@ fn calibrate_pt(scene: &Scene, frames: u32) -> CliResult<f64> {
     let pt = Method::Pt { spp: 4 };
     let mut times = Vec::new();
     for seed in 0..3 {
-        times.push(pt.render(scene, frames, 1_000_000 + seed)?.seconds_per_frame / 4.0);
+        times.push(
+            pt.render(scene, frames, 1_000_000 + seed)?
+                .seconds_per_frame
+                / 4.0,
+        );
     }
     times.sort_by(f64::total_cmp);
     Ok(times[1])
@@ -294,10 +314,8 @@ fn write_images(
         relative: quantile(&all_rel, 0.99),
     };
     let mut written = Vec::new();
-    for ((spec, _, replicas), (abs, rel)) in runs
-        .iter()
-        .filter(|(_, _, r)| !r.is_empty())
-        .zip(&maps)
+    for ((spec, _, replicas), (abs, rel)) in
+        runs.iter().filter(|(_, _, r)| !r.is_empty()).zip(&maps)
     {
         let stem = file_stem(spec);
         let names = MethodImages {

@@ -4,6 +4,7 @@ pub mod bias;
 pub mod common;
 pub mod compare;
 pub mod experiment;
+pub mod figures;
 pub mod reference;
 pub mod render;
 
@@ -27,9 +28,16 @@ pub fn scenes(args: &ListArgs) {
             .iter()
             .map(|(name, about)| json!({ "name": name, "description": about }))
             .collect();
-        println!("{}", serde_json::to_string_pretty(&list).expect("JSON values"));
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&list).expect("JSON values")
+        );
     } else {
-        let width = Scene::BUILTIN.iter().map(|(n, _)| n.len()).max().unwrap_or(0);
+        let width = Scene::BUILTIN
+            .iter()
+            .map(|(n, _)| n.len())
+            .max()
+            .unwrap_or(0);
         for (name, about) in Scene::BUILTIN {
             println!("{name:width$}  {about}");
         }
@@ -43,7 +51,10 @@ pub fn methods(args: &ListArgs) {
             .iter()
             .map(|e| json!({ "family": e.family, "usage": e.usage, "description": e.about }))
             .collect();
-        println!("{}", serde_json::to_string_pretty(&list).expect("JSON values"));
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&list).expect("JSON values")
+        );
     } else {
         for e in REGISTRY {
             println!("{}\n    {}", e.usage, e.about);

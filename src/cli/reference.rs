@@ -46,6 +46,9 @@ pub struct ReferenceArgs {
     /// Continue the checkpoint at --out instead of starting over.
     #[arg(long)]
     pub resume: bool,
+    /// Render at most this many batches now, then checkpoint and exit 0 (time-sliced jobs).
+    #[arg(long)]
+    pub max_batches: Option<u32>,
     /// Checkpoint file; the mean is also written to <out>.exr when complete.
     #[arg(long)]
     pub out: PathBuf,
@@ -67,24 +70,29 @@ pub struct MergeArgs {
     pub json: bool,
 }
 
-/// Renders the remaining batches of `reference` one at a time with a progress bar, saving a
-/// checkpoint to `path` every [`CHECKPOINT_EVERY`], on Ctrl-C (after the current batch) and at
-/// the end.
+/// Renders the remaining batches of `reference` (at most `max_batches`) one at a time with a
+/// progress bar, saving a checkpoint to `path` every [`CHECKPOINT_EVERY`], on Ctrl-C (after
+/// the current batch) and at the end.
 pub fn accumulate(
     reference: &mut Reference,
     scene: &Scene,
     path: &Path,
     what: &str,
+    max_batches: Option<u32>,
 ) -> CliResult<()> {
     let gbuffer = GBuffer::render(scene, reference.config.frame);
     let bar = progress((reference.end - reference.start) as u64, what);
     bar.set_position(reference.batches_done() as u64);
     let mut saved = Instant::now();
+    let stop = reference
+        .next
+        .saturating_add(max_batches.unwrap_or(u32::MAX))
+        .min(reference.end);
     let save = |r: &Reference| {
         r.save(path)
             .map_err(|e| CliError(format!("{}: {e}", path.display())))
     };
-    while !reference.is_complete() && !interrupted() {
+    while reference.next < stop && !interrupted() {
         reference.run(scene, &gbuffer, 1);
         bar.inc(1);
         if saved.elapsed() > CHECKPOINT_EVERY {
@@ -129,7 +137,10 @@ fn summary(reference: &Reference, path: &Path, exr: Option<&Path>, json: bool) {
             "complete": reference.is_complete(),
             "nonfinite": reference.nonfinite,
         });
-        println!("{}", serde_json::to_string_pretty(&value).expect("JSON values"));
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&value).expect("JSON values")
+        );
     } else {
         println!(
             "{}: {} {}×{} frame {}, batches {}..{} of {}..{} ({} spp each){}{}",
@@ -143,7 +154,11 @@ fn summary(reference: &Reference, path: &Path, exr: Option<&Path>, json: bool) {
             reference.start,
             reference.end,
             c.spp_per_batch,
-            if reference.is_complete() { ", complete" } else { ", partial" },
+            if reference.is_complete() {
+                ", complete"
+            } else {
+                ", partial"
+            },
             exr.map_or(String::new(), |p| format!("; mean in {}", p.display())),
         );
     }
@@ -151,9 +166,14 @@ fn summary(reference: &Reference, path: &Path, exr: Option<&Path>, json: bool) {
 
 pub fn command(args: &ReferenceArgs) -> CliResult<()> {
     let loaded = load_scene(&args.scene)?;
-    let resolution = args.resolution.as_deref().map(parse_resolution).transpose()?;
+    let resolution = args
+        .resolution
+        .as_deref()
+        .map(parse_resolution)
+        .transpose()?;
     let scene = with_resolution(loaded.scene, resolution);
-    if args.batch_spp == 0 || args.spp % args.batch_spp != 0 || args.spp < args.batch_spp {
+    if args.batch_spp == 0 || !args.spp.is_multiple_of(args.batch_spp) || args.spp < args.batch_spp
+    {
         return Err(CliError(format!(
             "--spp {} must be a positive multiple of --batch-spp {}",
             args.spp, args.batch_spp
@@ -197,14 +217,20 @@ pub fn command(args: &ReferenceArgs) -> CliResult<()> {
     if let Some(parent) = args.out.parent().filter(|p| !p.as_os_str().is_empty()) {
         super::common::output_dir(parent)?;
     }
-    accumulate(&mut reference, &scene, &args.out, "reference batches")?;
+    accumulate(
+        &mut reference,
+        &scene,
+        &args.out,
+        "reference batches",
+        args.max_batches,
+    )?;
     let exr = if reference.is_complete() {
         Some(write_mean(&reference, &args.out)?)
     } else {
         None
     };
     summary(&reference, &args.out, exr.as_deref(), args.json);
-    if !reference.is_complete() {
+    if interrupted() {
         return Err(CliError(format!(
             "interrupted; resume with --resume --out {}",
             args.out.display()

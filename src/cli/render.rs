@@ -39,12 +39,19 @@ pub struct RenderArgs {
 pub fn command(args: &RenderArgs) -> CliResult<()> {
     let method = Method::parse(&args.method)?;
     let loaded = load_scene(&args.scene)?;
-    let resolution = args.resolution.as_deref().map(parse_resolution).transpose()?;
+    let resolution = args
+        .resolution
+        .as_deref()
+        .map(parse_resolution)
+        .transpose()?;
     let scene = with_resolution(loaded.scene, resolution);
     let out = output_dir(&args.out)?;
     let rendered = method.render(&scene, args.frames, args.seed)?;
     let stem = format!("{}-{}", file_stem(&loaded.key), file_stem(&method.name()));
-    let (exr, png) = (out.join(format!("{stem}.exr")), out.join(format!("{stem}.png")));
+    let (exr, png) = (
+        out.join(format!("{stem}.exr")),
+        out.join(format!("{stem}.png")),
+    );
     rendered.image.write_exr(&exr)?;
     rendered.image.write_png(&png)?;
     if args.json {
@@ -62,7 +69,10 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
             "exr": exr.display().to_string(),
             "png": png.display().to_string(),
         });
-        println!("{}", serde_json::to_string_pretty(&value).expect("JSON values"));
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&value).expect("JSON values")
+        );
     } else {
         println!(
             "{} on {} ({}×{}, frame {} of {}): {:.1} ms/frame over {} rendered frame(s), {} non-finite\n{}\n{}",

@@ -1,0 +1,327 @@
+//! Loading Vulkan at run time, choosing a device, and the [`Context`] every kernel runs in.
+//!
+//! Choice: a device needs a compute queue, `shaderInt64` (the stream RNG is 64-bit) and
+//! `shaderFloat64` (the watertight triangle test's exact fallback); among
+//! those a discrete GPU wins, then integrated, virtual, CPU (Mesa lavapipe) and other devices,
+//! ties to the lower index. `RESHIFT_VULKAN_DEVICE=<substring>` (case-insensitive, of the device
+//! name) restricts the choice.
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use super::error::{VulkanError, api};
+
+/// The environment variable that restricts the device choice to names containing its value.
+pub const DEVICE_ENV: &str = "RESHIFT_VULKAN_DEVICE";
+
+/// What kind of implementation a device is, in order of preference.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum DeviceKind {
+    DiscreteGpu,
+    IntegratedGpu,
+    VirtualGpu,
+    Cpu,
+    Other,
+}
+
+impl DeviceKind {
+    fn from_vk(kind: vk::PhysicalDeviceType) -> DeviceKind {
+        match kind {
+            vk::PhysicalDeviceType::DISCRETE_GPU => DeviceKind::DiscreteGpu,
+            vk::PhysicalDeviceType::INTEGRATED_GPU => DeviceKind::IntegratedGpu,
+            vk::PhysicalDeviceType::VIRTUAL_GPU => DeviceKind::VirtualGpu,
+            vk::PhysicalDeviceType::CPU => DeviceKind::Cpu,
+            _ => DeviceKind::Other,
+        }
+    }
+}
+
+/// One physical device as the selection sees it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DeviceInfo {
+    pub name: String,
+    pub kind: DeviceKind,
+    /// A queue family with compute, if any.
+    pub compute_family: Option<u32>,
+    pub shader_int64: bool,
+    pub shader_float64: bool,
+}
+
+impl DeviceInfo {
+    fn usable(&self) -> bool {
+        self.compute_family.is_some() && self.shader_int64 && self.shader_float64
+    }
+}
+
+/// The index of the device to use: usable devices whose name contains `wanted`
+/// (case-insensitive; `None` or empty = any), best [`DeviceKind`] first, then lowest index.
+pub fn choose_device(devices: &[DeviceInfo], wanted: Option<&str>) -> Result<usize, VulkanError> {
+    let wanted = wanted.map(str::trim).filter(|w| !w.is_empty());
+    let matches =
+        |d: &DeviceInfo| wanted.is_none_or(|w| d.name.to_lowercase().contains(&w.to_lowercase()));
+    let best = devices
+        .iter()
+        .enumerate()
+        .filter(|(_, d)| d.usable() && matches(d))
+        .min_by_key(|(i, d)| (d.kind, *i))
+        .map(|(i, _)| i);
+    best.ok_or_else(|| {
+        let available = devices.iter().map(|d| d.name.clone()).collect();
+        match wanted {
+            Some(w) => VulkanError::NoMatchingDevice {
+                wanted: w.to_string(),
+                available,
+            },
+            None => VulkanError::NoDevice { available },
+        }
+    })
+}
+
+/// The instance and device, destroyed when the last [`Context`], buffer or kernel is dropped.
+pub(crate) struct Shared {
+    pub(crate) instance: ash::Instance,
+    pub(crate) device: ash::Device,
+    pub(crate) command_pool: vk::CommandPool,
+    /// Keeps libvulkan loaded until the instance is destroyed (fields drop after `drop`).
+    _entry: ash::Entry,
+}
+
+impl Drop for Shared {
+    fn drop(&mut self) {
+        // SAFETY: every object created from the device holds an `Arc<Shared>`, so none is alive.
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            self.device.destroy_command_pool(self.command_pool, None);
+            self.device.destroy_device(None);
+            self.instance.destroy_instance(None);
+        }
+    }
+}
+
+/// A Vulkan device with one compute queue: the place buffers live and kernels run.
+pub struct Context {
+    pub(crate) shared: Arc<Shared>,
+    pub(crate) queue: vk::Queue,
+    pub(crate) memory: vk::PhysicalDeviceMemoryProperties,
+    pub(crate) max_storage_range: u32,
+    /// Nanoseconds per timestamp tick, when the queue writes timestamps.
+    pub(crate) timestamp_period: Option<f64>,
+    info: DeviceInfo,
+}
+
+impl Context {
+    /// Loads Vulkan and opens the preferred device, honouring [`DEVICE_ENV`].
+    pub fn new() -> Result<Context, VulkanError> {
+        let wanted = std::env::var(DEVICE_ENV).ok();
+        Context::with_device(wanted.as_deref())
+    }
+
+    /// Loads Vulkan and opens the best usable device whose name contains `wanted`.
+    pub fn with_device(wanted: Option<&str>) -> Result<Context, VulkanError> {
+        // SAFETY: loading libvulkan runs its initialisers; it is the system's Vulkan loader.
+        let entry =
+            unsafe { ash::Entry::load() }.map_err(|e| VulkanError::NoLoader(e.to_string()))?;
+        let app = vk::ApplicationInfo::default()
+            .application_name(c"reshift")
+            .api_version(vk::API_VERSION_1_2);
+        let create = vk::InstanceCreateInfo::default().application_info(&app);
+        // SAFETY: valid create info; the instance is destroyed by `Shared` or below.
+        let instance =
+            unsafe { entry.create_instance(&create, None) }.map_err(VulkanError::NoDriver)?;
+        match open_device(&instance, wanted) {
+            Ok((physical, device, info)) => {
+                Context::assemble(entry, instance, physical, device, info)
+            }
+            Err(e) => {
+                // SAFETY: nothing else was created from the instance.
+                unsafe { instance.destroy_instance(None) };
+                Err(e)
+            }
+        }
+    }
+
+    fn assemble(
+        entry: ash::Entry,
+        instance: ash::Instance,
+        physical: vk::PhysicalDevice,
+        device: ash::Device,
+        info: DeviceInfo,
+    ) -> Result<Context, VulkanError> {
+        let family = info
+            .compute_family
+            .expect("chosen devices have a compute queue");
+        // SAFETY: `physical` belongs to `instance`, `device` was created with this family.
+        let (properties, families, memory, queue) = unsafe {
+            (
+                instance.get_physical_device_properties(physical),
+                instance.get_physical_device_queue_family_properties(physical),
+                instance.get_physical_device_memory_properties(physical),
+                device.get_device_queue(family, 0),
+            )
+        };
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        // SAFETY: valid create info on a live device.
+        let command_pool = match unsafe { device.create_command_pool(&pool_info, None) } {
+            Ok(pool) => pool,
+            Err(result) => {
+                // SAFETY: nothing else was created from the device.
+                unsafe {
+                    device.destroy_device(None);
+                    instance.destroy_instance(None);
+                }
+                return Err(api("vkCreateCommandPool")(result));
+            }
+        };
+        let timestamps = families[family as usize].timestamp_valid_bits > 0
+            && properties.limits.timestamp_period > 0.0;
+        Ok(Context {
+            shared: Arc::new(Shared {
+                instance,
+                device,
+                command_pool,
+                _entry: entry,
+            }),
+            queue,
+            memory,
+            max_storage_range: properties.limits.max_storage_buffer_range,
+            timestamp_period: timestamps.then_some(properties.limits.timestamp_period as f64),
+            info,
+        })
+    }
+
+    /// The chosen device.
+    pub fn device(&self) -> &DeviceInfo {
+        &self.info
+    }
+
+    /// Whether GPU times of dispatches are measured (timestamp queries on the compute queue).
+    pub fn has_timestamps(&self) -> bool {
+        self.timestamp_period.is_some()
+    }
+}
+
+/// Describes every physical device, chooses one, and creates its logical device.
+fn open_device(
+    instance: &ash::Instance,
+    wanted: Option<&str>,
+) -> Result<(vk::PhysicalDevice, ash::Device, DeviceInfo), VulkanError> {
+    // SAFETY: a live instance.
+    let physicals = unsafe { instance.enumerate_physical_devices() }
+        .map_err(api("vkEnumeratePhysicalDevices"))?;
+    let infos: Vec<DeviceInfo> = physicals
+        .iter()
+        .map(|&physical| describe(instance, physical))
+        .collect();
+    let index = choose_device(&infos, wanted)?;
+    let info = infos[index].clone();
+    let family = info
+        .compute_family
+        .expect("usable devices have a compute queue");
+    let priorities = [1.0f32];
+    let queues = [vk::DeviceQueueCreateInfo::default()
+        .queue_family_index(family)
+        .queue_priorities(&priorities)];
+    let features = vk::PhysicalDeviceFeatures::default()
+        .shader_int64(true)
+        .shader_float64(true);
+    let create = vk::DeviceCreateInfo::default()
+        .queue_create_infos(&queues)
+        .enabled_features(&features);
+    // SAFETY: the device supports the family and the features (checked by `choose_device`).
+    let device = unsafe { instance.create_device(physicals[index], &create, None) }
+        .map_err(api("vkCreateDevice"))?;
+    Ok((physicals[index], device, info))
+}
+
+fn describe(instance: &ash::Instance, physical: vk::PhysicalDevice) -> DeviceInfo {
+    // SAFETY: `physical` was enumerated from `instance`.
+    let (properties, features, families) = unsafe {
+        (
+            instance.get_physical_device_properties(physical),
+            instance.get_physical_device_features(physical),
+            instance.get_physical_device_queue_family_properties(physical),
+        )
+    };
+    let name = properties
+        .device_name_as_c_str()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|_| "<unnamed device>".into());
+    let compute_family = families
+        .iter()
+        .position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE))
+        .map(|i| i as u32);
+    DeviceInfo {
+        name,
+        kind: DeviceKind::from_vk(properties.device_type),
+        compute_family,
+        shader_int64: features.shader_int64 == vk::TRUE,
+        shader_float64: features.shader_float64 == vk::TRUE,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn device(name: &str, kind: DeviceKind) -> DeviceInfo {
+        DeviceInfo {
+            name: name.into(),
+            kind,
+            compute_family: Some(0),
+            shader_int64: true,
+            shader_float64: true,
+        }
+    }
+
+    #[test]
+    fn discrete_gpu_preferred_then_cpu_fallback() {
+        let lavapipe = device("llvmpipe (LLVM 15.0.6, 256 bits)", DeviceKind::Cpu);
+        let nvidia = device("NVIDIA H100 80GB HBM3", DeviceKind::DiscreteGpu);
+        let intel = device("Intel(R) UHD Graphics", DeviceKind::IntegratedGpu);
+        let all = [lavapipe.clone(), intel.clone(), nvidia];
+        assert_eq!(choose_device(&all, None), Ok(2));
+        assert_eq!(choose_device(&all[..2], None), Ok(1));
+        assert_eq!(choose_device(&all[..1], None), Ok(0));
+        // A device without 64-bit integers, 64-bit floats or compute is never chosen.
+        let no_int64 = DeviceInfo {
+            shader_int64: false,
+            ..device("old gpu", DeviceKind::DiscreteGpu)
+        };
+        let no_compute = DeviceInfo {
+            compute_family: None,
+            ..device("display only", DeviceKind::DiscreteGpu)
+        };
+        assert_eq!(
+            choose_device(&[no_int64, no_compute, lavapipe], None),
+            Ok(2)
+        );
+    }
+
+    #[test]
+    fn substring_override_and_its_errors() {
+        let all = [
+            device("NVIDIA GeForce RTX 3070", DeviceKind::DiscreteGpu),
+            device("llvmpipe (LLVM 15.0.6, 256 bits)", DeviceKind::Cpu),
+        ];
+        assert_eq!(choose_device(&all, Some("LLVMPIPE")), Ok(1));
+        assert_eq!(
+            choose_device(&all, Some("  ")),
+            Ok(0),
+            "blank = no preference"
+        );
+        let err = choose_device(&all, Some("radeon")).unwrap_err();
+        assert!(matches!(err, VulkanError::NoMatchingDevice { .. }));
+        let line = err.to_string();
+        assert!(
+            line.contains("radeon") && line.contains("RTX 3070") && !line.contains('\n'),
+            "{line}"
+        );
+        assert!(matches!(
+            choose_device(&[], None),
+            Err(VulkanError::NoDevice { .. })
+        ));
+    }
+}

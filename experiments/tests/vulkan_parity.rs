@@ -5,8 +5,8 @@
 //! why it is skipped and passes, unless `RESHIFT_REQUIRE_VULKAN=1`, which makes it fail.
 
 use experiments::vulkan::{
-    BVH_MAX_HITS, Buffer, BurleyInput, BurleyOutput, BvhRayInput, BvhRayOutput, Context, GpuBvh,
-    GpuStreamKey, Kernel, REQUIRE_ENV, RngParams, Shader, VulkanError, groups_for,
+    BVH_MAX_HITS, Buffer, BurleyInput, BurleyOutput, BvhRayInput, BvhRayOutput, Context, Dispatch,
+    GpuBvh, GpuStreamKey, Kernel, REQUIRE_ENV, RngParams, Shader, VulkanError, groups_for,
 };
 use glam::{Affine3A, Vec3, Vec3A};
 use restir::rng::StreamKey;
@@ -363,6 +363,27 @@ const T_BOUND: f64 = 10.0 * ULP;
 /// same (t, prim)-sorted hits on one object, for 3000 rays. It must exercise something: many
 /// hits and multi-hit chords. Negative control: CPU rays whose origins move by 10⁻⁴ along the
 /// ray give distances that the same bound rejects.
+/// Dispatches the BVH parity kernel over the first `count` rays of `rays` against `bvh`.
+fn trace_rays(
+    context: &mut Context,
+    kernel: &Kernel,
+    bvh: &GpuBvh,
+    rays: &Buffer,
+    results: &Buffer,
+    count: u32,
+) -> Dispatch {
+    let [nodes, triangles, leaf_prims, leaf_objects] = bvh.buffers();
+    let push = [count, bvh.node_count()];
+    context
+        .dispatch(
+            kernel,
+            &[rays, results, nodes, triangles, leaf_prims, leaf_objects],
+            bytemuck::cast_slice(&push),
+            [groups_for(count, Shader::ParityBvh.local_size()), 1, 1],
+        )
+        .unwrap()
+}
+
 #[test]
 fn bvh_queries_match_cpu() {
     let Some((mut context, kernel)) = kernel_or_skip("bvh parity", Shader::ParityBvh) else {
@@ -385,23 +406,14 @@ fn bvh_queries_match_cpu() {
     let bvh = GpuBvh::upload(&context, &geometry).unwrap();
     let ray_buffer = Buffer::from_slice(&context, &inputs).unwrap();
     let results = Buffer::zeroed(&context, inputs.len() * size_of::<BvhRayOutput>()).unwrap();
-    let [nodes, triangles, leaf_prims, leaf_objects] = bvh.buffers();
-    let push = [inputs.len() as u32, bvh.node_count()];
-    let timing = context
-        .dispatch(
-            &kernel,
-            &[
-                &ray_buffer,
-                &results,
-                nodes,
-                triangles,
-                leaf_prims,
-                leaf_objects,
-            ],
-            bytemuck::cast_slice(&push),
-            [groups_for(push[0], Shader::ParityBvh.local_size()), 1, 1],
-        )
-        .unwrap();
+    let timing = trace_rays(
+        &mut context,
+        &kernel,
+        &bvh,
+        &ray_buffer,
+        &results,
+        inputs.len() as u32,
+    );
     let outputs = results.read::<BvhRayOutput>().unwrap();
     let (mut closest_hits, mut multi, mut shifted_rejected, mut worst_t) = (0, 0, 0, 0.0f64);
     let mut all_hits: Vec<Hit> = Vec::new();
@@ -475,23 +487,7 @@ fn bvh_queries_match_cpu() {
     );
     // An empty scene uploads (zero nodes) and is never hit.
     let empty = GpuBvh::upload(&context, &Geometry::new(&[])).unwrap();
-    let [nodes, triangles, leaf_prims, leaf_objects] = empty.buffers();
-    let push = [1u32, empty.node_count()];
-    context
-        .dispatch(
-            &kernel,
-            &[
-                &ray_buffer,
-                &results,
-                nodes,
-                triangles,
-                leaf_prims,
-                leaf_objects,
-            ],
-            bytemuck::cast_slice(&push),
-            [1, 1, 1],
-        )
-        .unwrap();
+    trace_rays(&mut context, &kernel, &empty, &ray_buffer, &results, 1);
     let first = results.read::<BvhRayOutput>().unwrap()[0];
     assert_eq!(
         (first.closest_prim, first.occluded, first.hit_count),

@@ -201,6 +201,35 @@ where
     equivalence(&reuse(setup, shift), reference, DELTA, 1.0 - ALPHA)
 }
 
+/// Asserts that every correct shift of the crate gives an unbiased reuse step on `setup`
+/// (δ = [`DELTA`], α = [`ALPHA`], N = `setup.replicas`).
+fn assert_correct_shifts_unbiased(label: &str, setup: &Setup, reference: &Summary) {
+    let hybrid = Hybrid::for_material(setup.receiver.material());
+    let exact = InvertingReconnection {
+        policy: IndexPolicy::Exact,
+    };
+    for (name, e) in [
+        ("reconnection", verdict(setup, reference, &Reconnection)),
+        (
+            "delayed reconnection",
+            verdict(setup, reference, &DelayedReconnection),
+        ),
+        ("hybrid", verdict(setup, reference, &hybrid)),
+        (
+            "inverting reconnection (exact)",
+            verdict(setup, reference, &exact),
+        ),
+    ] {
+        println!("{label} {name}: {e:?}");
+        assert_eq!(
+            e.verdict,
+            Verdict::Unbiased,
+            "{label} {name}: δ = {DELTA}, α = {ALPHA}, N = {}: {e:?}",
+            setup.replicas
+        );
+    }
+}
+
 /// Every shift of the crate gives an unbiased reuse step (δ = 5%, α = 1e-3, N = 20 000 against
 /// 100 000 reference replicas); the negative control without visibility is biased (too bright)
 /// by the same test.
@@ -208,29 +237,7 @@ where
 fn reuse_is_unbiased_and_missing_visibility_is_caught() {
     let setup = half_shadow_setup();
     let reference = reference(&setup);
-    let hybrid = Hybrid::for_material(setup.receiver.material());
-    let exact = InvertingReconnection {
-        policy: IndexPolicy::Exact,
-    };
-    for (name, e) in [
-        ("reconnection", verdict(&setup, &reference, &Reconnection)),
-        (
-            "delayed reconnection",
-            verdict(&setup, &reference, &DelayedReconnection),
-        ),
-        ("hybrid", verdict(&setup, &reference, &hybrid)),
-        (
-            "inverting reconnection (exact)",
-            verdict(&setup, &reference, &exact),
-        ),
-    ] {
-        println!("{name}: {e:?}");
-        assert_eq!(
-            e.verdict,
-            Verdict::Unbiased,
-            "{name}: δ = {DELTA}, α = {ALPHA}, N = {N}: {e:?}"
-        );
-    }
+    assert_correct_shifts_unbiased("half-shadow", &setup, &reference);
     let leak = verdict(&setup, &reference, &DelayedWithoutVisibility);
     println!("delayed without visibility: {leak:?}");
     assert!(
@@ -278,29 +285,7 @@ fn bumpy_setup() -> Setup<'static> {
 fn reuse_on_the_bumpy_sphere_is_unbiased() {
     let setup = bumpy_setup();
     let reference = reference(&setup);
-    let hybrid = Hybrid::for_material(setup.receiver.material());
-    let exact = InvertingReconnection {
-        policy: IndexPolicy::Exact,
-    };
-    for (name, e) in [
-        ("reconnection", verdict(&setup, &reference, &Reconnection)),
-        (
-            "delayed reconnection",
-            verdict(&setup, &reference, &DelayedReconnection),
-        ),
-        ("hybrid", verdict(&setup, &reference, &hybrid)),
-        (
-            "inverting reconnection (exact)",
-            verdict(&setup, &reference, &exact),
-        ),
-    ] {
-        println!("bumpy {name}: {e:?}");
-        assert_eq!(
-            e.verdict,
-            Verdict::Unbiased,
-            "{name}: δ = {DELTA}, α = {ALPHA}, N = {N}: {e:?}"
-        );
-    }
+    assert_correct_shifts_unbiased("bumpy", &setup, &reference);
     let unscaled = verdict(&setup, &reference, &DelayedWithoutJacobian);
     println!("bumpy delayed without Jacobian: {unscaled:?}");
     assert!(

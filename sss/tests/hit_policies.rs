@@ -7,16 +7,16 @@
 
 use glam::Vec3;
 use restir::stats::{Welford, holm, welch};
-use sss::bssrdf::{EntryPoint, Probe, contribution, p_disk, pick_hit};
 use sss::geometry::Hit;
-use sss::integrator::pt::{estimate, occluded, sample_stream};
+use sss::integrator::pt::{estimate, sample_stream};
 use sss::integrator::{HitPolicy, PtSettings, Shading};
 use sss::scene::{GBuffer, GPixel, Scene, luminance};
 
 const N: u32 = 60_000;
 const ALPHA: f64 = 1e-3;
 
-/// The uniform-pick estimator with the `n_hits` factor dropped (deliberately biased).
+/// The uniform-pick estimator with the `n_hits` factor dropped (deliberately biased): the
+/// correct `HitPolicy::UniformOne` estimate divided by the number of hits its probe found.
 fn uniform_without_hit_count(
     scene: &Scene,
     shading: &Shading,
@@ -24,41 +24,11 @@ fn uniform_without_hit_count(
     rng: &mut restir::rng::Stream,
     hits: &mut Vec<Hit>,
 ) -> Vec3 {
-    let Shading::Translucent { material, x1 } = shading else {
-        panic!("pixel is not translucent")
-    };
-    let probe = Probe::sample(
-        &settings.selection,
-        rng.next_f32(),
-        rng.next_f32(),
-        rng.next_f32(),
-    );
-    probe.trace(&scene.geometry, x1, hits);
-    let Some((_, hit)) = pick_hit(hits, None, rng.next_f32()) else {
-        return Vec3::ZERO;
-    };
-    let x2 = EntryPoint::from_hit(&scene.geometry, &hit);
-    let p = p_disk(x1, &settings.selection, x2.position, x2.geometric_normal);
-    let Some(light) = scene.lights.sample(
-        x2.position,
-        [rng.next_f32(), rng.next_f32(), rng.next_f32()],
-    ) else {
-        return Vec3::ZERO;
-    };
-    let f = contribution(material, x1, &x2, light.wi, light.radiance);
-    if !(p > 0.0 && light.pdf > 0.0) || f == Vec3::ZERO {
-        return Vec3::ZERO;
-    }
-    if occluded(
-        scene,
-        x2.position,
-        x2.geometric_normal,
-        light.wi,
-        light.distance,
-    ) {
+    let value = estimate(scene, shading, settings, rng, hits);
+    if hits.is_empty() {
         Vec3::ZERO
     } else {
-        f / (p * light.pdf)
+        value / hits.len() as f32
     }
 }
 

@@ -359,17 +359,14 @@ fn energy_verdicts(tally: &EnergyTally, what: &str) -> [Verdict; 3] {
     })
 }
 
-/// Energy conservation at albedo 1 with an index-matched boundary, sphere (analytic) and closed
-/// mesh (BVH): gray medium, 8 × 2 500 walks, every walk exits with weight 1 (to 1e-5) and none
-/// reaches the cap (`DEFAULT_MAX_BOUNCES`); chromatic medium (σt = (6, 8, 10), hero weights),
-/// 16 × 5 000 walks: mean exit weight equivalent to 1 per channel (δ = 1%). Negative control:
-/// σa = 2% of σt loses energy, and both checks flag it.
-#[test]
-fn albedo_one_conserves_energy_index_matched() {
+/// Runs `check(name, boundary, x1, n1)` on the two closed objects of the energy tests: the unit
+/// sphere (analytic) and an icosphere mesh (BVH), each with an entry point on its surface.
+fn for_each_closed_boundary(mut check: impl FnMut(&str, &dyn Boundary, Vec3, Vec3)) {
     let sphere = Sphere {
         center: Vec3::ZERO,
         radius: 1.0,
     };
+    check("sphere", &sphere, Vec3::Z, Vec3::Z);
     let geometry = Geometry::new(&[icosphere(1.0, 2)]);
     let mesh = MeshBoundary {
         geometry: &geometry,
@@ -377,11 +374,22 @@ fn albedo_one_conserves_energy_index_matched() {
         inward_winding: false,
     };
     let [v0, v1, v2] = geometry.vertices(0);
-    let (x_mesh, n_mesh) = ((v0 + v1 + v2) / 3.0, geometry.geometric_normal(0));
-    let boundaries: [(&str, &dyn Boundary, Vec3, Vec3); 2] = [
-        ("sphere", &sphere, Vec3::Z, Vec3::Z),
-        ("icosphere mesh", &mesh, x_mesh, n_mesh),
-    ];
+    let centroid = (v0 + v1 + v2) / 3.0;
+    check(
+        "icosphere mesh",
+        &mesh,
+        centroid,
+        geometry.geometric_normal(0),
+    );
+}
+
+/// Energy conservation at albedo 1 with an index-matched boundary, sphere (analytic) and closed
+/// mesh (BVH): gray medium, 8 × 2 500 walks, every walk exits with weight 1 (to 1e-5) and none
+/// reaches the cap (`DEFAULT_MAX_BOUNCES`); chromatic medium (σt = (6, 8, 10), hero weights),
+/// 16 × 5 000 walks: mean exit weight equivalent to 1 per channel (δ = 1%). Negative control:
+/// σa = 2% of σt loses energy, and both checks flag it.
+#[test]
+fn albedo_one_conserves_energy_index_matched() {
     let gray = medium(Vec3::splat(10.0), Vec3::ZERO, 0.7, Interface::IndexMatched);
     let chromatic = medium(
         Vec3::new(6.0, 8.0, 10.0),
@@ -395,7 +403,7 @@ fn albedo_one_conserves_energy_index_matched() {
         0.7,
         Interface::IndexMatched,
     );
-    for (name, boundary, x1, n1) in boundaries {
+    for_each_closed_boundary(|name, boundary, x1, n1| {
         let tally = energy_tally(boundary, &gray, x1, n1, 8, 2_500, 1);
         assert_eq!(
             (tally.not_unit, tally.truncated),
@@ -420,7 +428,7 @@ fn albedo_one_conserves_energy_index_matched() {
             [Verdict::Biased; 3],
             "{name}: negative control not flagged (δ = 1%, confidence 1 − 0.01/3, 8 × 2 500 walks)"
         );
-    }
+    });
 }
 
 /// Smooth dielectric (η = 1.4) at albedo 1: Fresnel and total internal reflection only delay
@@ -429,26 +437,10 @@ fn albedo_one_conserves_energy_index_matched() {
 /// (so the check exercises reflection). Negative control: σa = 2% of σt loses energy.
 #[test]
 fn albedo_one_conserves_energy_dielectric() {
-    let sphere = Sphere {
-        center: Vec3::ZERO,
-        radius: 1.0,
-    };
-    let geometry = Geometry::new(&[icosphere(1.0, 2)]);
-    let mesh = MeshBoundary {
-        geometry: &geometry,
-        object: 0,
-        inward_winding: false,
-    };
-    let [v0, v1, v2] = geometry.vertices(0);
-    let (x_mesh, n_mesh) = ((v0 + v1 + v2) / 3.0, geometry.geometric_normal(0));
-    let boundaries: [(&str, &dyn Boundary, Vec3, Vec3); 2] = [
-        ("sphere", &sphere, Vec3::Z, Vec3::Z),
-        ("icosphere mesh", &mesh, x_mesh, n_mesh),
-    ];
     let dielectric = Interface::Dielectric { eta: 1.4 };
     let gray = medium(Vec3::splat(10.0), Vec3::ZERO, 0.7, dielectric);
     let lossy = medium(Vec3::splat(9.8), Vec3::splat(0.2), 0.7, dielectric);
-    for (name, boundary, x1, n1) in boundaries {
+    for_each_closed_boundary(|name, boundary, x1, n1| {
         let tally = energy_tally(boundary, &gray, x1, n1, 8, 2_500, 4);
         assert_eq!(
             (tally.not_unit, tally.truncated),
@@ -478,5 +470,5 @@ fn albedo_one_conserves_energy_dielectric() {
             [Verdict::Biased; 3],
             "{name}: negative control not flagged (δ = 1%, confidence 1 − 0.01/3, 8 × 2 500 walks)"
         );
-    }
+    });
 }

@@ -2,7 +2,7 @@
 //!
 //! Every `experiments/glsl/*.glsl` is one compute entry point; the GLSL twins it includes live
 //! beside their Rust modules (`restir/glsl/`, `sss/glsl/`, `shifts/glsl/`) and are found through
-//! `-I`. The SPIR-V goes to `$OUT_DIR/<stem>.spv` and the cfg `reshift_glslc` tells the crate to
+//! `-I`. The SPIR-V goes to `$OUT_DIR/<stem>.spv`, `$OUT_DIR/spirv_table.rs` maps stems to it, and the cfg `reshift_glslc` tells the crate to
 //! embed it. Without `glslc` the build still succeeds (with a warning) and the backend reports
 //! what to install; a shader that fails to compile fails the build.
 
@@ -41,6 +41,10 @@ fn main() {
         .filter(|path| path.extension().is_some_and(|e| e == "glsl"))
         .collect();
     sources.sort();
+    let mut table = String::from(
+        "/// The SPIR-V compiled from `experiments/glsl/<name>.glsl`, by name.\n\
+         pub(super) fn embedded_named(name: &str) -> Option<&'static [u8]> {\n    match name {\n",
+    );
     for source in &sources {
         let stem = source.file_stem().expect("a file name").to_string_lossy();
         let output = out_dir.join(format!("{stem}.spv"));
@@ -66,6 +70,12 @@ fn main() {
             source.display(),
             String::from_utf8_lossy(&result.stderr)
         );
+        table.push_str(&format!(
+            "        {stem:?} => Some(include_bytes!({:?})),\n",
+            output.display().to_string()
+        ));
     }
+    table.push_str("        _ => None,\n    }\n}\n");
+    std::fs::write(out_dir.join("spirv_table.rs"), table).expect("OUT_DIR is writable");
     println!("cargo::rustc-cfg=reshift_glslc");
 }

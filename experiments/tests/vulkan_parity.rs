@@ -74,7 +74,7 @@ fn golden_pcg32() -> [u32; 4] {
 /// comparison flags the CPU streams of the neighbouring purpose, and a `u · 2⁻³²` unit float.
 #[test]
 fn rng_streams_are_bit_identical() {
-    let Some((mut context, kernel)) = kernel_or_skip("rng parity", Shader::ParityRng) else {
+    let Some((mut context, kernel)) = kernel_or_skip("rng parity", Shader::PARITY_RNG) else {
         return;
     };
     const DRAWS: usize = 16;
@@ -97,7 +97,7 @@ fn rng_streams_are_bit_identical() {
             seed_lo: seed as u32,
             seed_hi: (seed >> 32) as u32,
         };
-        let groups = groups_for(params.count, Shader::ParityRng.local_size());
+        let groups = groups_for(params.count, Shader::PARITY_RNG.local_size);
         let timing = context
             .dispatch(
                 &kernel,
@@ -236,7 +236,7 @@ fn burley_inputs() -> Vec<BurleyInput> {
 /// d′ = d(1 + 2⁻¹⁷) (r scales with d, so every radius is off by 2⁻¹⁷ relative).
 #[test]
 fn burley_twin_within_precision_bounds() {
-    let Some((mut context, kernel)) = kernel_or_skip("burley parity", Shader::ParityBurley) else {
+    let Some((mut context, kernel)) = kernel_or_skip("burley parity", Shader::PARITY_BURLEY) else {
         return;
     };
     let inputs = burley_inputs();
@@ -248,7 +248,7 @@ fn burley_twin_within_precision_bounds() {
             &kernel,
             &[&input_buffer, &output_buffer],
             bytemuck::bytes_of(&count),
-            [groups_for(count, Shader::ParityBurley.local_size()), 1, 1],
+            [groups_for(count, Shader::PARITY_BURLEY.local_size), 1, 1],
         )
         .unwrap();
     let outputs = output_buffer.read::<BurleyOutput>().unwrap();
@@ -379,14 +379,14 @@ fn trace_rays(
             kernel,
             &[rays, results, nodes, triangles, leaf_prims, leaf_objects],
             bytemuck::cast_slice(&push),
-            [groups_for(count, Shader::ParityBvh.local_size()), 1, 1],
+            [groups_for(count, Shader::PARITY_BVH.local_size), 1, 1],
         )
         .unwrap()
 }
 
 #[test]
 fn bvh_queries_match_cpu() {
-    let Some((mut context, kernel)) = kernel_or_skip("bvh parity", Shader::ParityBvh) else {
+    let Some((mut context, kernel)) = kernel_or_skip("bvh parity", Shader::PARITY_BVH) else {
         return;
     };
     let geometry = bvh_scene();

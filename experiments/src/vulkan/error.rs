@@ -33,6 +33,8 @@ pub enum VulkanError {
     Binding(String),
     /// The embedded SPIR-V is not a valid word stream.
     InvalidSpirv(String),
+    /// No `experiments/glsl/<name>.glsl` was compiled into the crate.
+    UnknownShader(String),
 }
 
 impl fmt::Display for VulkanError {
@@ -74,6 +76,10 @@ impl fmt::Display for VulkanError {
             ),
             Self::Binding(why) => write!(f, "kernel binding mismatch: {why}"),
             Self::InvalidSpirv(why) => write!(f, "invalid embedded SPIR-V: {why}"),
+            Self::UnknownShader(name) => write!(
+                f,
+                "no compiled shader named {name:?} (experiments/glsl/{name}.glsl is missing)"
+            ),
         }
     }
 }

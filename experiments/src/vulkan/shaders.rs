@@ -1,75 +1,61 @@
 //! The compute shaders compiled by `build.rs` (one per `experiments/glsl/*.glsl`), embedded as
-//! SPIR-V when `glslc` was found at build time.
+//! SPIR-V when `glslc` was found at build time. A shader is named by its file stem; the module
+//! that dispatches it declares its binding interface as a [`Shader`] constant next to the code
+//! that fills the buffers.
 
 use super::error::VulkanError;
 
-/// A compute shader of `experiments/glsl/`, with its binding interface.
+/// A compute shader of `experiments/glsl/` and its binding interface: storage buffers at
+/// bindings `0..buffers`, `push_bytes` of push constants, `local_size` invocations per group.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Shader {
-    /// `parity_rng.glsl`: keys (`StreamKey`) → `draws` u32 and `draws` f32 per key.
-    /// Push constants: [`RngParams`](super::RngParams).
-    ParityRng,
-    /// `parity_burley.glsl`: [`BurleyInput`](super::BurleyInput) →
-    /// [`BurleyOutput`](super::BurleyOutput). Push constants: the count (`u32`).
-    ParityBurley,
-    /// `parity_bvh.glsl`: [`BvhRayInput`](super::BvhRayInput) →
-    /// [`BvhRayOutput`](super::BvhRayOutput), then the four buffers of a
-    /// [`GpuBvh`](super::GpuBvh). Push constants: ray count and node count (`[u32; 2]`).
-    ParityBvh,
+pub struct Shader {
+    /// The GLSL file stem.
+    pub name: &'static str,
+    pub buffers: u32,
+    pub push_bytes: u32,
+    /// `local_size_x` in the GLSL.
+    pub local_size: u32,
 }
 
 impl Shader {
-    /// Every shader, in a fixed order.
-    pub const ALL: [Shader; 3] = [Shader::ParityRng, Shader::ParityBurley, Shader::ParityBvh];
+    /// `parity_rng.glsl`: keys (`StreamKey`) → `draws` u32 and `draws` f32 per key.
+    /// Push constants: [`RngParams`](super::RngParams).
+    pub const PARITY_RNG: Shader = Shader::new("parity_rng", 3, 16);
+    /// `parity_burley.glsl`: [`BurleyInput`](super::BurleyInput) →
+    /// [`BurleyOutput`](super::BurleyOutput). Push constants: the count (`u32`).
+    pub const PARITY_BURLEY: Shader = Shader::new("parity_burley", 2, 4);
+    /// `parity_bvh.glsl`: [`BvhRayInput`](super::BvhRayInput) →
+    /// [`BvhRayOutput`](super::BvhRayOutput), then the four buffers of a
+    /// [`GpuBvh`](super::GpuBvh). Push constants: ray count and node count (`[u32; 2]`).
+    pub const PARITY_BVH: Shader = Shader::new("parity_bvh", 6, 8);
 
-    /// The GLSL file stem.
-    pub fn name(self) -> &'static str {
-        match self {
-            Shader::ParityRng => "parity_rng",
-            Shader::ParityBurley => "parity_burley",
-            Shader::ParityBvh => "parity_bvh",
+    /// A shader with 64 invocations per group.
+    pub const fn new(name: &'static str, buffers: u32, push_bytes: u32) -> Shader {
+        Shader {
+            name,
+            buffers,
+            push_bytes,
+            local_size: 64,
         }
-    }
-
-    /// Storage buffers at bindings `0..buffers()`.
-    pub fn buffers(self) -> u32 {
-        match self {
-            Shader::ParityRng => 3,
-            Shader::ParityBurley => 2,
-            Shader::ParityBvh => 6,
-        }
-    }
-
-    /// Push-constant bytes.
-    pub fn push_bytes(self) -> u32 {
-        match self {
-            Shader::ParityRng => 16,
-            Shader::ParityBurley => 4,
-            Shader::ParityBvh => 8,
-        }
-    }
-
-    /// Invocations per work group (`local_size_x` in the GLSL).
-    pub fn local_size(self) -> u32 {
-        64
     }
 
     /// The SPIR-V, or [`VulkanError::NoGlslc`] when the crate was built without `glslc`.
     pub fn spirv(self) -> Result<&'static [u8], VulkanError> {
-        embedded(self)
+        embedded(self.name)
     }
 }
 
 #[cfg(reshift_glslc)]
-fn embedded(shader: Shader) -> Result<&'static [u8], VulkanError> {
-    Ok(match shader {
-        Shader::ParityRng => include_bytes!(concat!(env!("OUT_DIR"), "/parity_rng.spv")),
-        Shader::ParityBurley => include_bytes!(concat!(env!("OUT_DIR"), "/parity_burley.spv")),
-        Shader::ParityBvh => include_bytes!(concat!(env!("OUT_DIR"), "/parity_bvh.spv")),
-    })
+mod table {
+    include!(concat!(env!("OUT_DIR"), "/spirv_table.rs"));
+}
+
+#[cfg(reshift_glslc)]
+fn embedded(name: &str) -> Result<&'static [u8], VulkanError> {
+    table::embedded_named(name).ok_or_else(|| VulkanError::UnknownShader(name.to_string()))
 }
 
 #[cfg(not(reshift_glslc))]
-fn embedded(_: Shader) -> Result<&'static [u8], VulkanError> {
+fn embedded(_: &str) -> Result<&'static [u8], VulkanError> {
     Err(VulkanError::NoGlslc)
 }

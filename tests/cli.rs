@@ -577,3 +577,143 @@ fn diagnostics_experiments_write_tables_and_findings() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// GPU options without `--backend vulkan` are input errors, not ignored; an unknown backend is
+/// a usage error.
+#[test]
+fn gpu_flags_need_the_vulkan_backend() {
+    let base = [
+        "render", "--scene", "bumpy", "--method", "pt", "--frames", "1",
+    ];
+    fails_with(
+        &[&base[..], &["--require-gpu"]].concat(),
+        "--backend vulkan",
+    );
+    fails_with(
+        &[&base[..], &["--device", "llvmpipe"]].concat(),
+        "--backend vulkan",
+    );
+    let o = reshift(&[&base[..], &["--backend", "metal"]].concat());
+    assert!(
+        !o.status.success() && stderr(&o).contains("cpu, vulkan"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// The Vulkan backend, or why it is unavailable; `RESHIFT_REQUIRE_VULKAN=1` turns "unavailable"
+/// into a failure.
+fn vulkan_or_reason(test: &str) -> Result<experiments::Backend, String> {
+    match experiments::Backend::vulkan(None, false) {
+        Ok(backend) => Ok(backend),
+        Err(e) if std::env::var(experiments::vulkan::REQUIRE_ENV).as_deref() == Ok("1") => {
+            panic!("{test}: RESHIFT_REQUIRE_VULKAN=1 but the Vulkan backend is unavailable: {e}")
+        }
+        Err(e) => {
+            eprintln!("{test}: Vulkan unavailable ({e}); checking the one-line error instead");
+            Err(e.to_string())
+        }
+    }
+}
+
+/// `render --backend vulkan` renders ReSTIR and pt (16×12, 2 frames) and says which
+/// device; `--require-gpu` fails on a CPU device (lavapipe) and works on a GPU; an unknown
+/// `--device` is a one-line error. Without Vulkan, `--backend vulkan` exits 1 with the
+/// `VulkanError` line and no panic.
+#[test]
+fn render_on_the_vulkan_backend_or_a_one_line_error() {
+    let dir = scratch("render-vulkan");
+    let args = |method: &'static str| {
+        [
+            "render",
+            "--scene",
+            "bumpy",
+            "--method",
+            method,
+            "--frames",
+            "2",
+            "--resolution",
+            "16x12",
+            "--out",
+            dir.to_str().unwrap(),
+            "--json",
+            "--backend",
+            "vulkan",
+        ]
+        .map(str::to_string)
+    };
+    let argv = |method| args(method).to_vec();
+    let call = |v: &[String]| reshift(&v.iter().map(String::as_str).collect::<Vec<_>>());
+    match vulkan_or_reason("render_on_the_vulkan_backend_or_a_one_line_error") {
+        Err(reason) => {
+            let v = argv("restir:hybrid");
+            fails_with(&v.iter().map(String::as_str).collect::<Vec<_>>(), &reason);
+        }
+        Ok(backend) => {
+            for method in ["restir:hybrid", "pt:2"] {
+                let json: Value = serde_json::from_str(&ok(&call(&argv(method)))).unwrap();
+                assert!(
+                    json["backend"].as_str().unwrap().starts_with("vulkan ("),
+                    "{json}"
+                );
+                assert_eq!(json["nonfinite"], 0, "{method}");
+                assert!(std::fs::metadata(json["png"].as_str().unwrap()).is_ok());
+            }
+            let mut strict = argv("pt");
+            strict.push("--require-gpu".into());
+            let is_cpu = backend.device().unwrap().kind == experiments::vulkan::DeviceKind::Cpu;
+            if is_cpu {
+                let s: Vec<&str> = strict.iter().map(String::as_str).collect();
+                fails_with(&s, "CPU implementation");
+            } else {
+                ok(&call(&strict));
+            }
+            let mut unknown = argv("pt");
+            unknown.extend(["--device".into(), "no-such-device-xyz".into()]);
+            let u: Vec<&str> = unknown.iter().map(String::as_str).collect();
+            fails_with(&u, "no-such-device-xyz");
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `compare --backend vulkan` (bumpy, 16×12, 2 frames, 2 replicas) writes results.json that
+/// validates against docs/results-schema.md, with finite errors for every method.
+#[test]
+fn compare_on_the_vulkan_backend_validates() {
+    if vulkan_or_reason("compare_on_the_vulkan_backend_validates").is_err() {
+        return;
+    }
+    let dir = scratch("compare-vulkan");
+    let (out, cache) = (dir.join("out"), dir.join("cache"));
+    let args = [
+        "compare",
+        "--backend",
+        "vulkan",
+        "--scene",
+        "bumpy",
+        "--methods",
+        "pt:2,restir:sequential,random-walk",
+        "--replicas",
+        "2",
+        "--frames",
+        "2",
+        "--resolution",
+        "16x12",
+        "--reference-spp",
+        "16",
+        "--reference-batch-spp",
+        "8",
+        "--out",
+        out.to_str().unwrap(),
+        "--cache",
+        cache.to_str().unwrap(),
+        "--json",
+    ];
+    let json: Value = serde_json::from_str(&ok(&reshift(&args))).unwrap();
+    assert_valid(&schemas()[0], &json, "compare --backend vulkan");
+    for method in json["methods"].as_array().unwrap() {
+        assert_eq!(method["nonfinite"], 0, "{method}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

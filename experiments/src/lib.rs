@@ -6,6 +6,7 @@
 //! `f(Y)·W`. Every random number comes from `StreamKey { pixel, frame, pass, purpose }` with the
 //! purposes of [`purpose`]; a run is a function of `(scene, preset, seed, frames)`.
 
+pub mod backend;
 pub mod bias;
 pub mod candidates;
 pub mod compare;
@@ -32,6 +33,7 @@ use restir::reservoir::InvalidCandidate;
 use sss::integrator::pt::{self, PtSettings};
 use sss::scene::{FRAMES, GBuffer, Scene};
 
+pub use backend::Backend;
 pub use diagnostics::Diagnostics;
 pub use image::Image;
 pub use layout::PixelReservoir;
@@ -126,6 +128,8 @@ pub enum PipelineError {
         pixel: u32,
         error: ResampleError,
     },
+    /// The Vulkan backend could not run.
+    Vulkan(vulkan::VulkanError),
 }
 
 impl fmt::Display for PipelineError {
@@ -148,6 +152,7 @@ impl fmt::Display for PipelineError {
             } => {
                 write!(f, "frame {frame}, pass {pass}, pixel {pixel}: {error}")
             }
+            Self::Vulkan(e) => e.fmt(f),
         }
     }
 }
@@ -160,14 +165,17 @@ impl From<PresetError> for PipelineError {
     }
 }
 
-/// Renders `config.frames` frames of `scene`'s camera trajectory with `preset` on the CPU.
-/// The resolution is the scene camera's (set it with `Camera::with_resolution`).
-pub fn run(scene: &Scene, preset: &Preset, config: &RunConfig) -> Result<Run, PipelineError> {
-    preset.validate()?;
-    if config.frames == 0 {
-        return Err(PipelineError::Config("frames = 0; need at least 1".into()));
+impl From<vulkan::VulkanError> for PipelineError {
+    fn from(e: vulkan::VulkanError) -> Self {
+        PipelineError::Vulkan(e)
     }
-    cpu::run(scene, preset, config)
+}
+
+/// Renders `config.frames` frames of `scene`'s camera trajectory with `preset` on the CPU.
+/// The resolution is the scene camera's (set it with `Camera::with_resolution`); for the GPU
+/// see [`Backend::run`].
+pub fn run(scene: &Scene, preset: &Preset, config: &RunConfig) -> Result<Run, PipelineError> {
+    Backend::Cpu.run(scene, preset, config)
 }
 
 /// The path-traced baseline (`sss::integrator::pt`, all hits per probe) at `spp` samples per

@@ -12,7 +12,7 @@ use sss::scene::{GBuffer, Scene};
 use crate::image::Image;
 use crate::preset::{PRESET_NAMES, PassSpec, Preset, ShiftKind};
 use crate::random_walk_method;
-use crate::{PipelineError, RunConfig, run};
+use crate::{Backend, PipelineError, RunConfig};
 
 /// The final frame of one replica of a method, and what it cost.
 #[derive(Clone, Debug)]
@@ -182,60 +182,78 @@ impl Method {
         }
     }
 
-    /// Renders replica `seed` and returns frame `frames − 1` (the resolution is the camera's).
+    /// Renders replica `seed` on the CPU and returns frame `frames − 1` (the resolution is the
+    /// camera's).
     pub fn render(&self, scene: &Scene, frames: u32, seed: u64) -> Result<Rendered, PipelineError> {
+        self.render_on(&Backend::Cpu, scene, frames, seed)
+    }
+
+    /// [`Method::render`] on `backend`. On Vulkan, `seconds_per_frame` is wall-clock time
+    /// including read-back, like the CPU's.
+    pub fn render_on(
+        &self,
+        backend: &Backend,
+        scene: &Scene,
+        frames: u32,
+        seed: u64,
+    ) -> Result<Rendered, PipelineError> {
         if frames == 0 {
             return Err(PipelineError::Config("frames = 0; need at least 1".into()));
         }
         let last = frames - 1;
-        match self {
+        let start = Instant::now();
+        // The renderer's lock is taken only by the memoryless methods: `Backend::run` takes it
+        // itself.
+        let (image, frames_rendered, nonfinite) = match self {
             Method::Restir(preset) => {
-                let start = Instant::now();
                 let config = RunConfig {
                     seed,
                     frames,
                     collect_diagnostics: false,
                 };
-                let mut result = run(scene, preset, &config)?;
-                let seconds = start.elapsed().as_secs_f64();
+                let mut result = backend.run(scene, preset, &config)?;
                 let image = result
                     .frames
                     .pop()
                     .ok_or_else(|| PipelineError::Config("the run returned no frame".into()))?;
-                Ok(Rendered {
-                    image,
-                    seconds_per_frame: seconds / frames as f64,
-                    frames_rendered: frames,
-                    nonfinite: result.nan_count,
-                })
+                (image, frames, result.nan_count)
             }
-            Method::Pt { spp } => {
-                let start = Instant::now();
-                let gbuffer = GBuffer::render(scene, last);
-                let image = pt::render(scene, &gbuffer, &PtSettings::default(), seed, 0, *spp);
-                Ok(Rendered {
-                    image: Image {
+            Method::Pt { spp } => match backend.renderer() {
+                Some(mut renderer) => {
+                    let (image, nonfinite) = renderer.pt(scene, last, seed, *spp)?;
+                    (image, 1, nonfinite)
+                }
+                None => {
+                    let gbuffer = GBuffer::render(scene, last);
+                    let image = pt::render(scene, &gbuffer, &PtSettings::default(), seed, 0, *spp);
+                    let pixels = image.pixels.iter().map(|p| p.as_vec3()).collect();
+                    let converted = Image {
                         width: image.width,
                         height: image.height,
-                        pixels: image.pixels.iter().map(|p| p.as_vec3()).collect(),
-                    },
-                    seconds_per_frame: start.elapsed().as_secs_f64(),
-                    frames_rendered: 1,
-                    nonfinite: image.nonfinite,
-                })
-            }
-            Method::RandomWalk { spp } => {
-                let start = Instant::now();
-                let gbuffer = GBuffer::render(scene, last);
-                let (image, nonfinite) = random_walk_method::render(scene, &gbuffer, seed, *spp)?;
-                Ok(Rendered {
-                    image,
-                    seconds_per_frame: start.elapsed().as_secs_f64(),
-                    frames_rendered: 1,
-                    nonfinite,
-                })
-            }
-        }
+                        pixels,
+                    };
+                    (converted, 1, image.nonfinite)
+                }
+            },
+            Method::RandomWalk { spp } => match backend.renderer() {
+                Some(mut renderer) => {
+                    let (image, nonfinite) = renderer.random_walk(scene, last, seed, *spp)?;
+                    (image, 1, nonfinite)
+                }
+                None => {
+                    let gbuffer = GBuffer::render(scene, last);
+                    let (image, nonfinite) =
+                        random_walk_method::render(scene, &gbuffer, seed, *spp)?;
+                    (image, 1, nonfinite)
+                }
+            },
+        };
+        Ok(Rendered {
+            image,
+            seconds_per_frame: start.elapsed().as_secs_f64() / frames_rendered as f64,
+            frames_rendered,
+            nonfinite,
+        })
     }
 }
 

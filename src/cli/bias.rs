@@ -14,8 +14,8 @@ use serde_json::{Value, json};
 use sss::scene::GBuffer;
 
 use super::common::{
-    CliError, CliResult, interrupted, json_number, load_scene, parse_resolution, progress,
-    with_resolution,
+    BackendArgs, CliError, CliResult, interrupted, json_number, load_scene, parse_resolution,
+    progress, with_resolution,
 };
 
 #[derive(Args, Clone, Debug)]
@@ -50,6 +50,8 @@ pub struct BiasArgs {
     /// Print JSON (schema `reshift-bias/1`) instead of the table.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub backend: BackendArgs,
 }
 
 pub fn command(args: &BiasArgs) -> CliResult<()> {
@@ -66,6 +68,7 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
             "--replicas and --reference-batches must be ≥ 2, --frames ≥ 1".into(),
         ));
     }
+    let backend = args.backend.open()?;
     let loaded = load_scene(&args.scene)?;
     let scene = with_resolution(loaded.scene, Some(parse_resolution(&args.resolution)?));
     let frame = args.frames - 1;
@@ -83,7 +86,7 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
         if interrupted() {
             break;
         }
-        let rendered = method.render(&scene, args.frames, seed)?;
+        let rendered = method.render_on(&backend, &scene, args.frames, seed)?;
         nonfinite += rendered.nonfinite;
         images.push(
             rendered

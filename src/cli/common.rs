@@ -6,6 +6,8 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Duration;
 
+use clap::{Args, ValueEnum};
+use experiments::Backend;
 use experiments::compare::fnv1a;
 use indicatif::{ProgressBar, ProgressStyle};
 use sss::InputError;
@@ -37,10 +39,64 @@ from_error!(
     experiments::PipelineError,
     experiments::methods::MethodError,
     experiments::image::WriteError,
+    experiments::vulkan::VulkanError,
     restir::resample::ResampleError
 );
 
 pub type CliResult<T> = Result<T, CliError>;
+
+/// `--backend`: where runs execute.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
+pub enum BackendKind {
+    /// The deterministic CPU implementation.
+    #[default]
+    Cpu,
+    /// A Vulkan device (a GPU, or Mesa's CPU device lavapipe).
+    Vulkan,
+}
+
+/// The backend options every rendering subcommand takes.
+#[derive(Args, Clone, Debug, Default)]
+pub struct BackendArgs {
+    /// Where to render.
+    #[arg(long, value_enum, default_value_t = BackendKind::Cpu)]
+    pub backend: BackendKind,
+    /// With --backend vulkan: fail if the chosen device is a CPU implementation (lavapipe).
+    #[arg(long)]
+    pub require_gpu: bool,
+    /// With --backend vulkan: the device whose name contains this text (as
+    /// RESHIFT_VULKAN_DEVICE).
+    #[arg(long, value_name = "SUBSTRING")]
+    pub device: Option<String>,
+}
+
+impl BackendArgs {
+    /// Opens the backend: a Vulkan error (no loader, no device, no SPIR-V in this build, a CPU
+    /// device with --require-gpu) is one line; GPU options without `--backend vulkan` are an
+    /// input error rather than ignored.
+    pub fn open(&self) -> CliResult<Backend> {
+        match self.backend {
+            BackendKind::Cpu => {
+                let stray = if self.require_gpu {
+                    Some(("--require-gpu", "true".to_string()))
+                } else {
+                    self.device.clone().map(|d| ("--device", d))
+                };
+                match stray {
+                    Some((field, value)) => Err(InputError::new(
+                        "(command line)",
+                        field,
+                        value,
+                        "only applies with --backend vulkan",
+                    )
+                    .into()),
+                    None => Ok(Backend::Cpu),
+                }
+            }
+            BackendKind::Vulkan => Ok(Backend::vulkan(self.device.as_deref(), self.require_gpu)?),
+        }
+    }
+}
 
 /// A scene as named on the command line, with its cache key.
 pub struct LoadedScene {

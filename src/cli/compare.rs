@@ -11,14 +11,14 @@ use experiments::compare::{
 use experiments::methods::{Method, Rendered};
 use experiments::metrics::{BIAS_CONFIDENCE, REL_EPSILON, efficiency, error_maps};
 use experiments::regions::{Region, Regions};
-use experiments::{Image, tables};
+use experiments::{Backend, Image, tables};
 use serde_json::{Value, json};
 use sss::integrator::Reference;
 use sss::scene::{GBuffer, Scene};
 
 use super::common::{
-    CliError, CliResult, LoadedScene, file_stem, interrupted, json_number, json_opt, load_scene,
-    output_dir, parse_resolution, progress, with_resolution, write_file,
+    BackendArgs, CliError, CliResult, LoadedScene, file_stem, interrupted, json_number, json_opt,
+    load_scene, output_dir, parse_resolution, progress, with_resolution, write_file,
 };
 
 /// The default method list: the path tracer and the four main presets [001 §5.1].
@@ -66,6 +66,8 @@ pub struct CompareArgs {
     /// Print results.json to stdout instead of the table.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub backend: BackendArgs,
 }
 
 /// What a finished (or interrupted) comparison produced.
@@ -118,6 +120,7 @@ pub fn run(args: &CompareArgs) -> CliResult<Outcome> {
         )));
     }
     let resolution = parse_resolution(&args.resolution)?;
+    let backend = args.backend.open()?;
     let LoadedScene { scene, key } = load_scene(&args.scene)?;
     let scene = with_resolution(scene, Some(resolution));
     let out = output_dir(
@@ -134,7 +137,7 @@ pub fn run(args: &CompareArgs) -> CliResult<Outcome> {
     let budget = args.equal_time;
     let seconds_per_spp = match budget {
         Some(_) if methods.iter().any(|(spec, _)| spec == "pt") => {
-            calibrate_pt(&scene, args.frames)?
+            calibrate_pt(&backend, &scene, args.frames)?
         }
         _ => 0.0,
     };
@@ -154,7 +157,7 @@ pub fn run(args: &CompareArgs) -> CliResult<Outcome> {
                 runs.push((spec.clone(), method, replicas));
                 break 'methods;
             }
-            replicas.push(method.render(&scene, args.frames, seed)?);
+            replicas.push(method.render_on(&backend, &scene, args.frames, seed)?);
             bar.inc(1);
         }
         runs.push((spec.clone(), method, replicas));
@@ -259,12 +262,12 @@ fn reference(
 }
 
 /// Seconds per sample per pixel of the path tracer on this scene (median of 3 runs at 4 spp).
-fn calibrate_pt(scene: &Scene, frames: u32) -> CliResult<f64> {
+fn calibrate_pt(backend: &Backend, scene: &Scene, frames: u32) -> CliResult<f64> {
     let pt = Method::Pt { spp: 4 };
     let mut times = Vec::new();
     for seed in 0..3 {
         times.push(
-            pt.render(scene, frames, 1_000_000 + seed)?
+            pt.render_on(backend, scene, frames, 1_000_000 + seed)?
                 .seconds_per_frame
                 / 4.0,
         );

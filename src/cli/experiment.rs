@@ -11,7 +11,7 @@ use experiments::regions::Region;
 use serde_json::json;
 
 use super::common::{
-    CliError, CliResult, load_scene, parse_resolution, with_resolution, write_file,
+    BackendArgs, CliError, CliResult, load_scene, parse_resolution, with_resolution, write_file,
 };
 use super::compare::{self, CompareArgs, DEFAULT_METHODS};
 use super::figures;
@@ -55,6 +55,8 @@ pub struct ExperimentArgs {
     /// Print JSON instead of the tables.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub backend: BackendArgs,
 }
 
 pub fn command(args: &ExperimentArgs) -> CliResult<()> {
@@ -81,10 +83,11 @@ pub fn equal_time_args(
     let loaded = load_scene(scene)?;
     let scene_at = with_resolution(loaded.scene, Some(resolution));
     let hybrid = Method::parse("restir:hybrid")?;
+    let backend = args.backend.open()?;
     let mut times = (0..3)
         .map(|seed| {
             Ok(hybrid
-                .render(&scene_at, 16, 1_000_000 + seed)?
+                .render_on(&backend, &scene_at, 16, 1_000_000 + seed)?
                 .seconds_per_frame)
         })
         .collect::<CliResult<Vec<f64>>>()?;
@@ -104,6 +107,7 @@ pub fn equal_time_args(
         reference_spp: args.reference_spp,
         reference_batch_spp: 128,
         json: false,
+        backend: args.backend.clone(),
     })
 }
 

@@ -7,7 +7,7 @@ use std::path::Path;
 use experiments::compare::REFERENCE_SEED;
 use experiments::methods::Method;
 use experiments::regions::{Region, Regions};
-use experiments::{Diagnostics, Image, RunConfig};
+use experiments::{Backend, Diagnostics, Image, RunConfig};
 use serde_json::json;
 use sss::scene::{GBuffer, Scene};
 
@@ -29,7 +29,7 @@ fn scene_and_regions(args: &ExperimentArgs, name: &str) -> CliResult<(Scene, Reg
 }
 
 /// Diagnostics of replica 0 of a ReSTIR method over the 16-frame trajectory.
-fn diagnostics(scene: &Scene, spec: &str) -> CliResult<Diagnostics> {
+fn diagnostics(backend: &Backend, scene: &Scene, spec: &str) -> CliResult<Diagnostics> {
     let Method::Restir(preset) = Method::parse(spec)? else {
         return Err(CliError(format!(
             "{spec}: diagnostics need a ReSTIR method"
@@ -40,7 +40,8 @@ fn diagnostics(scene: &Scene, spec: &str) -> CliResult<Diagnostics> {
         frames: 16,
         collect_diagnostics: true,
     };
-    experiments::run(scene, &preset, &config)?
+    backend
+        .run(scene, &preset, &config)?
         .diagnostics
         .ok_or_else(|| CliError(format!("{spec}: the run returned no diagnostics")))
 }
@@ -80,7 +81,7 @@ fn write_png(image: &Image, path: &Path) -> CliResult<()> {
 pub fn hybrid_map(args: &ExperimentArgs) -> CliResult<()> {
     let out = output_dir(&super::experiment::out_dir(args, "hybrid-map"))?;
     let (scene, regions) = scene_and_regions(args, "bumpy")?;
-    let d = diagnostics(&scene, "restir:hybrid")?;
+    let d = diagnostics(&args.backend.open()?, &scene, "restir:hybrid")?;
     write_png(&d.hybrid_choice, &out.join("hybrid-choice.png"))?;
     // The map is yellow → blue by the reconnection fraction (its blue channel); black = no choice.
     let fraction = |p: usize| {
@@ -120,6 +121,7 @@ pub fn hybrid_map(args: &ExperimentArgs) -> CliResult<()> {
 /// Mean improved fraction (shifted samples with a higher target than the canonical one) per
 /// region for each method.
 fn improved_table(
+    backend: &Backend,
     scene: &Scene,
     regions: &Regions,
     methods: &[&str],
@@ -130,7 +132,7 @@ fn improved_table(
     );
     let mut all = Vec::new();
     for spec in methods {
-        let d = diagnostics(scene, spec)?;
+        let d = diagnostics(backend, scene, spec)?;
         let stem = super::common::file_stem(spec);
         write_png(
             &d.improved_fraction,
@@ -152,7 +154,8 @@ pub fn improved_fraction(args: &ExperimentArgs) -> CliResult<()> {
     let out = output_dir(&super::experiment::out_dir(args, "improved-fraction"))?;
     let (scene, regions) = scene_and_regions(args, "bumpy")?;
     let methods = ["restir:hybrid", "restir:sequential"];
-    let (table, means) = improved_table(&scene, &regions, &methods, &out)?;
+    let backend = args.backend.open()?;
+    let (table, means) = improved_table(&backend, &scene, &regions, &methods, &out)?;
     let findings: Vec<Finding> = [(0, Region::Translucent), (2, Region::Penumbra)]
         .into_iter()
         .map(|(i, region)| Finding {
@@ -181,7 +184,8 @@ pub fn temporal_shift(args: &ExperimentArgs) -> CliResult<()> {
     let outcome = compare::run(&compare_args)?;
     let (scene, regions) = scene_and_regions(args, "bumpy")?;
     let specs: Vec<&str> = methods.split(',').collect();
-    let (improved, means) = improved_table(&scene, &regions, &specs, &outcome.out)?;
+    let backend = args.backend.open()?;
+    let (improved, means) = improved_table(&backend, &scene, &regions, &specs, &outcome.out)?;
     let r = &outcome.results;
     let findings = findings_markdown(&[
         Finding {

@@ -8,7 +8,8 @@ use experiments::methods::Method;
 use serde_json::json;
 
 use super::common::{
-    CliResult, file_stem, json_number, load_scene, output_dir, parse_resolution, with_resolution,
+    BackendArgs, CliResult, file_stem, json_number, load_scene, output_dir, parse_resolution,
+    with_resolution,
 };
 
 #[derive(Args, Clone, Debug)]
@@ -34,6 +35,8 @@ pub struct RenderArgs {
     /// Print a JSON summary.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub backend: BackendArgs,
 }
 
 pub fn command(args: &RenderArgs) -> CliResult<()> {
@@ -46,7 +49,8 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
         .transpose()?;
     let scene = with_resolution(loaded.scene, resolution);
     let out = output_dir(&args.out)?;
-    let rendered = method.render(&scene, args.frames, args.seed)?;
+    let backend = args.backend.open()?;
+    let rendered = method.render_on(&backend, &scene, args.frames, args.seed)?;
     let stem = format!("{}-{}", file_stem(&loaded.key), file_stem(&method.name()));
     let (exr, png) = (
         out.join(format!("{stem}.exr")),
@@ -59,6 +63,7 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
             "schema": "reshift-render/1",
             "scene": scene.name,
             "method": method.name(),
+            "backend": backend.to_string(),
             "width": rendered.image.width,
             "height": rendered.image.height,
             "frames": args.frames,
@@ -75,13 +80,14 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
         );
     } else {
         println!(
-            "{} on {} ({}×{}, frame {} of {}): {:.1} ms/frame over {} rendered frame(s), {} non-finite\n{}\n{}",
+            "{} on {} ({}×{}, frame {} of {}, {}): {:.1} ms/frame over {} rendered frame(s), {} non-finite\n{}\n{}",
             method,
             scene.name,
             rendered.image.width,
             rendered.image.height,
             args.frames - 1,
             args.frames,
+            backend,
             1e3 * rendered.seconds_per_frame,
             rendered.frames_rendered,
             rendered.nonfinite,

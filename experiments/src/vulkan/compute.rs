@@ -1,143 +1,27 @@
-//! Storage buffers, compute kernels (one pipeline per SPIR-V module) and timed dispatches.
+//! Compute kernels (one pipeline per SPIR-V module) and single timed dispatches.
 //!
-//! Buffers live in host-visible, host-coherent memory and stay mapped: uploads and read-backs
-//! are plain copies. Binding `i` of a kernel is the `i`-th buffer of a dispatch; push constants
-//! are raw bytes (a `#[repr(C)]` + `bytemuck` struct on the Rust side).
+//! Binding `i` of a kernel is the `i`-th buffer of a dispatch; push constants are raw bytes (a
+//! `#[repr(C)]` + `bytemuck` struct on the Rust side). A frame of several passes is recorded
+//! once and re-submitted by [`super::pipeline`].
 
 use std::sync::Arc;
 
 use ash::vk;
-use bytemuck::Pod;
 
 use super::device::{Context, Shared};
 use super::error::{VulkanError, api};
-
-/// A mapped storage buffer.
-pub struct Buffer {
-    shared: Arc<Shared>,
-    buffer: vk::Buffer,
-    memory: vk::DeviceMemory,
-    mapped: *mut u8,
-    bytes: usize,
-}
-
-impl Buffer {
-    /// A buffer holding a copy of `data`.
-    pub fn from_slice<T: Pod>(context: &Context, data: &[T]) -> Result<Buffer, VulkanError> {
-        let bytes: &[u8] = bytemuck::cast_slice(data);
-        let buffer = Buffer::zeroed(context, bytes.len())?;
-        // SAFETY: the mapping is `bytes.len()` long and nothing else references it.
-        unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), buffer.mapped, bytes.len()) };
-        Ok(buffer)
-    }
-
-    /// A zero-filled buffer of `bytes` bytes (at least 4 are allocated, Vulkan has no empty ones).
-    pub fn zeroed(context: &Context, bytes: usize) -> Result<Buffer, VulkanError> {
-        if bytes as u64 > context.max_storage_range as u64 {
-            return Err(VulkanError::BufferTooLarge {
-                bytes: bytes as u64,
-                limit: context.max_storage_range,
-            });
-        }
-        let device = &context.shared.device;
-        let size = bytes.max(4) as u64;
-        let info = vk::BufferCreateInfo::default()
-            .size(size)
-            .usage(vk::BufferUsageFlags::STORAGE_BUFFER)
-            .sharing_mode(vk::SharingMode::EXCLUSIVE);
-        // SAFETY: valid create info on a live device; every object is destroyed on failure.
-        unsafe {
-            let buffer = device
-                .create_buffer(&info, None)
-                .map_err(api("vkCreateBuffer"))?;
-            let requirements = device.get_buffer_memory_requirements(buffer);
-            let wanted =
-                vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
-            let Some(memory_type) = (0..context.memory.memory_type_count).find(|&i| {
-                requirements.memory_type_bits & (1 << i) != 0
-                    && context.memory.memory_types[i as usize]
-                        .property_flags
-                        .contains(wanted)
-            }) else {
-                device.destroy_buffer(buffer, None);
-                return Err(VulkanError::NoMemoryType);
-            };
-            let allocate = vk::MemoryAllocateInfo::default()
-                .allocation_size(requirements.size)
-                .memory_type_index(memory_type);
-            let memory = match device.allocate_memory(&allocate, None) {
-                Ok(memory) => memory,
-                Err(result) => {
-                    device.destroy_buffer(buffer, None);
-                    return Err(api("vkAllocateMemory")(result));
-                }
-            };
-            let mapped = device
-                .bind_buffer_memory(buffer, memory, 0)
-                .and_then(|()| device.map_memory(memory, 0, size, vk::MemoryMapFlags::empty()));
-            match mapped {
-                Ok(mapped) => {
-                    std::ptr::write_bytes(mapped.cast::<u8>(), 0, size as usize);
-                    Ok(Buffer {
-                        shared: context.shared.clone(),
-                        buffer,
-                        memory,
-                        mapped: mapped.cast(),
-                        bytes,
-                    })
-                }
-                Err(result) => {
-                    device.destroy_buffer(buffer, None);
-                    device.free_memory(memory, None);
-                    Err(api("vkMapMemory")(result))
-                }
-            }
-        }
-    }
-
-    /// Size in bytes as requested.
-    pub fn bytes(&self) -> usize {
-        self.bytes
-    }
-
-    /// The contents as `T`s; `Err` when the size is not a multiple of `size_of::<T>()`.
-    pub fn read<T: Pod>(&self) -> Result<Vec<T>, VulkanError> {
-        let size = size_of::<T>();
-        if size == 0 || !self.bytes.is_multiple_of(size) {
-            return Err(VulkanError::Binding(format!(
-                "a {}-byte buffer is not a whole number of {size}-byte elements",
-                self.bytes
-            )));
-        }
-        let mut out = vec![T::zeroed(); self.bytes / size];
-        // SAFETY: the mapping is `self.bytes` long; dispatches wait for the GPU before returning.
-        let contents = unsafe { std::slice::from_raw_parts(self.mapped, self.bytes) };
-        bytemuck::cast_slice_mut::<T, u8>(&mut out).copy_from_slice(contents);
-        Ok(out)
-    }
-}
-
-impl Drop for Buffer {
-    fn drop(&mut self) {
-        // SAFETY: dispatches complete before returning, so the GPU no longer uses the buffer.
-        unsafe {
-            self.shared.device.unmap_memory(self.memory);
-            self.shared.device.destroy_buffer(self.buffer, None);
-            self.shared.device.free_memory(self.memory, None);
-        }
-    }
-}
+use super::memory::Buffer;
 
 /// One compute pipeline: a SPIR-V module with `buffers` storage-buffer bindings (0, 1, …) and
 /// `push_bytes` bytes of push constants, entry point `main`.
 pub struct Kernel {
     shared: Arc<Shared>,
     module: vk::ShaderModule,
-    set_layout: vk::DescriptorSetLayout,
-    layout: vk::PipelineLayout,
-    pipeline: vk::Pipeline,
-    buffers: u32,
-    push_bytes: u32,
+    pub(crate) set_layout: vk::DescriptorSetLayout,
+    pub(crate) layout: vk::PipelineLayout,
+    pub(crate) pipeline: vk::Pipeline,
+    pub(crate) buffers: u32,
+    pub(crate) push_bytes: u32,
 }
 
 impl Kernel {
@@ -286,9 +170,11 @@ impl Context {
             )));
         }
         let device = &self.shared.device;
+        // Held until `submission` (declared after it, so dropped before it) is freed.
+        let submit = self.shared.lock();
         let mut submission = Submission {
             device,
-            pool: self.shared.command_pool,
+            pool: submit.command_pool,
             descriptor_pool: vk::DescriptorPool::null(),
             command_buffer: vk::CommandBuffer::null(),
             fence: vk::Fence::null(),
@@ -323,7 +209,7 @@ impl Context {
                     .iter()
                     .map(|b| {
                         [vk::DescriptorBufferInfo::default()
-                            .buffer(b.buffer)
+                            .buffer(b.allocation.buffer)
                             .range(vk::WHOLE_SIZE)]
                     })
                     .collect();
@@ -427,9 +313,9 @@ impl Context {
                 .create_fence(&vk::FenceCreateInfo::default(), None)
                 .map_err(api("vkCreateFence"))?;
             let command_buffers = [cb];
-            let submit = vk::SubmitInfo::default().command_buffers(&command_buffers);
+            let submit_info = vk::SubmitInfo::default().command_buffers(&command_buffers);
             device
-                .queue_submit(self.queue, &[submit], submission.fence)
+                .queue_submit(submit.queue, &[submit_info], submission.fence)
                 .map_err(api("vkQueueSubmit"))?;
             device
                 .wait_for_fences(&[submission.fence], true, u64::MAX)

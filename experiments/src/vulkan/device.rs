@@ -6,7 +6,7 @@
 //! ties to the lower index. `RESHIFT_VULKAN_DEVICE=<substring>` (case-insensitive, of the device
 //! name) restricts the choice.
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, MutexGuard};
 
 use ash::vk;
 
@@ -82,17 +82,100 @@ pub fn choose_device(devices: &[DeviceInfo], wanted: Option<&str>) -> Result<usi
 pub(crate) struct Shared {
     pub(crate) instance: ash::Instance,
     pub(crate) device: ash::Device,
-    pub(crate) command_pool: vk::CommandPool,
+    pub(crate) memory: vk::PhysicalDeviceMemoryProperties,
+    /// The compute queue and the command pool: Vulkan requires external synchronisation of
+    /// both, so they are used only while this lock is held.
+    pub(crate) submit: Mutex<Submit>,
     /// Keeps libvulkan loaded until the instance is destroyed (fields drop after `drop`).
     _entry: ash::Entry,
 }
 
+/// What [`Shared::submit`] guards.
+pub(crate) struct Submit {
+    pub(crate) queue: vk::Queue,
+    pub(crate) command_pool: vk::CommandPool,
+}
+
+impl Shared {
+    /// The lock on the queue and command pool (a poisoned lock still guards valid handles).
+    pub(crate) fn lock(&self) -> MutexGuard<'_, Submit> {
+        self.submit.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Records `record` into a fresh command buffer, submits it and waits for it.
+    pub(crate) fn one_shot(
+        &self,
+        record: impl FnOnce(&ash::Device, vk::CommandBuffer),
+    ) -> Result<(), VulkanError> {
+        let submit = self.lock();
+        let device = &self.device;
+        // SAFETY: the command buffer and fence are created here, used while the queue lock is
+        // held, waited on, and freed before returning.
+        unsafe {
+            let cb = device
+                .allocate_command_buffers(
+                    &vk::CommandBufferAllocateInfo::default()
+                        .command_pool(submit.command_pool)
+                        .level(vk::CommandBufferLevel::PRIMARY)
+                        .command_buffer_count(1),
+                )
+                .map_err(api("vkAllocateCommandBuffers"))?[0];
+            let result = (|| {
+                device
+                    .begin_command_buffer(
+                        cb,
+                        &vk::CommandBufferBeginInfo::default()
+                            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                    )
+                    .map_err(api("vkBeginCommandBuffer"))?;
+                record(device, cb);
+                device
+                    .end_command_buffer(cb)
+                    .map_err(api("vkEndCommandBuffer"))?;
+                submit_and_wait(device, submit.queue, cb)
+            })();
+            device.free_command_buffers(submit.command_pool, &[cb]);
+            result
+        }
+    }
+}
+
+/// Submits `cb` to `queue` and waits for it with a fence of its own.
+///
+/// # Safety
+/// `cb` is a recorded command buffer of `device` and the caller holds the queue lock.
+pub(crate) unsafe fn submit_and_wait(
+    device: &ash::Device,
+    queue: vk::Queue,
+    cb: vk::CommandBuffer,
+) -> Result<(), VulkanError> {
+    // SAFETY: the fence is destroyed after the wait (or the failed submit).
+    unsafe {
+        let fence = device
+            .create_fence(&vk::FenceCreateInfo::default(), None)
+            .map_err(api("vkCreateFence"))?;
+        let command_buffers = [cb];
+        let submit = vk::SubmitInfo::default().command_buffers(&command_buffers);
+        let result = device
+            .queue_submit(queue, &[submit], fence)
+            .map_err(api("vkQueueSubmit"))
+            .and_then(|()| {
+                device
+                    .wait_for_fences(&[fence], true, u64::MAX)
+                    .map_err(api("vkWaitForFences"))
+            });
+        device.destroy_fence(fence, None);
+        result
+    }
+}
+
 impl Drop for Shared {
     fn drop(&mut self) {
+        let pool = self.lock().command_pool;
         // SAFETY: every object created from the device holds an `Arc<Shared>`, so none is alive.
         unsafe {
             let _ = self.device.device_wait_idle();
-            self.device.destroy_command_pool(self.command_pool, None);
+            self.device.destroy_command_pool(pool, None);
             self.device.destroy_device(None);
             self.instance.destroy_instance(None);
         }
@@ -102,8 +185,6 @@ impl Drop for Shared {
 /// A Vulkan device with one compute queue: the place buffers live and kernels run.
 pub struct Context {
     pub(crate) shared: Arc<Shared>,
-    pub(crate) queue: vk::Queue,
-    pub(crate) memory: vk::PhysicalDeviceMemoryProperties,
     pub(crate) max_storage_range: u32,
     /// Nanoseconds per timestamp tick, when the queue writes timestamps.
     pub(crate) timestamp_period: Option<f64>,
@@ -181,11 +262,13 @@ impl Context {
             shared: Arc::new(Shared {
                 instance,
                 device,
-                command_pool,
+                memory,
+                submit: Mutex::new(Submit {
+                    queue,
+                    command_pool,
+                }),
                 _entry: entry,
             }),
-            queue,
-            memory,
             max_storage_range: properties.limits.max_storage_buffer_range,
             timestamp_period: timestamps.then_some(properties.limits.timestamp_period as f64),
             info,

@@ -18,6 +18,8 @@ pub enum VulkanError {
         wanted: String,
         available: Vec<String>,
     },
+    /// `--require-gpu`: the chosen device is a CPU implementation (e.g. lavapipe).
+    CpuDevice(String),
     /// The crate was built without `glslc`, so it has no SPIR-V.
     NoGlslc,
     /// A Vulkan call failed.
@@ -60,6 +62,11 @@ impl fmt::Display for VulkanError {
                 "no usable Vulkan device name contains \"{wanted}\" (RESHIFT_VULKAN_DEVICE); \
                  devices: {}",
                 list(available)
+            ),
+            Self::CpuDevice(name) => write!(
+                f,
+                "the Vulkan device \"{name}\" is a CPU implementation and a GPU was required \
+                 (--require-gpu); choose another with --device or RESHIFT_VULKAN_DEVICE"
             ),
             Self::NoGlslc => write!(
                 f,

@@ -1,6 +1,8 @@
 //! The Vulkan backend (DESIGN §6), loaded at run time with `ash`: device choice ([`Context`]),
-//! storage buffers and compute kernels ([`Buffer`], [`Kernel`]), timed dispatches, the scene
-//! BVH on the device ([`GpuBvh`]), and the embedded SPIR-V of `experiments/glsl/` ([`Shader`]).
+//! device-local storage buffers with staging ([`Buffer`]), compute kernels ([`Kernel`]), timed
+//! dispatches, the scene on the device ([`GpuScene`], [`GpuBvh`]), the frame pipeline with
+//! persistent command buffers and per-pass timestamps ([`Renderer`]), and the embedded SPIR-V
+//! of `experiments/glsl/` ([`Shader`]).
 //!
 //! A machine without libvulkan, without a driver, or a build without `glslc` gets a
 //! [`VulkanError`] that says in one line what to install; nothing here panics for that.
@@ -10,14 +12,32 @@ mod bvh;
 mod compute;
 mod device;
 mod error;
+mod memory;
+mod pipeline;
+mod pt;
+mod random_walk;
+mod scene;
 mod shaders;
+mod timing;
 
 use bytemuck::{Pod, Zeroable};
 
 pub use bvh::{BVH_MAX_HITS, BvhRayInput, BvhRayOutput, GpuBvh};
-pub use compute::{Buffer, Dispatch, Kernel, groups_for};
+pub use compute::{Dispatch, Kernel, groups_for};
 pub use device::{Context, DEVICE_ENV, DeviceInfo, DeviceKind, choose_device};
 pub use error::VulkanError;
+pub use memory::Buffer;
+pub use pipeline::{CANDIDATES, PassParams, Renderer, SPATIAL, TEMPORAL, decode_error};
+pub use pt::{
+    DeviceImage, FrameInput, MethodParams, PT, PT_MAX_HITS, PtParams, SHADE, render_pt,
+    render_pt_hits, shade,
+};
+pub use random_walk::{
+    GpuMedium, RANDOM_WALK, RandomWalkImage, WalkStats, render_random_walk, scene_media,
+};
+pub use scene::{
+    FrameParams, GBUFFER, GpuCamera, GpuLight, GpuMaterial, GpuPixel, GpuScene, GpuTriangle,
+};
 pub use shaders::Shader;
 
 /// The environment variable that turns "Vulkan unavailable, skipped" into a failure in tests.
@@ -95,10 +115,7 @@ mod tests {
             (16, 4)
         );
         assert_eq!(offset_of!(GpuStreamKey, purpose), 12);
-        assert_eq!(
-            size_of::<RngParams>() as u32,
-            Shader::PARITY_RNG.push_bytes
-        );
+        assert_eq!(size_of::<RngParams>() as u32, Shader::PARITY_RNG.push_bytes);
         assert_eq!(offset_of!(RngParams, seed_hi), 12);
         assert_eq!(
             (size_of::<BurleyInput>(), align_of::<BurleyInput>()),
@@ -114,7 +131,11 @@ mod tests {
 
     #[test]
     fn every_shader_is_embedded_or_explains_why_not() {
-        for shader in [Shader::PARITY_RNG, Shader::PARITY_BURLEY, Shader::PARITY_BVH] {
+        for shader in [
+            Shader::PARITY_RNG,
+            Shader::PARITY_BURLEY,
+            Shader::PARITY_BVH,
+        ] {
             match shader.spirv() {
                 // SPIR-V magic number, little endian.
                 Ok(words) => assert_eq!(&words[..4], &[0x03, 0x02, 0x23, 0x07], "{shader:?}"),

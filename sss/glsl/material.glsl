@@ -1,0 +1,78 @@
+// Twin of sss::material::Material (sss/src/material/). Derived values (d = scale·ℓ/s(A), r_max
+// per channel, κ_dist) are computed on the host in f32 exactly as Translucent::d, r_max and
+// r_max_all compute them and uploaded, so the GPU never re-derives them with its own
+// transcendentals. Per-sample profile values (exp) stay on the GPU: burley_pdf_disk.
+
+#ifndef SSS_MATERIAL_GLSL
+#define SSS_MATERIAL_GLSL
+
+#include "burley.glsl"
+#include "frame.glsl"
+
+const uint MATERIAL_LAMBERT = 0u;
+const uint MATERIAL_TRANSLUCENT = 1u;
+
+// std430, 56 bytes (Rust twin: experiments::vulkan::GpuMaterial). For a Lambert material only
+// kind and albedo are set; the rest is 0.
+struct GpuMaterial {
+    uint kind;
+    // Surface albedo A (Translucent) or diffuse reflectance (Lambert) per channel.
+    float albedo[3];
+    // Translucent::d: Burley d per channel [004 Eq. 5].
+    float d[3];
+    // Translucent::r_max per channel.
+    float r_max[3];
+    // Translucent::r_max_all = max of r_max.
+    float r_max_all;
+    float ior;
+    // Henyey–Greenstein g (random walk).
+    float g;
+    // Hybrid shift criterion κ_dist = 2 · max d [001 §5.1].
+    float kappa_dist;
+};
+
+bool material_is_translucent(GpuMaterial m) {
+    return m.kind == MATERIAL_TRANSLUCENT;
+}
+
+vec3 material_albedo(GpuMaterial m) {
+    return vec3(m.albedo[0], m.albedo[1], m.albedo[2]);
+}
+
+// Translucent::d.
+vec3 material_d(GpuMaterial m) {
+    return vec3(m.d[0], m.d[1], m.d[2]);
+}
+
+// Translucent::r_max.
+vec3 material_r_max(GpuMaterial m) {
+    return vec3(m.r_max[0], m.r_max[1], m.r_max[2]);
+}
+
+// Translucent::r_max_all.
+float material_r_max_all(GpuMaterial m) {
+    return m.r_max_all;
+}
+
+// Translucent::profile_rgb: A_c · R_{d_c}(r) per channel, 0 beyond r_max_all [001 Eq. 3].
+vec3 material_profile_rgb(GpuMaterial m, float r) {
+    if (r > m.r_max_all) {
+        return vec3(0.0);
+    }
+    precise vec3 p = vec3(m.albedo[0] * burley_pdf_disk(m.d[0], r),
+        m.albedo[1] * burley_pdf_disk(m.d[1], r),
+        m.albedo[2] * burley_pdf_disk(m.d[2], r));
+    return p;
+}
+
+// fresnel_transmission: F_t(μ) = 1 − ½(1 − μ)⁵, μ clamped to [0, 1]. (1 − μ)⁵ is evaluated as
+// Rust's powi(5) is: m · (m²)².
+float material_fresnel_transmission(float mu) {
+    precise float m = 1.0 - rust_clamp(mu, 0.0, 1.0);
+    precise float m2 = m * m;
+    precise float m4 = m2 * m2;
+    precise float f = 1.0 - 0.5 * (m * m4);
+    return f;
+}
+
+#endif

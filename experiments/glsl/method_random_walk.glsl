@@ -38,6 +38,7 @@ layout(push_constant) uniform MethodParams {
 #include "scene.glsl"
 #include "pt.glsl"
 #include "random_walk.glsl"
+#include "loop_budget.glsl"
 
 // experiments::random_walk_method::PURPOSE_WALK and PURPOSE_WALK_LIGHT.
 const uint RANDOM_WALK_PURPOSE_WALK = 0x52570001u;
@@ -195,17 +196,6 @@ vec3 exit_lighting_radiance(vec3 point, vec3 wi) {
     return lights_radiance(nearest, nearest_point, point);
 }
 
-// Whether this invocation group's loops still run to completion: a loop of two iterations (its
-// bound is not a compile-time constant, so it stays a loop) that a spent loop budget cuts to one.
-bool random_walk_method_loops_intact() {
-    uint bound = min(params.spp, 1u) + 1u;
-    uint iterations = 0u;
-    for (uint i = 0u; i < bound; i++) {
-        iterations++;
-    }
-    return iterations == bound;
-}
-
 void main() {
     uint pixel = gl_GlobalInvocationID.x;
     if (pixel >= frame_params.width * frame_params.height) {
@@ -278,7 +268,7 @@ void main() {
         sum = sum + dvec3(value);
         state.finite++;
     }
-    if (!random_walk_method_loops_intact()) {
+    if (!loop_budget_intact(min(params.spp, 1u))) {
         tally.cut++;
     }
     state.sum = double[3](sum.x, sum.y, sum.z);

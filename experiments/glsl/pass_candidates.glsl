@@ -16,9 +16,12 @@ layout(local_size_x = 64) in;
 // Hit lists of 16: the built-in scenes' probes stay far below (experiments/tests/vulkan_bssrdf.rs
 // measures the largest count); beyond it the CPU's extra hits would be missing here.
 #define BVH_MAX_HITS 16
+// The diag error code of a pixel with a probe of more hits (experiments::vulkan::HIT_OVERFLOW).
+const uint HIT_OVERFLOW = 0xFEu;
 #define SCENE_BINDING 0
 #include "domain.glsl"
 #include "reservoir.glsl"
+#include "loop_budget.glsl"
 
 // PassParams (the contract's 32 bytes of push constants).
 layout(push_constant) uniform Params {
@@ -45,6 +48,8 @@ const uint CANDIDATES_PURPOSE_SELECT = 0x102u;
 struct ProbeCounts {
     uint probes;
     uint hits;
+    // A probe had more hits than the BVH_MAX_HITS this pass keeps.
+    bool overflow;
 };
 
 vec3 candidates_light_numbers(inout Stream rng) {
@@ -74,7 +79,7 @@ uint candidates_error_code(uint invalid) {
 uint candidates_generate(SssDomain domain, uint bssrdf_samples, bool shared_light,
         out PixelReservoir result, out ProbeCounts counts) {
     result = reservoir_empty();
-    counts = ProbeCounts(0u, 0u);
+    counts = ProbeCounts(0u, 0u, false);
     Stream probe_rng = stream_new(
         StreamKey(domain.pixel, domain.frame, domain.pass, CANDIDATES_PURPOSE_PROBE), domain.seed);
     Stream light_rng = stream_new(
@@ -122,8 +127,10 @@ uint candidates_generate(SssDomain domain, uint bssrdf_samples, bool shared_ligh
                 }
             }
         }
-        // Hits beyond the stored ones are lost; their numbers are still drawn so that the
-        // following probes use the CPU's.
+        // Hits beyond the stored ones would be lost (a bias the CPU does not have): the pixel
+        // reports HIT_OVERFLOW and the host fails the run. Their numbers are still drawn so that
+        // the following probes use the CPU's.
+        counts.overflow = counts.overflow || bvh_hit_count > stored;
         for (uint rank = stored; rank < bvh_hit_count; rank++) {
             if (!shared_light) {
                 candidates_light_numbers(light_rng);
@@ -176,10 +183,16 @@ void main() {
     }
     candidates_shadow_test(domain, canonical);
     reservoirs[pixel] = canonical;
+    uvec4 diagnostics = uvec4(0u);
     if (params.collect_diagnostics != 0u) {
         uint choice = candidates_hybrid_choice(domain, canonical);
-        diag[pixel] = uvec4(counts.probes, counts.hits, choice, 0u);
-    } else {
-        diag[pixel] = uvec4(0u);
+        diagnostics = uvec4(counts.probes, counts.hits, choice, 0u);
     }
+    if (counts.overflow) {
+        diagnostics.w = HIT_OVERFLOW;
+    }
+    if (!loop_budget_intact(min(frame_params.width, 1u))) {
+        diagnostics.w = LOOP_BUDGET_CUT;
+    }
+    diag[pixel] = diagnostics;
 }

@@ -7,9 +7,12 @@
 // 10 PixelReservoir in, 11 previous GPixel, 12 previous PixelReservoir, 13 PixelReservoir out,
 // 14 uvec4 diag (shifted, failed, improved, error code of resample.glsl).
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+// Hits kept per probe, as in pass_candidates: a sample's intersection index is below 16.
+#define BVH_MAX_HITS 16
 #define SCENE_BINDING 0
 #include "scene.glsl"
 #include "resample.glsl"
+#include "loop_budget.glsl"
 
 layout(local_size_x = 64) in;
 
@@ -96,5 +99,8 @@ void main() {
     uint error = resample_step(2u, params.shift, params.mis, PURPOSE_SELECT,
                                params.collect_diagnostics != 0u, result, counts);
     reservoirs_out[pixel] = error == 0u ? result : stored;
+    if (!loop_budget_intact(min(frame_params.width, 1u))) {
+        error = LOOP_BUDGET_CUT;
+    }
     diag[pixel] = uvec4(counts, error);
 }

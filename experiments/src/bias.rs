@@ -23,7 +23,7 @@ use sss::scene::{GBuffer, Scene};
 
 use crate::preset::Preset;
 use crate::regions::{Region, Regions};
-use crate::{PipelineError, RunConfig, run};
+use crate::{Backend, PipelineError, RunConfig};
 
 /// Rec. 709 luminance of linear RGB, in `f64` (statistics accumulate in double precision).
 pub fn luminance(rgb: Vec3) -> f64 {
@@ -39,32 +39,40 @@ pub struct Images {
     pub nonfinite: u64,
 }
 
-/// The final frame (`frames − 1`) of replicas `0..replicas` of `preset`; replica `i` runs with
-/// seed `i`. Replicas run in parallel; each is a function of its seed alone.
+/// The final frame (`frames − 1`) of replicas `0..replicas` of `preset` on `backend`; replica `i`
+/// runs with seed `i`. On the CPU replicas run in parallel; a Vulkan backend runs them one after
+/// another on its device. Each is a function of its seed alone.
 pub fn replica_images(
+    backend: &Backend,
     scene: &Scene,
     preset: &Preset,
     replicas: u64,
     frames: u32,
 ) -> Result<Images, PipelineError> {
-    let runs: Vec<(Vec<f64>, u64)> = (0..replicas)
-        .into_par_iter()
-        .map(|seed| {
-            let config = RunConfig {
-                seed,
-                frames,
-                collect_diagnostics: false,
-            };
-            let mut result = run(scene, preset, &config)?;
-            let last = result.frames.pop().ok_or_else(|| {
-                PipelineError::Config(format!("run with frames = {frames} returned no frame"))
-            })?;
-            Ok((
-                last.pixels.iter().map(|&p| luminance(p)).collect(),
-                result.nan_count,
-            ))
-        })
-        .collect::<Result<_, PipelineError>>()?;
+    let replica = |seed| {
+        let config = RunConfig {
+            seed,
+            frames,
+            collect_diagnostics: false,
+        };
+        let mut result = backend.run(scene, preset, &config)?;
+        let last = result.frames.pop().ok_or_else(|| {
+            PipelineError::Config(format!("run with frames = {frames} returned no frame"))
+        })?;
+        Ok((
+            last.pixels.iter().map(|&p| luminance(p)).collect(),
+            result.nan_count,
+        ))
+    };
+    let runs: Vec<(Vec<f64>, u64)> = match backend {
+        Backend::Cpu => (0..replicas)
+            .into_par_iter()
+            .map(replica)
+            .collect::<Result<_, PipelineError>>()?,
+        Backend::Vulkan(_) => (0..replicas)
+            .map(replica)
+            .collect::<Result<_, PipelineError>>()?,
+    };
     Ok(Images {
         nonfinite: runs.iter().map(|r| r.1).sum(),
         luminance: runs.into_iter().map(|r| r.0).collect(),

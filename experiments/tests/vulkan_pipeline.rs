@@ -255,3 +255,82 @@ fn unknown_device_is_a_one_line_error() {
         Ok(b) => panic!("opened {b} for a device that does not exist"),
     }
 }
+
+/// `slab` with its translucent slab replaced by `layers` parallel triangles 1e-6 apart across its
+/// front face: a BSSRDF probe along the normal crosses all of them, so candidate generation
+/// traverses `layers` triangles per probe (the camera ray stops at the first layer).
+fn layered_scene(layers: u32) -> Scene {
+    use sss::geometry::{Geometry, TriangleMesh};
+    let slab = scene("slab", 8, 6);
+    let front = glam::Vec3::new(0.0, 0.7, 0.025);
+    let mut layered = TriangleMesh::default();
+    for k in 0..layers {
+        let z = front.z - k as f32 * 1e-6;
+        let base = layered.positions.len() as u32;
+        layered.positions.extend([
+            glam::Vec3::new(-1.0, -0.2, z),
+            glam::Vec3::new(1.0, -0.2, z),
+            glam::Vec3::new(0.0, 1.6, z),
+        ]);
+        layered.indices.push([base, base + 1, base + 2]);
+    }
+    let floor = sss::geometry::shapes::quad(8.0, 8.0);
+    Scene {
+        geometry: Geometry::new(&[layered, floor]),
+        ..slab
+    }
+}
+
+/// Loops that the device cuts short are an error, never an image (`restir/glsl/loop_budget.glsl`).
+/// With 70 000 layers a probe's traversal loops past lavapipe's budget of 65 535 iterations per
+/// invocation group, so lavapipe must report `LoopsCut` from the candidates pass; a device
+/// without such a budget must run it. Control: 16 layers run on both.
+#[test]
+fn loops_cut_by_the_device_are_errors() {
+    let Some(backend) = backend_or_skip("loops_cut_by_the_device_are_errors") else {
+        return;
+    };
+    let preset = Preset::named("reconnection").expect("registered preset");
+    let control = backend.run(&layered_scene(16), &preset, &config(1, 1));
+    assert!(control.is_ok(), "16 layers: {:?}", control.err());
+    let lavapipe = backend
+        .device()
+        .is_some_and(|d| d.kind == experiments::vulkan::DeviceKind::Cpu);
+    match backend.run(&layered_scene(70_000), &preset, &config(1, 1)) {
+        Err(experiments::PipelineError::Vulkan(VulkanError::LoopsCut { shader, count })) => {
+            assert!(lavapipe, "a cut reported on {backend}");
+            assert_eq!(shader, "pass_candidates");
+            assert!(count > 0);
+        }
+        Ok(_) if !lavapipe => {}
+        other => panic!("70 000 layers on {backend}: {:?}", other.err()),
+    }
+}
+
+/// A probe with more hits than the pass shaders keep (16) fails the run instead of dropping the
+/// extra candidates (a bias the CPU does not have); control: 16 layers run.
+#[test]
+fn probes_with_more_hits_than_kept_are_errors() {
+    let Some(backend) = backend_or_skip("probes_with_more_hits_than_kept_are_errors") else {
+        return;
+    };
+    let preset = Preset::named("reconnection").expect("registered preset");
+    let control = backend.run(&layered_scene(16), &preset, &config(1, 1));
+    assert!(control.is_ok(), "16 layers: {:?}", control.err());
+    match backend.run(&layered_scene(17), &preset, &config(1, 1)) {
+        Err(experiments::PipelineError::Vulkan(VulkanError::TooManyHits {
+            shader,
+            kept,
+            count,
+        })) => {
+            assert_eq!((shader, kept), ("pass_candidates", 16));
+            assert!(count > 0);
+        }
+        other => panic!("17 layers on {backend}: {:?}", other.err()),
+    }
+    assert!(
+        Backend::Cpu
+            .run(&layered_scene(17), &preset, &config(1, 1))
+            .is_ok()
+    );
+}

@@ -183,6 +183,7 @@ pub fn run(args: &CompareArgs) -> CliResult<Outcome> {
     write_file(&out.join("table.csv"), &tables::csv(&results))?;
     let json = results_json(&Context {
         args,
+        backend: &backend,
         scene: &scene,
         regions: &regions,
         reference: &reference,
@@ -340,6 +341,7 @@ fn write_images(
 
 struct Context<'a> {
     args: &'a CompareArgs,
+    backend: &'a Backend,
     scene: &'a Scene,
     regions: &'a Regions,
     reference: &'a Reference,
@@ -404,6 +406,7 @@ fn results_json(c: &Context) -> Value {
     json!({
         "schema": "reshift-compare/1",
         "scene": c.scene.name,
+        "backend": c.backend.to_string(),
         "width": reference.width,
         "height": reference.height,
         "frames": c.args.frames,

@@ -36,7 +36,7 @@ struct FrameParams {
     uint object_count;
     uint seed_lo;
     uint seed_hi;
-    float scene_radius;
+    uint pad; // keeps the Rust twin's layout explicit
     GpuCamera camera;
     // The camera of the previous frame (valid when has_previous != 0): temporal reprojection.
     GpuCamera previous_camera;

@@ -35,6 +35,17 @@ pub enum VulkanError {
     Binding(String),
     /// The embedded SPIR-V is not a valid word stream.
     InvalidSpirv(String),
+    /// The device ended loops of `shader` early (lavapipe's per-group loop budget, see
+    /// `restir/glsl/loop_budget.glsl`) for `count` pixels or samples; the results are void.
+    LoopsCut { shader: &'static str, count: u64 },
+    /// A BSSRDF probe of `shader` hit its object more often than the `kept` hits the shader
+    /// stores (`BVH_MAX_HITS`), for `count` pixels; the CPU would use them all, so the results
+    /// are void.
+    TooManyHits {
+        shader: &'static str,
+        kept: u32,
+        count: u64,
+    },
     /// No `experiments/glsl/<name>.glsl` was compiled into the crate.
     UnknownShader(String),
 }
@@ -83,6 +94,21 @@ impl fmt::Display for VulkanError {
             ),
             Self::Binding(why) => write!(f, "kernel binding mismatch: {why}"),
             Self::InvalidSpirv(why) => write!(f, "invalid embedded SPIR-V: {why}"),
+            Self::LoopsCut { shader, count } => write!(
+                f,
+                "the Vulkan device cut loops of {shader} short for {count} pixels or samples \
+                 (lavapipe ends all loops of a group after 65 535 iterations); the result is \
+                 void: use a GPU, fewer samples per call or a smaller scene"
+            ),
+            Self::TooManyHits {
+                shader,
+                kept,
+                count,
+            } => write!(
+                f,
+                "{count} pixels of {shader} had a BSSRDF probe with more than {kept} hits, which \
+                 the Vulkan backend does not keep (raise BVH_MAX_HITS there); use the CPU backend"
+            ),
             Self::UnknownShader(name) => write!(
                 f,
                 "no compiled shader named {name:?} (experiments/glsl/{name}.glsl is missing)"

@@ -106,7 +106,16 @@ impl PassParams {
     }
 }
 
-/// Decodes a pass's per-pixel error code (diag `w`; 0 = none). Low byte: 1–4 an
+/// The diag `w` of a pixel whose loops the device cut short (`restir/glsl/loop_budget.glsl`).
+pub const LOOP_BUDGET_CUT: u32 = 0xFF;
+/// The diag `w` of a pixel with a BSSRDF probe of more than [`KEPT_HITS`] hits
+/// (`pass_candidates.glsl`).
+pub const HIT_OVERFLOW: u32 = 0xFE;
+/// Hits per probe that the pass shaders keep (their `BVH_MAX_HITS`).
+pub const KEPT_HITS: u32 = 16;
+
+/// Decodes a pass's per-pixel error code (diag `w`; 0 = none, [`LOOP_BUDGET_CUT`] and
+/// [`HIT_OVERFLOW`] are handled before). Low byte: 1–4 an
 /// [`InvalidCandidate`] (`Weight`, `Target`, `Confidence`, `Ucw`), 5 `TooManyDomains`, 6
 /// `BadPdf`, 7 `BadJacobian`; bits 8–15: the domain index `source` of a resampling error. The
 /// offending value is not carried (it reads as NaN); a code outside this table is reported as
@@ -266,6 +275,12 @@ impl Renderer {
             height: scene.camera.height(),
         };
         let out = render_random_walk(context, kernel, &input, &media, spp)?;
+        if out.cut > 0 {
+            return Err(PipelineError::Vulkan(VulkanError::LoopsCut {
+                shader: RANDOM_WALK.name,
+                count: out.cut,
+            }));
+        }
         Ok((out.image.image, out.image.left_out))
     }
 
@@ -498,6 +513,24 @@ impl<'a> FrameRun<'a> {
             for (index, pass) in self.preset.passes.iter().enumerate() {
                 let start = (index + 1) * n * TEXEL;
                 let diag: &[[u32; 4]] = bytemuck::cast_slice(&bytes[start..start + n * TEXEL]);
+                let pixels_with = |code| diag.iter().filter(|d| d[3] == code).count() as u64;
+                let shader = shader_of(pass).name;
+                match (pixels_with(LOOP_BUDGET_CUT), pixels_with(HIT_OVERFLOW)) {
+                    (0, 0) => {}
+                    (0, count) => {
+                        return Err(PipelineError::Vulkan(VulkanError::TooManyHits {
+                            shader,
+                            kept: KEPT_HITS,
+                            count,
+                        }));
+                    }
+                    (count, _) => {
+                        return Err(PipelineError::Vulkan(VulkanError::LoopsCut {
+                            shader,
+                            count,
+                        }));
+                    }
+                }
                 if let Some(pixel) = diag.iter().position(|d| d[3] != 0) {
                     let error = decode_error(diag[pixel][3]);
                     let pixel = pixel as u32;

@@ -13,8 +13,9 @@ use super::{
 use crate::image::Image;
 
 /// `method_pt.glsl`: scene bindings 0–8, 9 G-buffer (`GpuPixel`), 10 `vec4` out (mean of `spp`
-/// samples, `w` = samples left out, see [`DeviceImage`]). Push constants: [`PtParams`].
-pub const PT: Shader = Shader::new("method_pt", 11, 32);
+/// samples, `w` = samples left out, see [`DeviceImage`]), 11 the per-pixel running sum between
+/// its dispatches (one per sample). Push constants: [`PtParams`].
+pub const PT: Shader = Shader::new("method_pt", 12, 32);
 /// `pass_shade.glsl`: scene bindings 0–8, 9 G-buffer, 10 `PixelReservoir` in, 11 `vec4` out
 /// (`f(Y)·W` or one path-traced sample, `w` = 1 where the value was written as 0, see
 /// [`DeviceImage`]). Push constants: [`PassParams`] (only `pass` is read).
@@ -30,13 +31,24 @@ pub struct MethodParams {
 }
 
 /// Push constants of `method_pt`: [`MethodParams`] whose first padding word carries the
-/// path tracer's [`HitPolicy`] (declaration order: 0 = `UniformOne`, 1 = `All`).
+/// path tracer's [`HitPolicy`] (declaration order: 0 = `UniformOne`, 1 = `All`) and the second
+/// the sample that the dispatch adds.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
 pub struct PtParams {
     pub spp: u32,
     pub hits: u32,
-    pub pad: [u32; 6],
+    pub sample_index: u32,
+    pub pad: [u32; 5],
+}
+
+/// `method_pt.glsl`'s `PtState` (std430, 32 bytes): a pixel's running sum between dispatches.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+struct PtState {
+    sum: [f64; 3],
+    left_out: u32,
+    cut: u32,
 }
 
 /// What a per-pixel kernel of one frame reads: the uploaded scene, the frame's `FrameParams`
@@ -62,18 +74,15 @@ pub struct DeviceImage {
     pub left_out: u64,
 }
 
-/// Runs `kernel` (of [`PT`] or [`SHADE`]) with the frame's bindings, `extra` buffers after the
-/// G-buffer and a fresh `vec4` output, and reads the output back.
-fn run(
-    context: &mut Context,
-    kernel: &Kernel,
-    frame: &FrameInput,
-    extra: &[&Buffer],
-    push: &[u8],
-) -> Result<DeviceImage, VulkanError> {
-    let count = frame.width * frame.height;
+/// The frame's bindings (scene, `FrameParams`, G-buffer) followed by `extra`, after checking
+/// that the G-buffer covers the frame.
+fn bindings<'a>(
+    frame: &FrameInput<'a>,
+    extra: &[&'a Buffer],
+) -> Result<Vec<&'a Buffer>, VulkanError> {
+    let count = frame.width as usize * frame.height as usize;
     let pixel_bytes = size_of::<GpuPixel>();
-    if frame.gbuffer.bytes() < count as usize * pixel_bytes {
+    if frame.gbuffer.bytes() < count * pixel_bytes {
         return Err(VulkanError::Binding(format!(
             "G-buffer of {} bytes for {}×{} pixels of {pixel_bytes} bytes",
             frame.gbuffer.bytes(),
@@ -81,18 +90,15 @@ fn run(
             frame.height
         )));
     }
-    let output = Buffer::zeroed(context, count as usize * 16)?;
     let mut buffers: Vec<&Buffer> = frame.scene.buffers().to_vec();
     buffers.push(frame.params);
     buffers.push(frame.gbuffer);
     buffers.extend_from_slice(extra);
-    buffers.push(&output);
-    context.dispatch(
-        kernel,
-        &buffers,
-        push,
-        [groups_for(count, PT.local_size), 1, 1],
-    )?;
+    Ok(buffers)
+}
+
+/// Reads a `vec4` output back as an image and the count of its texels with `w ≠ 0` summed.
+fn read_image(frame: &FrameInput, output: &Buffer) -> Result<DeviceImage, VulkanError> {
     let texels = output.read::<[f32; 4]>()?;
     Ok(DeviceImage {
         image: Image {
@@ -127,14 +133,37 @@ pub fn render_pt_hits(
         HitPolicy::UniformOne => 0,
         HitPolicy::All => 1,
     };
-    let params = PtParams {
-        spp,
-        hits,
-        pad: [0; 6],
-    };
-    run(context, kernel, frame, &[], bytemuck::bytes_of(&params))
+    let count = frame.width * frame.height;
+    let output = Buffer::zeroed(context, count as usize * 16)?;
+    let state = Buffer::zeroed(context, count as usize * size_of::<PtState>())?;
+    let buffers = bindings(frame, &[&output, &state])?;
+    for sample_index in 0..spp {
+        let params = PtParams {
+            spp,
+            hits,
+            sample_index,
+            pad: [0; 5],
+        };
+        context.dispatch(
+            kernel,
+            &buffers,
+            bytemuck::bytes_of(&params),
+            [groups_for(count, PT.local_size), 1, 1],
+        )?;
+    }
+    let cut: u64 = state
+        .read::<PtState>()?
+        .iter()
+        .map(|s| u64::from(s.cut))
+        .sum();
+    if cut > 0 {
+        return Err(VulkanError::LoopsCut {
+            shader: PT.name,
+            count: cut,
+        });
+    }
+    read_image(frame, &output)
 }
-
 /// The shade pass on one frame: `f(Y)·W` of `reservoirs` (`PixelReservoir`s) on translucent
 /// pixels, one path-traced sample elsewhere, keyed by `pass` (the kernel of [`SHADE`]).
 pub fn shade(
@@ -144,16 +173,18 @@ pub fn shade(
     reservoirs: &Buffer,
     pass: u32,
 ) -> Result<DeviceImage, VulkanError> {
+    let count = frame.width * frame.height;
+    let output = Buffer::zeroed(context, count as usize * 16)?;
+    let buffers = bindings(frame, &[reservoirs, &output])?;
     let params = PassParams::new(pass, None, false);
-    run(
-        context,
+    context.dispatch(
         kernel,
-        frame,
-        &[reservoirs],
+        &buffers,
         bytemuck::bytes_of(&params),
-    )
+        [groups_for(count, SHADE.local_size), 1, 1],
+    )?;
+    read_image(frame, &output)
 }
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -163,6 +194,9 @@ mod tests {
         assert_eq!(size_of::<MethodParams>() as u32, PT.push_bytes);
         assert_eq!(size_of::<PtParams>() as u32, PT.push_bytes);
         assert_eq!(std::mem::offset_of!(PtParams, hits), 4);
+        assert_eq!(std::mem::offset_of!(PtParams, sample_index), 8);
+        assert_eq!(size_of::<PtState>(), 32);
+        assert_eq!(std::mem::offset_of!(PtState, cut), 28);
         assert_eq!(size_of::<PassParams>() as u32, SHADE.push_bytes);
     }
 }

@@ -8,9 +8,8 @@
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
-use sss::geometry::Geometry;
 use sss::material::Material;
-use sss::scene::{Camera, GPixel, Light, Lights, Scene};
+use sss::scene::{Camera, GPixel, Light, Scene};
 
 use super::{Buffer, Context, GpuBvh, Shader, VulkanError};
 
@@ -175,22 +174,11 @@ impl GpuCamera {
             right: right.to_array(),
             up: up.to_array(),
             jitter: camera.jitter(frame).to_array(),
-            tan_half_fov: tan_half_fov(camera),
+            tan_half_fov: camera.tan_half_fov(),
             width: camera.width(),
             height: camera.height(),
         }
     }
-}
-
-/// `tan(vfov / 2)` of `camera`, bit for bit. `Camera` keeps it private and has no accessor, so
-/// it is read back from the derived `Debug` text, whose `f32` is the shortest string that
-/// round-trips (replace with an accessor when `Camera` gets one).
-fn tan_half_fov(camera: &Camera) -> f32 {
-    let text = format!("{camera:?}");
-    text.split_once("tan_half_fov: ")
-        .and_then(|(_, rest)| rest.split(',').next())
-        .and_then(|value| value.trim().parse().ok())
-        .unwrap_or_else(|| panic!("Camera's Debug text lacks tan_half_fov: {text}"))
 }
 
 /// `scene.glsl`'s `FrameParams` (std430, 176 bytes), binding 8: one frame's constants. The host
@@ -208,8 +196,8 @@ pub struct FrameParams {
     /// The run seed of `restir::rng`, low and high 32 bits.
     pub seed_lo: u32,
     pub seed_hi: u32,
-    /// The radius of the scene's bounding sphere (directional lights' power).
-    pub scene_radius: f32,
+    /// Keeps `camera` at offset 36 (std430 needs no padding here; the word is unused).
+    pub pad: u32,
     pub camera: GpuCamera,
     /// The camera at `previous` (zeroed when there is none).
     pub previous_camera: GpuCamera,
@@ -229,7 +217,7 @@ impl FrameParams {
             object_count: scene.geometry.object_count(),
             seed_lo: seed as u32,
             seed_hi: (seed >> 32) as u32,
-            scene_radius: scene_radius(&scene.geometry),
+            pad: 0,
             camera: GpuCamera::new(&scene.camera, frame),
             previous_camera: previous
                 .map_or(GpuCamera::default(), |p| GpuCamera::new(&scene.camera, p)),
@@ -293,57 +281,6 @@ impl GpuPixel {
     }
 }
 
-/// Half the diagonal of the bounding box of `geometry`'s triangles (at least the smallest
-/// positive normal `f32`), as the scene loader computes it from the meshes.
-fn scene_radius(geometry: &Geometry) -> f32 {
-    let (lo, hi) = (0..geometry.triangle_count())
-        .flat_map(|prim| geometry.vertices(prim))
-        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), v| {
-            (lo.min(v), hi.max(v))
-        });
-    (0.5 * (hi - lo).length()).max(f32::MIN_POSITIVE)
-}
-
-/// The selection CDF of `lights`, rebuilt as `Lights::new` builds it (power in f64, running
-/// sums divided by the total, the last value forced to 1), checked against the pmf the CPU
-/// samples with: an error if any probability differs in a single bit.
-fn selection_cdf(lights: &Lights, scene_radius: f32) -> Result<Vec<f32>, VulkanError> {
-    let powers: Vec<f64> = lights
-        .iter()
-        .map(|l| l.power(scene_radius).max(0.0) as f64)
-        .collect();
-    let total: f64 = powers.iter().sum();
-    let mut running = 0.0f64;
-    let mut cdf: Vec<f32> = powers
-        .iter()
-        .map(|p| {
-            running += p;
-            (running / total) as f32
-        })
-        .collect();
-    if let Some(last) = cdf.last_mut() {
-        *last = 1.0;
-    }
-    for (i, &c) in cdf.iter().enumerate() {
-        let pmf = c - if i == 0 { 0.0 } else { cdf[i - 1] };
-        if pmf.to_bits() != lights.selection_pmf(i as u32).to_bits() {
-            return Err(VulkanError::Binding(format!(
-                "light {i}: the rebuilt selection pmf {pmf} differs from the scene's {}",
-                lights.selection_pmf(i as u32)
-            )));
-        }
-    }
-    Ok(cdf)
-}
-
-/// The per-vertex shading normals of triangle `prim` as `Geometry::shading_normal` returns
-/// them at the corners. `Geometry` keeps the raw normals private; at a corner the interpolation
-/// is exact, so these are the stored normals renormalised (the stored ones are unit already,
-/// so they differ by at most a rounding of `x · (1/‖x‖)`).
-fn corner_normals(geometry: &Geometry, prim: u32) -> [Vec3; 3] {
-    [Vec2::ZERO, Vec2::X, Vec2::Y].map(|bary| geometry.shading_normal(prim, bary))
-}
-
 /// A scene's buffers on the device, bindings 0–7 of `scene.glsl` (binding 8 is
 /// [`FrameParams::buffer`]).
 pub struct GpuScene {
@@ -361,7 +298,7 @@ impl GpuScene {
         let mut triangles: Vec<GpuTriangle> = (0..geometry.triangle_count())
             .map(|prim| GpuTriangle {
                 v: flatten(geometry.vertices(prim)),
-                n: flatten(corner_normals(geometry, prim)),
+                n: flatten(geometry.vertex_normals(prim)),
                 object: geometry.object_of(prim),
             })
             .collect();
@@ -377,7 +314,7 @@ impl GpuScene {
         } else {
             materials
         };
-        let cdf = selection_cdf(&scene.lights, scene_radius(geometry))?;
+        let cdf = scene.lights.selection_cdf();
         let lights: Vec<GpuLight> = scene
             .lights
             .iter()
@@ -453,7 +390,7 @@ mod tests {
             (176, 4)
         );
         assert_eq!(offset_of!(FrameParams, seed_hi), 28);
-        assert_eq!(offset_of!(FrameParams, scene_radius), 32);
+        assert_eq!(offset_of!(FrameParams, pad), 32);
         assert_eq!(offset_of!(FrameParams, camera), 36);
         assert_eq!(offset_of!(FrameParams, previous_camera), 104);
         assert_eq!(offset_of!(FrameParams, has_previous), 172);
@@ -464,61 +401,6 @@ mod tests {
         assert_eq!(offset_of!(GpuPixel, valid), 60);
         assert_eq!(offset_of!(GpuPixel, bary), 64);
         assert_eq!(GBUFFER.push_bytes, 32);
-    }
-
-    /// The rebuilt selection CDF reproduces every built-in scene's pmf bit for bit (the check
-    /// inside `selection_cdf`); negative control: a directional light (whose power depends on
-    /// the scene radius) beside a point light, rebuilt with a doubled radius, is refused.
-    #[test]
-    fn selection_cdf_reproduces_the_cpu_pmf() {
-        for &(name, _) in Scene::BUILTIN {
-            let scene = Scene::builtin(name).unwrap();
-            let cdf = selection_cdf(&scene.lights, scene_radius(&scene.geometry))
-                .unwrap_or_else(|e| panic!("{name}: {e}"));
-            assert_eq!(cdf.len(), scene.lights.len(), "{name}");
-            assert_eq!(cdf.last(), Some(&1.0), "{name}");
-        }
-        let lights = Lights::new(
-            vec![
-                Light::Directional {
-                    direction: Vec3::NEG_Y,
-                    irradiance: Vec3::ONE,
-                },
-                Light::Point {
-                    position: Vec3::Y,
-                    intensity: Vec3::ONE,
-                },
-            ],
-            1.5,
-        )
-        .unwrap();
-        assert!(selection_cdf(&lights, 1.5).is_ok());
-        assert!(selection_cdf(&lights, 3.0).is_err());
-    }
-
-    /// `tan_half_fov` read back from the Debug text is the value `Camera::new` computed; a
-    /// camera with another field of view gives another value.
-    #[test]
-    fn tan_half_fov_is_read_back_exactly() {
-        let camera = |vfov: f32| {
-            Camera::new(
-                [64, 48],
-                vfov,
-                [Vec3::new(0.0, 1.0, 4.0); 2],
-                [Vec3::ZERO; 2],
-                Vec3::Y,
-                true,
-            )
-        };
-        for vfov in [1.0f32, 33.3, 40.0, 90.0, 179.0] {
-            let want = (0.5 * vfov.to_radians()).tan();
-            assert_eq!(
-                tan_half_fov(&camera(vfov)).to_bits(),
-                want.to_bits(),
-                "{vfov}"
-            );
-        }
-        assert_ne!(tan_half_fov(&camera(40.0)), tan_half_fov(&camera(40.001)));
     }
 
     /// G-buffer entries round-trip through the device layout, misses included.

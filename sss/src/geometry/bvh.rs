@@ -494,6 +494,12 @@ impl Geometry {
         (v1 - v0).cross(v2 - v0).normalize_or_zero()
     }
 
+    /// The per-vertex shading normals of `prim` as stored (the geometric normal where the mesh
+    /// has none), for the GPU twin of [`Geometry::shading_normal`].
+    pub fn vertex_normals(&self, prim: u32) -> [Vec3; 3] {
+        self.shading_normals[prim as usize]
+    }
+
     /// Interpolated per-vertex normal, renormalised; the geometric normal where the mesh has no
     /// normals or the interpolated one vanishes.
     pub fn shading_normal(&self, prim: u32, bary: Vec2) -> Vec3 {

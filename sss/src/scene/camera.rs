@@ -70,6 +70,11 @@ impl Camera {
         self.width
     }
 
+    /// `tan(vfov / 2)`, for the GPU twin of [`Camera::ray`].
+    pub fn tan_half_fov(&self) -> f32 {
+        self.tan_half_fov
+    }
+
     pub fn height(&self) -> u32 {
         self.height
     }

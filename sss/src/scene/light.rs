@@ -373,6 +373,12 @@ impl Lights {
         self.pmf[light as usize]
     }
 
+    /// The selection CDF (`cdf[i]` = probability of lights `0..=i`), for the GPU twin of
+    /// `select`.
+    pub fn selection_cdf(&self) -> &[f32] {
+        &self.cdf
+    }
+
     /// The light whose CDF interval `[cdf[i−1], cdf[i])` contains `u ∈ [0, 1)`.
     fn select(&self, u: f32) -> u32 {
         let i = self.cdf.partition_point(|&c| c <= u);

@@ -10,8 +10,14 @@ use std::env;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// Include directories of the GLSL twins, relative to this crate.
-const INCLUDE_DIRS: [&str; 3] = ["../restir/glsl", "../sss/glsl", "../shifts/glsl"];
+/// Include directories of the GLSL twins and of the kernels' shared headers, relative to this
+/// crate.
+const INCLUDE_DIRS: [&str; 4] = [
+    "../restir/glsl",
+    "../sss/glsl",
+    "../shifts/glsl",
+    "glsl/include",
+];
 
 fn main() {
     println!("cargo::rustc-check-cfg=cfg(reshift_glslc)");

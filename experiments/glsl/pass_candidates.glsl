@@ -23,17 +23,7 @@ const uint HIT_OVERFLOW = 0xFEu;
 #include "reservoir.glsl"
 #include "loop_budget.glsl"
 
-// PassParams (the contract's 32 bytes of push constants).
-layout(push_constant) uniform Params {
-    uint pass;
-    uint shift;
-    uint mis;
-    uint neighbours;
-    float confidence_cap;
-    uint bssrdf_samples;
-    uint shared_light;
-    uint collect_diagnostics;
-} params;
+#include "pass_params.glsl"
 
 layout(std430, binding = 9) readonly buffer GBufferIn { GPixel gbuffer[]; };
 layout(std430, binding = 10) writeonly buffer ReservoirsOut { PixelReservoir reservoirs[]; };

@@ -6,17 +6,7 @@
 
 layout(local_size_x = 64) in;
 
-// The pass constants of every pass shader (unused here).
-layout(push_constant) uniform PassParams {
-    uint pass;
-    uint shift;
-    uint mis;
-    uint neighbours;
-    float confidence_cap;
-    uint bssrdf_samples;
-    uint shared_light;
-    uint collect_diagnostics;
-} pass_params;
+#include "pass_params.glsl"
 
 #define SCENE_BINDING 0
 #include "scene.glsl"

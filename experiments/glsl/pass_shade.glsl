@@ -10,16 +10,7 @@
 
 layout(local_size_x = 64) in;
 
-layout(push_constant) uniform PassParams {
-    uint pass;
-    uint shift;
-    uint mis;
-    uint neighbours;
-    float confidence_cap;
-    uint bssrdf_samples;
-    uint shared_light;
-    uint collect_diagnostics;
-} params;
+#include "pass_params.glsl"
 
 #define SCENE_BINDING 0
 // Hits kept per probe (experiments::vulkan::PT_MAX_HITS). Probes of the path tracer see at most 8

@@ -21,16 +21,7 @@ layout(std430, binding = 10) readonly buffer ReservoirsIn { PixelReservoir reser
 layout(std430, binding = 11) writeonly buffer ReservoirsOut { PixelReservoir reservoirs_out[]; };
 layout(std430, binding = 12) writeonly buffer Diag { uvec4 diag[]; };
 
-layout(push_constant) uniform PassParams {
-    uint pass;
-    uint shift;
-    uint mis;
-    uint neighbours;
-    float confidence_cap;
-    uint bssrdf_samples;
-    uint shared_light;
-    uint collect_diagnostics;
-} params;
+#include "pass_params.glsl"
 
 // experiments::purpose::{SELECT, NEIGHBOURS}.
 const uint PURPOSE_SELECT = 0x102u;

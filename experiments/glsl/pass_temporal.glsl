@@ -25,16 +25,7 @@ layout(std430, binding = 12) readonly buffer PreviousReservoirs {
 layout(std430, binding = 13) writeonly buffer ReservoirsOut { PixelReservoir reservoirs_out[]; };
 layout(std430, binding = 14) writeonly buffer Diag { uvec4 diag[]; };
 
-layout(push_constant) uniform PassParams {
-    uint pass;
-    uint shift;
-    uint mis;
-    uint neighbours;
-    float confidence_cap;
-    uint bssrdf_samples;
-    uint shared_light;
-    uint collect_diagnostics;
-} params;
+#include "pass_params.glsl"
 
 // experiments::purpose::SELECT.
 const uint PURPOSE_SELECT = 0x102u;

@@ -30,7 +30,7 @@ use experiments::bias::{
     BiasRow, Protocol, RegionSummary, Table, bias_rows, reference_images, replica_images, summarize,
 };
 use experiments::regions::{Region, Regions};
-use experiments::vulkan::REQUIRE_ENV;
+use experiments::vulkan::testing::backend_or_skip;
 use experiments::{Backend, Preset, ShiftKind};
 use glam::Vec3;
 use restir::stats::Verdict;
@@ -131,22 +131,6 @@ fn setup() -> &'static Setup {
     })
 }
 
-/// The shared Vulkan backend, or `None` (with the reason printed) where Vulkan is unavailable;
-/// with `RESHIFT_REQUIRE_VULKAN=1` unavailability fails the test instead.
-fn vulkan(test: &str) -> Option<Backend> {
-    static VULKAN: OnceLock<Result<Backend, String>> = OnceLock::new();
-    match VULKAN.get_or_init(|| Backend::vulkan(None, false).map_err(|e| e.to_string())) {
-        Ok(backend) => Some(backend.clone()),
-        Err(e) if std::env::var(REQUIRE_ENV).as_deref() == Ok("1") => {
-            panic!("{test}: {REQUIRE_ENV}=1 but the Vulkan backend is unavailable: {e}")
-        }
-        Err(e) => {
-            eprintln!("{test}: skipped, Vulkan backend unavailable: {e}");
-            None
-        }
-    }
-}
-
 /// The bias table of `preset` over [`REPLICAS`] replicas on `backend` (printed).
 fn measure(backend: &Backend, preset: &Preset) -> Vec<BiasRow> {
     let setup = setup();
@@ -238,7 +222,7 @@ macro_rules! on_both_backends {
         #[test]
         fn $vulkan() {
             let check: fn(&Backend) = $check;
-            if let Some(backend) = vulkan(stringify!($vulkan)) {
+            if let Some(backend) = backend_or_skip(stringify!($vulkan)) {
                 check(&backend);
             }
         }

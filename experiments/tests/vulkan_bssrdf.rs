@@ -20,9 +20,10 @@ use bytemuck::{Pod, Zeroable};
 use experiments::candidates;
 use experiments::layout::PixelReservoir;
 use experiments::purpose;
+use experiments::vulkan::testing::{Tally, kernel_or_skip, rel_error, scaled_error};
 use experiments::vulkan::{
-    BVH_MAX_HITS, Buffer, CANDIDATES, Context, FrameParams, GpuPixel, GpuScene, Kernel, PassParams,
-    REQUIRE_ENV, Shader, VulkanError, groups_for,
+    BVH_MAX_HITS, Buffer, CANDIDATES, Context, FrameParams, GpuPixel, GpuScene, PassParams, Shader,
+    groups_for,
 };
 use restir::rng::StreamKey;
 use restir::shift::Domain;
@@ -42,96 +43,10 @@ const PARITY_BSSRDF: Shader = Shader::new("parity_bssrdf", 12, 8);
 /// edge, and ten materials side by side.
 const SCENES: [&str; 3] = ["bumpy", "half-shadow", "materials"];
 
-/// The device, the kernel of `shader`, or `None` (after saying why) when Vulkan is missing.
-fn kernel_or_skip(test: &str, shader: Shader) -> Option<(Context, Kernel)> {
-    let opened = Context::new().and_then(|context| {
-        let kernel = Kernel::for_shader(&context, shader)?;
-        Ok::<_, VulkanError>((context, kernel))
-    });
-    match opened {
-        Ok((context, kernel)) => {
-            eprintln!("{test}: on {:?}", context.device());
-            Some((context, kernel))
-        }
-        Err(e) if std::env::var(REQUIRE_ENV).as_deref() == Ok("1") => {
-            panic!("{test}: {REQUIRE_ENV}=1 but the Vulkan backend is unavailable: {e}")
-        }
-        Err(e) => {
-            eprintln!("{test}: skipped, Vulkan backend unavailable: {e}");
-            None
-        }
-    }
-}
-
 fn scene(name: &str, size: u32) -> Scene {
     let mut scene = Scene::builtin(name).unwrap();
     scene.camera = scene.camera.with_resolution(size, size);
     scene
-}
-
-/// Relative error of `got` against `want`; equal values (incl. both 0) give 0, a 0 or
-/// non-finite value on one side only gives ∞.
-fn rel_error(got: f32, want: f32) -> f64 {
-    if got == want {
-        0.0
-    } else if want == 0.0 || !want.is_finite() || !got.is_finite() {
-        f64::INFINITY
-    } else {
-        ((got as f64 - want as f64) / want as f64).abs()
-    }
-}
-
-/// Largest relative error over the components, each measured against `scale` (a length of the
-/// problem, so components near 0 are not over-weighted).
-fn scaled_error(got: &[f32], want: &[f32], scale: f32) -> f64 {
-    got.iter()
-        .zip(want)
-        .map(|(&g, &w)| (g as f64 - w as f64).abs() / scale as f64)
-        .fold(0.0, f64::max)
-}
-
-/// Per-field worst errors and mismatch counts of one comparison against per-field bounds.
-#[derive(Debug)]
-struct Tally {
-    bounds: &'static [(&'static str, f64)],
-    compared: usize,
-    /// Queries (or pixels) with at least one integer field different.
-    mismatched: usize,
-    /// Queries (or pixels) whose integers agree but a float exceeds its bound.
-    beyond_bounds: usize,
-    /// Worst float error per named field, over the queries whose integers agree.
-    worst: Vec<(&'static str, f64)>,
-}
-
-impl Tally {
-    fn new(bounds: &'static [(&'static str, f64)]) -> Tally {
-        Tally {
-            bounds,
-            compared: 0,
-            mismatched: 0,
-            beyond_bounds: 0,
-            worst: Vec::new(),
-        }
-    }
-
-    /// Records `error` of field `name`; true if it exceeds the field's bound.
-    fn float(&mut self, name: &'static str, error: f64) -> bool {
-        match self.worst.iter_mut().find(|(n, _)| *n == name) {
-            Some((_, e)) => *e = e.max(error),
-            None => self.worst.push((name, error)),
-        }
-        let bound = self.bounds.iter().find(|(n, _)| *n == name);
-        error > bound.expect("every compared field has a bound").1
-    }
-
-    /// Fraction of queries rejected for any reason (the negative controls' statistic).
-    fn rejected_fraction(&self) -> f64 {
-        (self.mismatched + self.beyond_bounds) as f64 / self.compared.max(1) as f64
-    }
-
-    fn mismatch_fraction(&self) -> f64 {
-        self.mismatched as f64 / self.compared.max(1) as f64
-    }
 }
 
 // ---------------------------------------------------------------------- function-level parity

@@ -4,35 +4,15 @@
 //! Without Vulkan (no loader, no driver, no device, or a build without `glslc`) each test prints
 //! why it is skipped and passes, unless `RESHIFT_REQUIRE_VULKAN=1`, which makes it fail.
 
+use experiments::vulkan::testing::kernel_or_skip;
 use experiments::vulkan::{
     BVH_MAX_HITS, Buffer, BurleyInput, BurleyOutput, BvhRayInput, BvhRayOutput, Context, Dispatch,
-    GpuBvh, GpuStreamKey, Kernel, REQUIRE_ENV, RngParams, Shader, VulkanError, groups_for,
+    GpuBvh, GpuStreamKey, Kernel, RngParams, Shader, VulkanError, groups_for,
 };
 use glam::{Affine3A, Vec3, Vec3A};
 use restir::rng::StreamKey;
 use sss::geometry::{Geometry, Hit, Ray, shapes};
 use sss::profile::Burley;
-
-/// The device and the kernel of `shader`, or `None` (after saying why) when Vulkan is missing.
-fn kernel_or_skip(test: &str, shader: Shader) -> Option<(Context, Kernel)> {
-    let opened = Context::new().and_then(|context| {
-        let kernel = Kernel::for_shader(&context, shader)?;
-        Ok::<_, VulkanError>((context, kernel))
-    });
-    match opened {
-        Ok((context, kernel)) => {
-            eprintln!("{test}: on {:?}", context.device());
-            Some((context, kernel))
-        }
-        Err(e) if std::env::var(REQUIRE_ENV).as_deref() == Ok("1") => {
-            panic!("{test}: {REQUIRE_ENV}=1 but the Vulkan backend is unavailable: {e}")
-        }
-        Err(e) => {
-            eprintln!("{test}: skipped, Vulkan backend unavailable: {e}");
-            None
-        }
-    }
-}
 
 fn gpu_time(seconds: Option<f64>) -> String {
     seconds.map_or("no timestamps".into(), |s| format!("{:.3} ms GPU", s * 1e3))

@@ -5,31 +5,11 @@
 //! Without Vulkan (no loader, no device, or a build without glslc) each test says why it is
 //! skipped and passes, unless `RESHIFT_REQUIRE_VULKAN=1`, which makes it fail.
 
-use std::sync::OnceLock;
-
 use experiments::methods::Method;
-use experiments::vulkan::{REQUIRE_ENV, VulkanError};
+use experiments::vulkan::VulkanError;
+use experiments::vulkan::testing::backend_or_skip;
 use experiments::{Backend, Image, PixelReservoir, Preset, Run, RunConfig};
 use sss::scene::Scene;
-
-/// The Vulkan backend shared by every test of this file (creating pipelines on lavapipe compiles
-/// LLVM code, once per shader per renderer), or `None` (after saying why) when Vulkan is missing.
-fn backend_or_skip(test: &str) -> Option<Backend> {
-    static SHARED: OnceLock<Result<Backend, VulkanError>> = OnceLock::new();
-    match SHARED.get_or_init(|| Backend::vulkan(None, false)) {
-        Ok(backend) => {
-            eprintln!("{test}: on {backend}");
-            Some(backend.clone())
-        }
-        Err(e) if std::env::var(REQUIRE_ENV).as_deref() == Ok("1") => {
-            panic!("{test}: {REQUIRE_ENV}=1 but the Vulkan backend is unavailable: {e}")
-        }
-        Err(e) => {
-            eprintln!("{test}: skipped, Vulkan backend unavailable: {e}");
-            None
-        }
-    }
-}
 
 fn scene(name: &str, width: u32, height: u32) -> Scene {
     let mut scene = Scene::builtin(name).expect("built-in scene");

@@ -5,13 +5,14 @@
 //! Without Vulkan each test prints why it is skipped and passes, unless
 //! `RESHIFT_REQUIRE_VULKAN=1`, which makes it fail.
 
+use experiments::vulkan::testing::{UploadedFrame, kernel_or_skip};
 use std::cell::RefCell;
 use std::path::Path;
 
 use experiments::random_walk_method::{PURPOSE_WALK, PURPOSE_WALK_LIGHT, SceneLighting, render};
 use experiments::vulkan::{
-    Buffer, Context, FrameInput, FrameParams, GpuMedium, GpuPixel, GpuScene, Kernel, RANDOM_WALK,
-    REQUIRE_ENV, RandomWalkImage, WalkStats, render_random_walk, scene_media,
+    Context, GpuMedium, Kernel, RANDOM_WALK, RandomWalkImage, WalkStats, render_random_walk,
+    scene_media,
 };
 use glam::{DVec3, Vec3};
 use restir::rng::StreamKey;
@@ -30,72 +31,21 @@ const OTHER_SEED: u64 = 12;
 /// Walks per pixel of the parity test.
 const SPP: u32 = 4;
 
-/// The device and the method's kernel, or `None` (after saying why) when Vulkan is missing.
-fn kernel_or_skip(test: &str) -> Option<(Context, Kernel)> {
-    let opened = Context::new().and_then(|context| {
-        let kernel = Kernel::for_shader(&context, RANDOM_WALK)?;
-        Ok((context, kernel))
-    });
-    match opened {
-        Ok((context, kernel)) => {
-            eprintln!("{test}: on {:?}", context.device());
-            Some((context, kernel))
-        }
-        Err(e) if std::env::var(REQUIRE_ENV).as_deref() == Ok("1") => {
-            panic!("{test}: {REQUIRE_ENV}=1 but the Vulkan backend is unavailable: {e}")
-        }
-        Err(e) => {
-            eprintln!("{test}: skipped, Vulkan backend unavailable: {e}");
-            None
-        }
-    }
-}
-
 fn scene(name: &str) -> Scene {
     let mut scene = Scene::builtin(name).expect("built-in scene");
     scene.camera = scene.camera.with_resolution(WIDTH, HEIGHT);
     scene
 }
 
-/// A scene uploaded with one frame's parameters and the CPU's G-buffer of that frame.
-struct Uploaded {
-    scene: GpuScene,
-    params: Buffer,
-    gbuffer: Buffer,
-}
-
-impl Uploaded {
-    fn new(context: &Context, scene: &Scene, gbuffer: &GBuffer, seed: u64) -> Uploaded {
-        let pixels: Vec<GpuPixel> = gbuffer
-            .pixels
-            .iter()
-            .map(|p| GpuPixel::from_cpu(p.as_ref()))
-            .collect();
-        Uploaded {
-            scene: GpuScene::upload(context, scene).unwrap(),
-            params: FrameParams::new(scene, gbuffer.frame, None, seed)
-                .buffer(context)
-                .unwrap(),
-            gbuffer: Buffer::from_slice(context, &pixels).unwrap(),
-        }
-    }
-
-    fn render(
-        &self,
-        context: &mut Context,
-        kernel: &Kernel,
-        media: &[GpuMedium],
-        spp: u32,
-    ) -> RandomWalkImage {
-        let frame = FrameInput {
-            scene: &self.scene,
-            params: &self.params,
-            gbuffer: &self.gbuffer,
-            width: WIDTH,
-            height: HEIGHT,
-        };
-        render_random_walk(context, kernel, &frame, media, spp).unwrap()
-    }
+/// The random-walk kernel on an uploaded frame.
+fn render_gpu(
+    uploaded: &UploadedFrame,
+    context: &mut Context,
+    kernel: &Kernel,
+    media: &[GpuMedium],
+    spp: u32,
+) -> RandomWalkImage {
+    render_random_walk(context, kernel, &uploaded.input(), media, spp).unwrap()
 }
 
 /// `Σ ‖a − b‖² / Σ ‖b‖²` over `pixels`.
@@ -200,7 +150,7 @@ const END_MISMATCH_FRACTION: f64 = 0.05;
 /// every walk scatters elsewhere) fails the same ratio.
 #[test]
 fn random_walk_method_matches_the_cpu() {
-    let Some((mut context, kernel)) = kernel_or_skip("random-walk parity") else {
+    let Some((mut context, kernel)) = kernel_or_skip("random-walk parity", RANDOM_WALK) else {
         return;
     };
     for name in ["slab", "bumpy", "materials"] {
@@ -208,8 +158,8 @@ fn random_walk_method_matches_the_cpu() {
         let scene = scene(name);
         let gbuffer = GBuffer::render(&scene, FRAME);
         let media = scene_media(&scene).unwrap();
-        let uploaded = Uploaded::new(&context, &scene, &gbuffer, SEED);
-        let gpu = uploaded.render(&mut context, &kernel, &media, SPP);
+        let uploaded = UploadedFrame::new(&context, &scene, &gbuffer, SEED).unwrap();
+        let gpu = render_gpu(&uploaded, &mut context, &kernel, &media, SPP);
         assert_eq!(gpu.cut, 0, "{name}: the device cut loops short");
         let (cpu, cpu_left_out) = render(&scene, &gbuffer, SEED, SPP).unwrap();
         let (replica, _) = render(&scene, &gbuffer, OTHER_SEED, SPP).unwrap();
@@ -272,7 +222,7 @@ fn random_walk_method_matches_the_cpu() {
 
         let other_phase: Vec<GpuMedium> =
             media.iter().map(|m| GpuMedium { g: 0.5, ..*m }).collect();
-        let control = uploaded.render(&mut context, &kernel, &other_phase, SPP);
+        let control = render_gpu(&uploaded, &mut context, &kernel, &other_phase, SPP);
         let control_ratio = rel_mse(&control.image.image.pixels, &cpu.pixels, &walk_pixels) / noise;
         eprintln!("{name}: control (g = 0.5): relMSE ratio {control_ratio:.2e}");
         assert!(
@@ -374,13 +324,13 @@ impl Energy {
 /// `β/q = 1` exactly, so absorption shows as lost walks, not as lighter ones).
 #[test]
 fn gpu_walks_conserve_energy_at_albedo_one() {
-    let Some((mut context, kernel)) = kernel_or_skip("random-walk energy") else {
+    let Some((mut context, kernel)) = kernel_or_skip("random-walk energy", RANDOM_WALK) else {
         return;
     };
     for name in ["slab", "bumpy"] {
         let scene = scene(name);
         let gbuffer = GBuffer::render(&scene, FRAME);
-        let uploaded = Uploaded::new(&context, &scene, &gbuffer, SEED);
+        let uploaded = UploadedFrame::new(&context, &scene, &gbuffer, SEED).unwrap();
         for interface in [
             Interface::IndexMatched,
             Interface::Dielectric { eta: 1.4 },
@@ -388,7 +338,7 @@ fn gpu_walks_conserve_energy_at_albedo_one() {
         ] {
             let start = std::time::Instant::now();
             let media = gray_media(&scene, 0.0, interface);
-            let gpu = uploaded.render(&mut context, &kernel, &media, ENERGY_SPP);
+            let gpu = render_gpu(&uploaded, &mut context, &kernel, &media, ENERGY_SPP);
             assert_eq!(
                 gpu.cut, 0,
                 "{name} {interface:?}: the device cut loops short"
@@ -398,9 +348,7 @@ fn gpu_walks_conserve_energy_at_albedo_one() {
             assert!(energy.conserved(), "{name} {interface:?}: {energy:?}");
             let absorbing = gray_media(&scene, 0.1, interface);
             let control = Energy::of(
-                &uploaded
-                    .render(&mut context, &kernel, &absorbing, ENERGY_SPP)
-                    .stats,
+                &render_gpu(&uploaded, &mut context, &kernel, &absorbing, ENERGY_SPP).stats,
             );
             eprintln!("{name} {interface:?}: control σa = 0.1 σt: {control:?}");
             assert!(
@@ -419,12 +367,12 @@ fn gpu_walks_conserve_energy_at_albedo_one() {
 /// without that budget nothing is cut and the walks are reported truncated.
 #[test]
 fn loops_cut_short_by_the_device_are_reported() {
-    let Some((mut context, kernel)) = kernel_or_skip("random-walk loop budget") else {
+    let Some((mut context, kernel)) = kernel_or_skip("random-walk loop budget", RANDOM_WALK) else {
         return;
     };
     let scene = scene("bumpy");
     let gbuffer = GBuffer::render(&scene, FRAME);
-    let uploaded = Uploaded::new(&context, &scene, &gbuffer, SEED);
+    let uploaded = UploadedFrame::new(&context, &scene, &gbuffer, SEED).unwrap();
     let dense: Vec<GpuMedium> = gray_media(&scene, 0.0, Interface::IndexMatched)
         .iter()
         .map(|m| {
@@ -437,7 +385,7 @@ fn loops_cut_short_by_the_device_are_reported() {
         })
         .collect();
     let start = std::time::Instant::now();
-    let gpu = uploaded.render(&mut context, &kernel, &dense, 16);
+    let gpu = render_gpu(&uploaded, &mut context, &kernel, &dense, 16);
     let truncated: u32 = gpu.stats.iter().map(|s| s.truncated).sum();
     let lavapipe = context.device().name.contains("llvmpipe");
     eprintln!(

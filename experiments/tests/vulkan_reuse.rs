@@ -10,9 +10,10 @@ use experiments::candidates;
 use experiments::layout::PixelReservoir;
 use experiments::preset::{MisKind, PassSpec, Preset, ShiftKind};
 use experiments::reuse::{self, PassInput, Previous, ShiftCounts};
+use experiments::vulkan::testing::{Tally, kernel_or_skip, rel_error, scaled_error};
 use experiments::vulkan::{
-    Buffer, Context, FrameParams, GpuPixel, GpuScene, Kernel, PassParams, REQUIRE_ENV, SPATIAL,
-    Shader, TEMPORAL, VulkanError, groups_for,
+    Buffer, Context, FrameParams, GpuPixel, GpuScene, Kernel, PassParams, SPATIAL, Shader,
+    TEMPORAL, groups_for,
 };
 use restir::mis::MAX_DOMAINS;
 use restir::reservoir::{InvalidCandidate, Ris};
@@ -74,27 +75,6 @@ const MIS_KINDS: [MisKind; 4] = [
     MisKind::DefensivePairwise,
     MisKind::ConfidenceOnly,
 ];
-
-/// The device and the kernel of `shader`, or `None` (after saying why) when Vulkan is missing.
-fn kernel_or_skip(test: &str, shader: Shader) -> Option<(Context, Kernel)> {
-    let opened = Context::new().and_then(|context| {
-        let kernel = Kernel::for_shader(&context, shader)?;
-        Ok::<_, VulkanError>((context, kernel))
-    });
-    match opened {
-        Ok((context, kernel)) => {
-            eprintln!("{test}: on {:?}", context.device());
-            Some((context, kernel))
-        }
-        Err(e) if std::env::var(REQUIRE_ENV).as_deref() == Ok("1") => {
-            panic!("{test}: {REQUIRE_ENV}=1 but the Vulkan backend is unavailable: {e}")
-        }
-        Err(e) => {
-            eprintln!("{test}: skipped, Vulkan backend unavailable: {e}");
-            None
-        }
-    }
-}
 
 /// Runs `parity_reuse.glsl` in `mode` over `cases`, with the scene and pass buffers 0–10 given
 /// (placeholders for the modes that do not read them), and returns the results.
@@ -388,69 +368,6 @@ fn gpu_pixels(gbuffer: &GBuffer) -> Vec<GpuPixel> {
         .iter()
         .map(|g| GpuPixel::from_cpu(g.as_ref()))
         .collect()
-}
-
-/// Relative error of `got` against `want`; equal values (incl. both 0) give 0, a 0 or
-/// non-finite value on one side only gives ∞.
-fn rel_error(got: f32, want: f32) -> f64 {
-    if got == want {
-        0.0
-    } else if want == 0.0 || !want.is_finite() || !got.is_finite() {
-        f64::INFINITY
-    } else {
-        ((got as f64 - want as f64) / want as f64).abs()
-    }
-}
-
-/// Largest absolute difference of the components over `scale`.
-fn scaled_error(got: &[f32], want: &[f32], scale: f32) -> f64 {
-    got.iter()
-        .zip(want)
-        .map(|(&g, &w)| (g as f64 - w as f64).abs() / scale as f64)
-        .fold(0.0, f64::max)
-}
-
-/// Worst float errors, integer mismatches and out-of-bound comparisons of one parity run.
-#[derive(Debug)]
-struct Tally {
-    bounds: &'static [(&'static str, f64)],
-    compared: usize,
-    /// Comparisons with an integer field (or a fail code, or a diag counter) different.
-    mismatched: usize,
-    /// Comparisons whose integers agree but a float exceeds its bound.
-    beyond_bounds: usize,
-    worst: Vec<(&'static str, f64)>,
-}
-
-impl Tally {
-    fn new(bounds: &'static [(&'static str, f64)]) -> Tally {
-        Tally {
-            bounds,
-            compared: 0,
-            mismatched: 0,
-            beyond_bounds: 0,
-            worst: Vec::new(),
-        }
-    }
-
-    /// Records `error` of field `name`; true if it exceeds the field's bound.
-    fn float(&mut self, name: &'static str, error: f64) -> bool {
-        match self.worst.iter_mut().find(|(n, _)| *n == name) {
-            Some((_, e)) => *e = e.max(error),
-            None => self.worst.push((name, error)),
-        }
-        let bound = self.bounds.iter().find(|(n, _)| *n == name);
-        error > bound.expect("every compared field has a bound").1
-    }
-
-    fn mismatch_fraction(&self) -> f64 {
-        self.mismatched as f64 / self.compared.max(1) as f64
-    }
-
-    /// Fraction rejected for any reason (the negative controls' statistic).
-    fn rejected_fraction(&self) -> f64 {
-        (self.mismatched + self.beyond_bounds) as f64 / self.compared.max(1) as f64
-    }
 }
 
 /// The integer fields of a stored sample that must match exactly.

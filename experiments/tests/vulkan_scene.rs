@@ -10,12 +10,12 @@
 //! each comparison: shading normals (the corner normals the host can read are renormalised),
 //! sphere-light samples (GPU `sin`/`cos`) and the Burley profile (GPU `exp`).
 
+use experiments::vulkan::testing::kernel_or_skip;
 use std::path::Path;
 
 use bytemuck::{Pod, Zeroable};
 use experiments::vulkan::{
-    Buffer, Context, FrameParams, GBUFFER, GpuPixel, GpuScene, Kernel, REQUIRE_ENV, Shader,
-    VulkanError, groups_for,
+    Buffer, Context, FrameParams, GBUFFER, GpuPixel, GpuScene, Kernel, Shader, groups_for,
 };
 use glam::Vec3;
 use restir::rng::{Stream, StreamKey};
@@ -31,27 +31,6 @@ const PARITY_SCENE: Shader = Shader::new("parity_scene", 11, 4);
 
 /// `2⁻²³`: the largest relative spacing of f32 (one ulp at the bottom of a binade).
 const ULP: f64 = 1.0 / 8_388_608.0;
-
-/// The device and the kernel of `shader`, or `None` (after saying why) when Vulkan is missing.
-fn kernel_or_skip(test: &str, shader: Shader) -> Option<(Context, Kernel)> {
-    let opened = Context::new().and_then(|context| {
-        let kernel = Kernel::for_shader(&context, shader)?;
-        Ok::<_, VulkanError>((context, kernel))
-    });
-    match opened {
-        Ok((context, kernel)) => {
-            eprintln!("{test}: on {:?}", context.device());
-            Some((context, kernel))
-        }
-        Err(e) if std::env::var(REQUIRE_ENV).as_deref() == Ok("1") => {
-            panic!("{test}: {REQUIRE_ENV}=1 but the Vulkan backend is unavailable: {e}")
-        }
-        Err(e) => {
-            eprintln!("{test}: skipped, Vulkan backend unavailable: {e}");
-            None
-        }
-    }
-}
 
 fn stream(purpose: u32) -> Stream {
     StreamKey::new(0, 0, 0, purpose).stream(SEED)

@@ -7,9 +7,9 @@
 
 use experiments::layout::PixelReservoir;
 use experiments::reuse::{self, PassInput};
+use experiments::vulkan::testing::{UploadedFrame, kernel_or_skip};
 use experiments::vulkan::{
-    Buffer, Context, FrameInput, FrameParams, GpuPixel, GpuScene, Kernel, PT, PT_MAX_HITS,
-    REQUIRE_ENV, SHADE, Shader, VulkanError, render_pt_hits, shade,
+    Buffer, FrameInput, PT, PT_MAX_HITS, SHADE, VulkanError, render_pt_hits, shade,
 };
 use experiments::{candidates, purpose};
 use glam::{DVec3, Vec3};
@@ -28,65 +28,10 @@ const FRAME: u32 = 3;
 const SEED: u64 = 11;
 const OTHER_SEED: u64 = 12;
 
-/// The device and the kernel of `shader`, or `None` (after saying why) when Vulkan is missing.
-fn kernel_or_skip(test: &str, shader: Shader) -> Option<(Context, Kernel)> {
-    let opened = Context::new().and_then(|context| {
-        let kernel = Kernel::for_shader(&context, shader)?;
-        Ok::<_, VulkanError>((context, kernel))
-    });
-    match opened {
-        Ok((context, kernel)) => {
-            eprintln!("{test}: on {:?}", context.device());
-            Some((context, kernel))
-        }
-        Err(e) if std::env::var(REQUIRE_ENV).as_deref() == Ok("1") => {
-            panic!("{test}: {REQUIRE_ENV}=1 but the Vulkan backend is unavailable: {e}")
-        }
-        Err(e) => {
-            eprintln!("{test}: skipped, Vulkan backend unavailable: {e}");
-            None
-        }
-    }
-}
-
 fn scene(name: &str) -> Scene {
     let mut scene = Scene::builtin(name).expect("built-in scene");
     scene.camera = scene.camera.with_resolution(SIZE, SIZE);
     scene
-}
-
-/// A scene uploaded with one frame's parameters and the CPU's G-buffer of that frame.
-struct Uploaded {
-    scene: GpuScene,
-    params: Buffer,
-    gbuffer: Buffer,
-}
-
-impl Uploaded {
-    fn new(context: &Context, scene: &Scene, gbuffer: &GBuffer, seed: u64) -> Uploaded {
-        let pixels: Vec<GpuPixel> = gbuffer
-            .pixels
-            .iter()
-            .map(|p| GpuPixel::from_cpu(p.as_ref()))
-            .collect();
-        Uploaded {
-            scene: GpuScene::upload(context, scene).unwrap(),
-            params: FrameParams::new(scene, gbuffer.frame, None, seed)
-                .buffer(context)
-                .unwrap(),
-            gbuffer: Buffer::from_slice(context, &pixels).unwrap(),
-        }
-    }
-
-    fn input(&self) -> FrameInput<'_> {
-        FrameInput {
-            scene: &self.scene,
-            params: &self.params,
-            gbuffer: &self.gbuffer,
-            width: SIZE,
-            height: SIZE,
-        }
-    }
 }
 
 /// The canonical reservoirs of the candidates pass (pass 0, one BSSRDF sample, shared light
@@ -289,7 +234,7 @@ fn shade_pass_matches_the_cpu() {
         let scene = scene(name);
         let gbuffer = GBuffer::render(&scene, FRAME);
         let reservoirs = cpu_reservoirs(&scene, &gbuffer, SEED);
-        let uploaded = Uploaded::new(&context, &scene, &gbuffer, SEED);
+        let uploaded = UploadedFrame::new(&context, &scene, &gbuffer, SEED).unwrap();
         let reservoir_buffer = Buffer::from_slice(&context, &reservoirs).unwrap();
         let start = std::time::Instant::now();
         let gpu = shade(
@@ -358,7 +303,8 @@ fn pt_method_matches_the_cpu() {
         return;
     };
     let small = scene("bumpy");
-    let uploaded = Uploaded::new(&context, &small, &GBuffer::render(&small, FRAME), SEED);
+    let uploaded =
+        UploadedFrame::new(&context, &small, &GBuffer::render(&small, FRAME), SEED).unwrap();
     let too_large = FrameInput {
         height: SIZE + 1,
         ..uploaded.input()
@@ -373,8 +319,8 @@ fn pt_method_matches_the_cpu() {
     for name in SCENES {
         let scene = scene(name);
         let gbuffer = GBuffer::render(&scene, FRAME);
-        let uploads =
-            [SEED, OTHER_SEED].map(|seed| Uploaded::new(&context, &scene, &gbuffer, seed));
+        let uploads = [SEED, OTHER_SEED]
+            .map(|seed| UploadedFrame::new(&context, &scene, &gbuffer, seed).unwrap());
         for hits in [HitPolicy::All, HitPolicy::UniformOne] {
             let settings = PtSettings {
                 hits,
@@ -395,7 +341,7 @@ fn pt_method_matches_the_cpu() {
                 noise > 0.0,
                 "{name} {hits:?}: replicas of two seeds are identical"
             );
-            let mut gpu_image = |uploaded: &Uploaded| {
+            let mut gpu_image = |uploaded: &UploadedFrame| {
                 render_pt_hits(&mut context, &kernel, &uploaded.input(), PT_SPP, hits).unwrap()
             };
             let gpu = gpu_image(&uploads[0]);

@@ -18,6 +18,7 @@ mod pt;
 mod random_walk;
 mod scene;
 mod shaders;
+pub mod testing;
 mod timing;
 
 use bytemuck::{Pod, Zeroable};

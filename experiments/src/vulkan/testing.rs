@@ -1,0 +1,158 @@
+//! The skip policy of the Vulkan tests, in one place: where Vulkan is unavailable (no loader, no
+//! device, a build without `glslc`) a test says why and passes, unless [`REQUIRE_ENV`]` = 1`
+//! (set in CI, where lavapipe is installed), which makes it fail instead.
+
+use std::sync::OnceLock;
+
+use sss::scene::{GBuffer, Scene};
+
+use super::{
+    Buffer, Context, FrameInput, FrameParams, GpuPixel, GpuScene, Kernel, REQUIRE_ENV, Shader,
+    VulkanError,
+};
+use crate::Backend;
+
+/// `Some(value)`, or `None` after printing why `test` is skipped; panics instead when
+/// [`REQUIRE_ENV`] is `1`.
+fn or_skip<T>(test: &str, opened: Result<T, String>) -> Option<T> {
+    match opened {
+        Ok(value) => Some(value),
+        Err(e) if std::env::var(REQUIRE_ENV).as_deref() == Ok("1") => {
+            panic!("{test}: {REQUIRE_ENV}=1 but the Vulkan backend is unavailable: {e}")
+        }
+        Err(e) => {
+            eprintln!("{test}: skipped, Vulkan backend unavailable: {e}");
+            None
+        }
+    }
+}
+
+/// A device and the kernel of `shader` for `test`, or `None` when Vulkan is unavailable.
+pub fn kernel_or_skip(test: &str, shader: Shader) -> Option<(Context, Kernel)> {
+    let opened = Context::new().and_then(|context| {
+        let kernel = Kernel::for_shader(&context, shader)?;
+        Ok::<_, VulkanError>((context, kernel))
+    });
+    let (context, kernel) = or_skip(test, opened.map_err(|e| e.to_string()))?;
+    eprintln!("{test}: on {:?}", context.device());
+    Some((context, kernel))
+}
+
+/// The Vulkan backend shared by every test of one test binary (pipelines are created once per
+/// renderer; on lavapipe that compiles LLVM code), or `None` when Vulkan is unavailable.
+pub fn backend_or_skip(test: &str) -> Option<Backend> {
+    static SHARED: OnceLock<Result<Backend, String>> = OnceLock::new();
+    let opened = SHARED.get_or_init(|| Backend::vulkan(None, false).map_err(|e| e.to_string()));
+    let backend = or_skip(test, opened.clone())?;
+    eprintln!("{test}: on {backend}");
+    Some(backend)
+}
+
+/// Relative error of `got` against `want`; equal values (0 included) give 0, a 0 or
+/// non-finite value on one side only gives ∞.
+pub fn rel_error(got: f32, want: f32) -> f64 {
+    if got == want {
+        0.0
+    } else if want == 0.0 || !want.is_finite() || !got.is_finite() {
+        f64::INFINITY
+    } else {
+        ((got as f64 - want as f64) / want as f64).abs()
+    }
+}
+
+/// Largest absolute difference of the components over `scale` (a length of the problem, so
+/// components near 0 are not over-weighted).
+pub fn scaled_error(got: &[f32], want: &[f32], scale: f32) -> f64 {
+    got.iter()
+        .zip(want)
+        .map(|(&g, &w)| (g as f64 - w as f64).abs() / scale as f64)
+        .fold(0.0, f64::max)
+}
+
+/// The tally of one parity comparison: integer mismatches, float errors beyond their stated
+/// bounds, and the worst error per named float field.
+#[derive(Debug)]
+pub struct Tally {
+    pub bounds: &'static [(&'static str, f64)],
+    pub compared: usize,
+    /// Comparisons with an integer field (or a fail code, or a diag counter) different.
+    pub mismatched: usize,
+    /// Comparisons whose integers agree but a float exceeds its bound.
+    pub beyond_bounds: usize,
+    /// Worst float error per named field, over the comparisons whose integers agree.
+    pub worst: Vec<(&'static str, f64)>,
+}
+
+impl Tally {
+    /// An empty tally; every float field compared later needs a bound in `bounds`.
+    pub fn new(bounds: &'static [(&'static str, f64)]) -> Tally {
+        Tally {
+            bounds,
+            compared: 0,
+            mismatched: 0,
+            beyond_bounds: 0,
+            worst: Vec::new(),
+        }
+    }
+
+    /// Records `error` of field `name`; true if it exceeds the field's bound.
+    pub fn float(&mut self, name: &'static str, error: f64) -> bool {
+        match self.worst.iter_mut().find(|(n, _)| *n == name) {
+            Some((_, e)) => *e = e.max(error),
+            None => self.worst.push((name, error)),
+        }
+        let bound = self.bounds.iter().find(|(n, _)| *n == name);
+        error > bound.expect("every compared field has a bound").1
+    }
+
+    pub fn mismatch_fraction(&self) -> f64 {
+        self.mismatched as f64 / self.compared.max(1) as f64
+    }
+
+    /// Fraction rejected for any reason (the negative controls' statistic).
+    pub fn rejected_fraction(&self) -> f64 {
+        (self.mismatched + self.beyond_bounds) as f64 / self.compared.max(1) as f64
+    }
+}
+
+/// A scene uploaded with one frame's `FrameParams` and the CPU's G-buffer of that frame: the
+/// inputs of a per-pixel kernel under test.
+pub struct UploadedFrame {
+    pub scene: GpuScene,
+    pub params: Buffer,
+    pub gbuffer: Buffer,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl UploadedFrame {
+    pub fn new(
+        context: &Context,
+        scene: &Scene,
+        gbuffer: &GBuffer,
+        seed: u64,
+    ) -> Result<UploadedFrame, VulkanError> {
+        let pixels: Vec<GpuPixel> = gbuffer
+            .pixels
+            .iter()
+            .map(|p| GpuPixel::from_cpu(p.as_ref()))
+            .collect();
+        Ok(UploadedFrame {
+            scene: GpuScene::upload(context, scene)?,
+            params: FrameParams::new(scene, gbuffer.frame, None, seed).buffer(context)?,
+            gbuffer: Buffer::from_slice(context, &pixels)?,
+            width: gbuffer.width,
+            height: gbuffer.height,
+        })
+    }
+
+    pub fn input(&self) -> FrameInput<'_> {
+        FrameInput {
+            scene: &self.scene,
+            params: &self.params,
+            gbuffer: &self.gbuffer,
+            width: self.width,
+            height: self.height,
+        }
+    }
+}

@@ -145,6 +145,52 @@ impl Drop for Submission<'_> {
     }
 }
 
+/// A descriptor set of `kernel`'s layout from `pool`, with `buffers` bound in order to bindings
+/// `0..`.
+///
+/// # Safety
+/// `pool`, `kernel` and `buffers` must be live objects of `device`, and `pool` must have room
+/// for one more set of `kernel.buffers` storage buffers.
+pub(super) unsafe fn bind_buffers(
+    device: &ash::Device,
+    pool: vk::DescriptorPool,
+    kernel: &Kernel,
+    buffers: &[&Buffer],
+) -> Result<vk::DescriptorSet, VulkanError> {
+    let layouts = [kernel.set_layout];
+    // SAFETY: the caller guarantees live objects and room in the pool.
+    let set = unsafe {
+        device.allocate_descriptor_sets(
+            &vk::DescriptorSetAllocateInfo::default()
+                .descriptor_pool(pool)
+                .set_layouts(&layouts),
+        )
+    }
+    .map_err(api("vkAllocateDescriptorSets"))?[0];
+    let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
+        .iter()
+        .map(|b| {
+            [vk::DescriptorBufferInfo::default()
+                .buffer(b.allocation.buffer)
+                .range(vk::WHOLE_SIZE)]
+        })
+        .collect();
+    let writes: Vec<_> = infos
+        .iter()
+        .enumerate()
+        .map(|(binding, info)| {
+            vk::WriteDescriptorSet::default()
+                .dst_set(set)
+                .dst_binding(binding as u32)
+                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                .buffer_info(info)
+        })
+        .collect();
+    // SAFETY: the set was just allocated and the buffers are live.
+    unsafe { device.update_descriptor_sets(&writes, &[]) };
+    Ok(set)
+}
+
 /// Work groups needed to cover `count` invocations with `local_size` per group.
 pub fn groups_for(count: u32, local_size: u32) -> u32 {
     count.div_ceil(local_size.max(1))
@@ -197,35 +243,12 @@ impl Context {
                     .map_err(api("vkCreateDescriptorPool"))?;
             }
             let set = if kernel.buffers > 0 {
-                let layouts = [kernel.set_layout];
-                let set = device
-                    .allocate_descriptor_sets(
-                        &vk::DescriptorSetAllocateInfo::default()
-                            .descriptor_pool(submission.descriptor_pool)
-                            .set_layouts(&layouts),
-                    )
-                    .map_err(api("vkAllocateDescriptorSets"))?[0];
-                let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
-                    .iter()
-                    .map(|b| {
-                        [vk::DescriptorBufferInfo::default()
-                            .buffer(b.allocation.buffer)
-                            .range(vk::WHOLE_SIZE)]
-                    })
-                    .collect();
-                let writes: Vec<_> = infos
-                    .iter()
-                    .enumerate()
-                    .map(|(binding, info)| {
-                        vk::WriteDescriptorSet::default()
-                            .dst_set(set)
-                            .dst_binding(binding as u32)
-                            .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
-                            .buffer_info(info)
-                    })
-                    .collect();
-                device.update_descriptor_sets(&writes, &[]);
-                Some(set)
+                Some(bind_buffers(
+                    device,
+                    submission.descriptor_pool,
+                    kernel,
+                    buffers,
+                )?)
             } else {
                 None
             };

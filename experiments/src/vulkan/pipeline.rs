@@ -18,6 +18,7 @@ use restir::resample::ResampleError;
 use restir::reservoir::InvalidCandidate;
 use sss::scene::Scene;
 
+use super::compute::bind_buffers;
 use super::device::Context;
 use super::error::{VulkanError, api};
 use super::memory::{Allocation, Buffer, Placement, barrier};
@@ -811,34 +812,7 @@ impl<'a> FrameRun<'a> {
         // SAFETY: the set is allocated from this run's pool with the kernel's layout and
         // written with live buffers; `cb` is recording.
         unsafe {
-            let layouts = [kernel.set_layout];
-            let set = device
-                .allocate_descriptor_sets(
-                    &vk::DescriptorSetAllocateInfo::default()
-                        .descriptor_pool(self.descriptor_pool)
-                        .set_layouts(&layouts),
-                )
-                .map_err(api("vkAllocateDescriptorSets"))?[0];
-            let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
-                .iter()
-                .map(|b| {
-                    [vk::DescriptorBufferInfo::default()
-                        .buffer(b.allocation.buffer)
-                        .range(vk::WHOLE_SIZE)]
-                })
-                .collect();
-            let writes: Vec<_> = infos
-                .iter()
-                .enumerate()
-                .map(|(binding, info)| {
-                    vk::WriteDescriptorSet::default()
-                        .dst_set(set)
-                        .dst_binding(binding as u32)
-                        .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
-                        .buffer_info(info)
-                })
-                .collect();
-            device.update_descriptor_sets(&writes, &[]);
+            let set = bind_buffers(device, self.descriptor_pool, kernel, buffers)?;
             if let Some(t) = &recorded.timestamps {
                 t.begin(cb, section);
             }

@@ -7,9 +7,9 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Duration;
 
 use clap::{Args, ValueEnum};
-use experiments::Backend;
-use experiments::compare::fnv1a;
+use engine::Backend;
 use indicatif::{ProgressBar, ProgressStyle};
+use lab::compare::fnv1a;
 use sss::InputError;
 use sss::scene::Scene;
 
@@ -36,10 +36,10 @@ macro_rules! from_error {
 
 from_error!(
     InputError,
-    experiments::PipelineError,
-    experiments::methods::MethodError,
-    experiments::image::WriteError,
-    experiments::vulkan::VulkanError,
+    engine::PipelineError,
+    lab::methods::MethodError,
+    engine::image::WriteError,
+    engine::vulkan::VulkanError,
     restir::resample::ResampleError
 );
 

@@ -4,14 +4,15 @@
 use std::path::{Path, PathBuf};
 
 use clap::Args;
-use experiments::compare::{
+use engine::{Backend, Image};
+use lab::compare::{
     MethodResult, REFERENCE_SEED, ReferenceKey, cache_path, check_reference, equal_time_method,
     quantile, reference_pixels, write_false_colour,
 };
-use experiments::methods::{Method, Rendered};
-use experiments::metrics::{BIAS_CONFIDENCE, REL_EPSILON, efficiency, error_maps};
-use experiments::regions::{Region, Regions};
-use experiments::{Backend, Image, tables};
+use lab::methods::{Method, Rendered};
+use lab::metrics::{BIAS_CONFIDENCE, REL_EPSILON, efficiency, error_maps};
+use lab::regions::{Region, Regions};
+use lab::tables;
 use serde_json::{Value, json};
 use sss::integrator::Reference;
 use sss::scene::{GBuffer, Scene};

@@ -4,10 +4,10 @@
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
-use experiments::compare::MethodResult;
-use experiments::methods::Method;
-use experiments::metrics::Area;
-use experiments::regions::Region;
+use lab::compare::MethodResult;
+use lab::methods::Method;
+use lab::metrics::Area;
+use lab::regions::Region;
 use serde_json::json;
 
 use super::common::{

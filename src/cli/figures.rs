@@ -1,13 +1,13 @@
 //! The diagnostics experiments of seed 001: the hybrid criterion's map (Fig. 4), the fraction of
 //! improved samples of hybrid vs. sequential (Fig. 5) and the temporal shift of the sequential
-//! scheme (Fig. 10). Per-pixel diagnostics of `experiments::diagnostics` are averaged per region.
+//! scheme (Fig. 10). Per-pixel diagnostics of `engine::diagnostics` are averaged per region.
 
 use std::path::Path;
 
-use experiments::compare::REFERENCE_SEED;
-use experiments::methods::Method;
-use experiments::regions::{Region, Regions};
-use experiments::{Backend, Diagnostics, Image, RunConfig};
+use engine::{Backend, Diagnostics, Image, RunConfig};
+use lab::compare::REFERENCE_SEED;
+use lab::methods::Method;
+use lab::regions::{Region, Regions};
 use serde_json::json;
 use sss::scene::{GBuffer, Scene};
 

@@ -9,7 +9,7 @@ pub mod reference;
 pub mod render;
 
 use clap::Args;
-use experiments::methods::REGISTRY;
+use lab::methods::REGISTRY;
 use serde_json::json;
 use sss::scene::Scene;
 

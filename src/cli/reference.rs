@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use clap::Args;
-use experiments::Image;
-use experiments::compare::{REFERENCE_SEED, reference_pixels};
+use engine::Image;
+use lab::compare::{REFERENCE_SEED, reference_pixels};
 use serde_json::json;
 use sss::integrator::pt::PtSettings;
 use sss::integrator::{Reference, ReferenceConfig, Shard};

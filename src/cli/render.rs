@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use experiments::methods::Method;
+use lab::methods::Method;
 use serde_json::json;
 
 use super::common::{

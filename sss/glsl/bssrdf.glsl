@@ -15,7 +15,7 @@
 // host computed them (never re-derived here). Hit lists are bvh.glsl's `bvh_hits` /
 // `bvh_hit_count`, sorted by (t, prim) as Geometry::all_hits_on_object; the count goes on past
 // BVH_MAX_HITS, which an including shader may raise with a #define before the include (the
-// built-in scenes reach 8 hits per probe, experiments/tests/vulkan_bssrdf.rs).
+// built-in scenes reach 8 hits per probe, engine/tests/vulkan_bssrdf.rs).
 //
 // Every arithmetic local is `precise` (no fused multiply-add) and glam's operation order is kept
 // (frame.glsl's glam_* helpers for Vec3).

@@ -12,7 +12,7 @@
 const uint MATERIAL_LAMBERT = 0u;
 const uint MATERIAL_TRANSLUCENT = 1u;
 
-// std430, 56 bytes (Rust twin: experiments::vulkan::GpuMaterial). For a Lambert material only
+// std430, 56 bytes (Rust twin: engine::vulkan::GpuMaterial). For a Lambert material only
 // kind and albedo are set; the rest is 0.
 struct GpuMaterial {
     uint kind;

@@ -46,7 +46,7 @@ const uint RANDOM_WALK_EXITED = 0u;
 const uint RANDOM_WALK_TERMINATED = 1u;
 const uint RANDOM_WALK_TRUNCATED = 2u;
 
-// The medium of one material (std430, 48 bytes; Rust twin experiments::vulkan::GpuMedium):
+// The medium of one material (std430, 48 bytes; Rust twin engine::vulkan::GpuMedium):
 // Medium::sigma_s() and Medium::sigma_t() as the host computes them, HG g, the interface and
 // its eta.
 struct RandomWalkMedium {

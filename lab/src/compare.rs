@@ -170,15 +170,14 @@ impl MethodResult {
     }
 }
 
-/// Equal time: the path tracer's spp that fits `budget` seconds per frame, from a measured
-/// `seconds_per_spp` (at least 1 spp); other methods keep their own cost.
+/// Equal time: `method` at the spp that fits `budget` seconds per frame, from its measured
+/// `seconds_per_spp` (at least 1 spp); methods of fixed cost are returned unchanged.
 pub fn equal_time_method(method: &Method, budget: f64, seconds_per_spp: f64) -> Method {
-    match method {
-        Method::Pt { .. } if seconds_per_spp > 0.0 && budget.is_finite() => {
-            let spp = (budget / seconds_per_spp).round().clamp(1.0, 1e6) as u32;
-            method.with_spp(spp)
-        }
-        _ => method.clone(),
+    if seconds_per_spp > 0.0 && budget.is_finite() {
+        let spp = (budget / seconds_per_spp).round().clamp(1.0, 1e6) as u32;
+        method.with_spp(spp)
+    } else {
+        method.clone()
     }
 }
 
@@ -293,7 +292,7 @@ mod tests {
     }
 
     #[test]
-    fn equal_time_scales_only_the_path_tracer() {
+    fn equal_time_scales_the_spp_of_a_path_tracer() {
         let pt = Method::parse("pt").unwrap();
         assert_eq!(
             equal_time_method(&pt, 0.1, 0.02),

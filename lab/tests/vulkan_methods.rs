@@ -8,7 +8,7 @@
 use engine::vulkan::VulkanError;
 use engine::vulkan::testing::backend_or_skip;
 use engine::{Backend, Image, PixelReservoir, Preset, Run, RunConfig};
-use lab::methods::Method;
+use lab::methods::{Method, restir};
 use sss::scene::Scene;
 
 fn scene(name: &str, width: u32, height: u32) -> Scene {
@@ -57,8 +57,8 @@ fn every_preset_and_method_runs_on_every_scene() {
     let Some(backend) = backend_or_skip("every_preset_and_method_runs_on_every_scene") else {
         return;
     };
-    let mut methods: Vec<Method> = Preset::all().into_iter().map(Method::Restir).collect();
-    methods.extend([Method::Pt { spp: 2 }, Method::RandomWalk { spp: 1 }]);
+    let mut methods: Vec<Method> = restir::all();
+    methods.extend(["pt:2", "random-walk:1"].map(|spec| Method::parse(spec).unwrap()));
     for (name, _) in Scene::BUILTIN {
         let scene = scene(name, 32, 24);
         for method in &methods {

@@ -9,6 +9,7 @@ use lab::compare::{
     MethodResult, REFERENCE_SEED, ReferenceKey, cache_path, check_reference, equal_time_method,
     quantile, reference_pixels, write_false_colour,
 };
+use lab::methods::pt::Pt;
 use lab::methods::{Method, Rendered};
 use lab::metrics::{BIAS_CONFIDENCE, REL_EPSILON, efficiency, error_maps};
 use lab::regions::{Region, Regions};
@@ -148,7 +149,7 @@ pub fn run(args: &CompareArgs) -> CliResult<Outcome> {
     'methods: for (spec, method) in &methods {
         // `pt:N` pins its spp; a bare `pt` is scaled to the budget.
         let method = match budget {
-            Some(b) if !spec.contains(':') => equal_time_method(method, b, seconds_per_spp),
+            Some(b) if spec == "pt" => equal_time_method(method, b, seconds_per_spp),
             _ => method.clone(),
         };
         bar.set_message(method.name());
@@ -265,7 +266,7 @@ fn reference(
 
 /// Seconds per sample per pixel of the path tracer on this scene (median of 3 runs at 4 spp).
 fn calibrate_pt(backend: &Backend, scene: &Scene, frames: u32) -> CliResult<f64> {
-    let pt = Method::Pt { spp: 4 };
+    let pt = Method::new(Pt { spp: 4 });
     let mut times = Vec::new();
     for seed in 0..3 {
         times.push(

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use engine::{Backend, Diagnostics, Image, RunConfig};
 use lab::compare::REFERENCE_SEED;
-use lab::methods::Method;
+use lab::methods::restir;
 use lab::regions::{Region, Regions};
 use serde_json::json;
 use sss::scene::{GBuffer, Scene};
@@ -30,11 +30,10 @@ fn scene_and_regions(args: &ExperimentArgs, name: &str) -> CliResult<(Scene, Reg
 
 /// Diagnostics of replica 0 of a ReSTIR method over the 16-frame trajectory.
 fn diagnostics(backend: &Backend, scene: &Scene, spec: &str) -> CliResult<Diagnostics> {
-    let Method::Restir(preset) = Method::parse(spec)? else {
-        return Err(CliError(format!(
-            "{spec}: diagnostics need a ReSTIR method"
-        )));
-    };
+    let preset = spec
+        .strip_prefix("restir:")
+        .ok_or_else(|| CliError(format!("{spec}: diagnostics need a ReSTIR method")))
+        .and_then(|arg| restir::preset(Some(arg)).map_err(|e| CliError(format!("{spec}: {e}"))))?;
     let config = RunConfig {
         seed: 0,
         frames: 16,

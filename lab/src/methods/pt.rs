@@ -1,0 +1,70 @@
+//! `pt[:spp]`: the path-traced baseline, BSSRDF importance sampling with every probe hit
+//! [001 Eq. 10] (`sss::integrator::pt`; on Vulkan its twin `method_pt.glsl`). It has no memory
+//! across frames, so only the final frame is rendered.
+
+use engine::image::Image;
+use engine::{Backend, PipelineError};
+use sss::integrator::pt::{self, PtSettings};
+use sss::scene::{GBuffer, Scene};
+
+use super::{Entry, Estimator, Frame, Method, parse_spp};
+
+pub const ENTRY: Entry = Entry {
+    family: "pt",
+    usage: "pt[:spp]",
+    about: "path-traced baseline, BSSRDF importance sampling, all probe hits (default 1 spp)",
+    build: |arg| {
+        Ok(Method::new(Pt {
+            spp: parse_spp(arg)?,
+        }))
+    },
+};
+
+/// The path tracer at `spp` samples per pixel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Pt {
+    pub spp: u32,
+}
+
+impl Estimator for Pt {
+    fn name(&self) -> String {
+        format!("pt:{}", self.spp)
+    }
+
+    fn spp(&self) -> u32 {
+        self.spp
+    }
+
+    fn with_spp(&self, spp: u32) -> Option<Method> {
+        Some(Method::new(Pt { spp }))
+    }
+
+    fn render(
+        &self,
+        backend: &Backend,
+        scene: &Scene,
+        frames: u32,
+        seed: u64,
+    ) -> Result<Frame, PipelineError> {
+        let last = frames - 1;
+        let (image, nonfinite) = match backend.renderer() {
+            Some(mut renderer) => renderer.pt(scene, last, seed, self.spp)?,
+            None => {
+                let gbuffer = GBuffer::render(scene, last);
+                let image = pt::render(scene, &gbuffer, &PtSettings::default(), seed, 0, self.spp);
+                let pixels = image.pixels.iter().map(|p| p.as_vec3()).collect();
+                let converted = Image {
+                    width: image.width,
+                    height: image.height,
+                    pixels,
+                };
+                (converted, image.nonfinite)
+            }
+        };
+        Ok(Frame {
+            image,
+            frames_rendered: 1,
+            nonfinite,
+        })
+    }
+}

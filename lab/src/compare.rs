@@ -1,173 +1,204 @@
-//! Pieces of `reshift compare` (DESIGN §7): the cached reference, per-method results from
-//! replicas, equal-time calibration and false-colour error maps. The CLI drives the loops (progress
-//! bars, Ctrl-C); everything here is a pure function of its inputs or one file.
+//! A comparison (DESIGN §7): K replicas of several methods on one scene against one reference,
+//! measured per region; the job of `reshift compare` and of the experiments built on it.
 //!
-//! The reference is `sss::integrator::reference` (the path tracer in independent batches) at the
-//! final frame, with a seed no replica uses ([`REFERENCE_SEED`]). It is cached as a checkpoint
-//! named by [`ReferenceKey::file_name`] and reused when the key matches.
+//! [`run`] takes a [`Plan`], obtains the reference ([`crate::reference_cache`]), renders the
+//! replicas (seeds `0..K`; with an equal-time budget a bare `pt` is first calibrated), reduces
+//! them to [`MethodResult`]s and writes `table.md`, `table.csv`, `results.json` ([`Results`])
+//! and the images ([`crate::images`]) into the plan's folder.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use glam::DVec3;
-use sss::InputError;
-use sss::integrator::pt::PtSettings;
-use sss::integrator::{Reference, ReferenceConfig, Shard};
+use engine::Backend;
+use sss::scene::{GBuffer, Scene};
 
-use crate::methods::{Method, Rendered};
-use crate::metrics::{AreaMetrics, area_metrics, tonemapped_mse};
+use crate::error::Error;
+use crate::images::write_comparison_images;
+use crate::method_result::MethodResult;
+use crate::methods::pt::Pt;
+use crate::methods::{Method, MethodError, Rendered};
+use crate::progress::Progress;
+use crate::reference_cache::{self, REFERENCE_SEED, ReferenceSource};
 use crate::regions::Regions;
-use engine::image::WriteError;
+use crate::report::results::{MethodEntry, ReferenceEntry, Results, RunEntry};
+use crate::report::{output_dir, tables, write_text};
 
-/// Seed of the reference's batches (ASCII "REFERENC"); replicas use seeds `0..K`.
-pub const REFERENCE_SEED: u64 = 0x5245_4645_5245_4E43;
+/// The default method list: the path tracer and the four main presets [001 §5.1].
+pub const DEFAULT_METHODS: &str =
+    "pt,restir:reconnection,restir:delayed,restir:hybrid,restir:sequential";
 
-/// What identifies a cached reference.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ReferenceKey {
-    /// The built-in scene name, or `file-<stem>-<hash of the file's text>`.
-    pub scene: String,
-    pub width: u32,
-    pub height: u32,
-    pub frame: u32,
-    pub spp_per_batch: u32,
-    pub batches: u32,
+/// The method whose samples per pixel an equal-time budget sets: the bare path tracer.
+pub const EQUAL_TIME_SPEC: &str = "pt";
+
+/// What to compare, where, and against what.
+pub struct Plan {
+    /// The scene with the camera at the comparison's resolution.
+    pub scene: Scene,
+    /// Names the scene's cached references ([`crate::scenes::LoadedScene::key`]).
+    pub scene_key: String,
+    /// `(spec as requested, method)`; the spec names the method's rows and files.
+    pub methods: Vec<(String, Method)>,
+    /// Independent replicas per method (seeds `0..replicas`).
+    pub replicas: u32,
+    /// Frames of the camera trajectory; errors are measured on the last one.
+    pub frames: u32,
+    /// `Some(seconds)`: equal time, [`EQUAL_TIME_SPEC`] is scaled to `seconds` per frame and
+    /// every other method keeps its cost; `None`: every method at its own spp.
+    pub equal_time: Option<f64>,
+    pub reference: ReferenceSource,
+    /// The output folder.
+    pub out: PathBuf,
+    pub backend: Backend,
 }
 
-impl ReferenceKey {
-    /// Total samples per pixel.
-    pub fn spp(&self) -> u64 {
-        self.spp_per_batch as u64 * self.batches as u64
-    }
+/// What a finished (or stopped) comparison produced.
+pub struct Outcome {
+    /// The contents of `results.json`.
+    pub results: Results,
+    /// One row group per method that rendered at least one replica.
+    pub rows: Vec<MethodResult>,
+    /// The contents of `table.md`.
+    pub markdown: String,
+    pub out: PathBuf,
+}
 
-    /// `ref-<scene>-<W>x<H>-f<frame>-<batches>x<spp_per_batch>spp.rsref`.
-    pub fn file_name(&self) -> String {
-        format!(
-            "ref-{}-{}x{}-f{}-{}x{}spp.rsref",
-            self.scene, self.width, self.height, self.frame, self.batches, self.spp_per_batch
-        )
-    }
+/// `(spec, method)` of every spec, in order.
+pub fn parse_methods<S: AsRef<str>>(specs: &[S]) -> Result<Vec<(String, Method)>, MethodError> {
+    specs
+        .iter()
+        .map(|s| Ok((s.as_ref().to_string(), Method::parse(s.as_ref())?)))
+        .collect()
+}
 
-    /// The reference configuration of this key (default path-tracer settings).
-    pub fn config(&self, scene_name: &str) -> ReferenceConfig {
-        ReferenceConfig {
-            scene: scene_name.to_string(),
-            frame: self.frame,
-            seed: REFERENCE_SEED,
-            spp_per_batch: self.spp_per_batch,
-            batches: self.batches,
-            settings: PtSettings::default(),
+impl Plan {
+    fn check(&self) -> Result<(), Error> {
+        let invalid = |reason: &str| Err(Error::Invalid(format!("comparison plan: {reason}")));
+        if self.methods.is_empty() {
+            return invalid("no method given");
         }
-    }
-
-    /// An empty (unsharded) reference for this key.
-    pub fn empty(&self, scene_name: &str) -> Result<Reference, InputError> {
-        Reference::new(
-            self.config(scene_name),
-            self.width,
-            self.height,
-            Shard::WHOLE,
-        )
+        if self.replicas == 0 || self.frames == 0 {
+            return invalid("replicas and frames must be ≥ 1");
+        }
+        if self.equal_time.is_some_and(|t| !(t.is_finite() && t > 0.0)) {
+            return invalid("the equal-time budget must be a positive number of seconds");
+        }
+        Ok(())
     }
 }
 
-/// A stable 64-bit FNV-1a hash (file-scene cache keys).
-pub fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
-        (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
+/// Runs the comparison of `plan`, reporting to `progress` (phases `reference` and `replicas`).
+/// A stop request ends it after the current replica with the replicas rendered so far
+/// (`results.interrupted`), or, while the reference renders, with [`Error::Interrupted`].
+pub fn run(plan: &Plan, progress: &mut dyn Progress) -> Result<Outcome, Error> {
+    plan.check()?;
+    let out = output_dir(&plan.out)?;
+    let frame = plan.frames - 1;
+    let scene = &plan.scene;
+    let reference =
+        reference_cache::obtain(&plan.reference, scene, &plan.scene_key, frame, progress)?;
+    let regions = Regions::classify(scene, &GBuffer::render(scene, frame), REFERENCE_SEED);
+    let runs = render_replicas(plan, progress)?;
+    let interrupted = progress.stop_requested();
+
+    let mut rows = Vec::new();
+    for (spec, method, replicas) in runs.iter().filter(|r| !r.2.is_empty()) {
+        let row = MethodResult::from_replicas(
+            spec,
+            method.spp(),
+            replicas,
+            &reference.reference,
+            &regions,
+        )
+        .ok_or_else(|| Error::Invalid(format!("{spec}: image size differs from the reference")))?;
+        rows.push(row);
+    }
+    let finals: Vec<(&str, &engine::Image)> = runs
+        .iter()
+        .filter_map(|(spec, _, replicas)| Some((spec.as_str(), &replicas.first()?.image)))
+        .collect();
+    let (images, scale) = write_comparison_images(&out, &finals, &reference.reference)?;
+    let markdown = tables::markdown(&rows);
+    write_text(&out.join("table.md"), &markdown)?;
+    write_text(&out.join("table.csv"), &tables::csv(&rows))?;
+    let run = RunEntry {
+        scene: scene.name.clone(),
+        backend: plan.backend.to_string(),
+        width: reference.reference.width,
+        height: reference.reference.height,
+        frames: plan.frames,
+        replicas: plan.replicas,
+        equal_time: plan.equal_time,
+        interrupted,
+    };
+    let entries = rows
+        .iter()
+        .zip(images)
+        .map(|(r, files)| MethodEntry::new(r, files))
+        .collect();
+    let reference_entry =
+        ReferenceEntry::new(&reference.reference, &reference.path, reference.cached);
+    let results = Results::new(run, reference_entry, &regions, scale, entries);
+    write_text(&out.join("results.json"), &results.to_json_pretty())?;
+    Ok(Outcome {
+        results,
+        rows,
+        markdown,
+        out,
     })
 }
 
-/// Checks that `reference` (read from `path`) is of `width × height` at `frame`: a reference
-/// of another size or frame is an input error, not a silent mismatch.
-pub fn check_reference(
-    reference: &Reference,
-    path: &Path,
-    width: u32,
-    height: u32,
-    frame: u32,
-) -> Result<(), InputError> {
-    if (reference.width, reference.height) != (width, height) {
-        return Err(InputError::new(
-            path,
-            "width×height",
-            format!("{}×{}", reference.width, reference.height),
-            format!("the comparison renders {width}×{height}"),
-        ));
+/// The replicas of every method, in order; after a stop request the list ends with the method
+/// that was rendering, with the replicas it finished.
+fn render_replicas(
+    plan: &Plan,
+    progress: &mut dyn Progress,
+) -> Result<Vec<(String, Method, Vec<Rendered>)>, Error> {
+    let seconds_per_spp = match plan.equal_time {
+        Some(_) if plan.methods.iter().any(|(s, _)| s == EQUAL_TIME_SPEC) => {
+            calibrate_pt(&plan.backend, &plan.scene, plan.frames)?
+        }
+        _ => 0.0,
+    };
+    progress.begin(
+        "replicas",
+        plan.methods.len() as u64 * plan.replicas as u64,
+        0,
+    );
+    let mut runs = Vec::new();
+    'methods: for (spec, method) in &plan.methods {
+        // `pt:N` pins its spp; a bare `pt` is scaled to the budget.
+        let method = match plan.equal_time {
+            Some(b) if spec == EQUAL_TIME_SPEC => equal_time_method(method, b, seconds_per_spp),
+            _ => method.clone(),
+        };
+        progress.item(&method.name());
+        let mut replicas = Vec::new();
+        for seed in 0..plan.replicas as u64 {
+            if progress.stop_requested() {
+                runs.push((spec.clone(), method, replicas));
+                break 'methods;
+            }
+            replicas.push(method.render_on(&plan.backend, &plan.scene, plan.frames, seed)?);
+            progress.step();
+        }
+        runs.push((spec.clone(), method, replicas));
     }
-    if reference.config.frame != frame {
-        return Err(InputError::new(
-            path,
-            "frame",
-            reference.config.frame.to_string(),
-            format!("the comparison measures frame {frame}"),
-        ));
-    }
-    if reference.batches_done() < 2 {
-        return Err(InputError::new(
-            path,
-            "batches",
-            reference.batches_done().to_string(),
-            "a reference needs at least 2 finished batches (for its standard error)",
-        ));
-    }
-    Ok(())
+    progress.end();
+    Ok(runs)
 }
 
-/// The cache file of `key` under `cache_dir`.
-pub fn cache_path(cache_dir: &Path, key: &ReferenceKey) -> PathBuf {
-    cache_dir.join(key.file_name())
-}
-
-/// One method's row group of the comparison.
-#[derive(Clone, Debug, PartialEq)]
-pub struct MethodResult {
-    /// The method as requested (`pt`, `restir:hybrid`).
-    pub method: String,
-    /// Samples per pixel per frame actually used (after equal-time calibration).
-    pub spp: u32,
-    pub replicas: usize,
-    /// Mean over replicas.
-    pub seconds_per_frame: f64,
-    pub frames_rendered: u32,
-    pub metrics: Vec<AreaMetrics>,
-    /// Seed 001's metric over whole frames, mean over replicas ([`tonemapped_mse`]).
-    pub tonemapped_mse: f64,
-    pub nonfinite: u64,
-}
-
-impl MethodResult {
-    /// The row group of `method` from its replicas' final frames; `None` when there is no
-    /// replica or a size disagrees with the reference.
-    pub fn from_replicas(
-        method: &str,
-        spp: u32,
-        replicas: &[Rendered],
-        reference: &Reference,
-        regions: &Regions,
-    ) -> Option<MethodResult> {
-        let images: Vec<_> = replicas.iter().map(|r| r.image.clone()).collect();
-        let mean = reference.mean();
-        let metrics = area_metrics(&images, &mean, &reference.std_err(), regions)?;
-        let k = replicas.len() as f64;
-        let tonemapped = images
-            .iter()
-            .map(|i| tonemapped_mse(i, &mean))
-            .sum::<Option<f64>>()?;
-        Some(MethodResult {
-            method: method.to_string(),
-            spp,
-            replicas: replicas.len(),
-            seconds_per_frame: replicas.iter().map(|r| r.seconds_per_frame).sum::<f64>() / k,
-            frames_rendered: replicas
-                .iter()
-                .map(|r| r.frames_rendered)
-                .max()
-                .unwrap_or(0),
-            metrics,
-            tonemapped_mse: tonemapped / k,
-            nonfinite: replicas.iter().map(|r| r.nonfinite).sum(),
-        })
+/// Seconds per sample per pixel of the path tracer on this scene (median of 3 runs at 4 spp).
+fn calibrate_pt(backend: &Backend, scene: &Scene, frames: u32) -> Result<f64, Error> {
+    let pt = Method::new(Pt { spp: 4 });
+    let mut times = Vec::new();
+    for seed in 0..3 {
+        times.push(
+            pt.render_on(backend, scene, frames, 1_000_000 + seed)?
+                .seconds_per_frame
+                / 4.0,
+        );
     }
+    times.sort_by(f64::total_cmp);
+    Ok(times[1])
 }
 
 /// Equal time: `method` at the spp that fits `budget` seconds per frame, from its measured
@@ -181,115 +212,11 @@ pub fn equal_time_method(method: &Method, budget: f64, seconds_per_spp: f64) -> 
     }
 }
 
-/// Height in pixels of the colour bar under an error map.
-pub const COLOUR_BAR_HEIGHT: u32 = 6;
-
-/// Writes `values` (row-major `width × height`) as a false-colour PNG, 0 → dark blue, `max` →
-/// yellow (a viridis-like ramp), with a colour bar spanning 0 … `max` left to right in
-/// [`COLOUR_BAR_HEIGHT`] rows below the image. Non-finite values are drawn magenta.
-pub fn write_false_colour(
-    values: &[f64],
-    width: u32,
-    height: u32,
-    max: f64,
-    path: &Path,
-) -> Result<(), WriteError> {
-    let error = |reason: String| WriteError {
-        path: path.to_path_buf(),
-        reason,
-    };
-    if values.len() != width as usize * height as usize || width == 0 {
-        return Err(error(format!(
-            "{} values for a {width}×{height} image",
-            values.len()
-        )));
-    }
-    let scale = if max > 0.0 && max.is_finite() {
-        max
-    } else {
-        1.0
-    };
-    let mut bytes = Vec::with_capacity(values.len() * 3 + (width * COLOUR_BAR_HEIGHT * 3) as usize);
-    for &v in values {
-        bytes.extend(if v.is_finite() {
-            ramp(v / scale)
-        } else {
-            [255, 0, 255]
-        });
-    }
-    for _ in 0..COLOUR_BAR_HEIGHT {
-        for x in 0..width {
-            bytes.extend(ramp(x as f64 / (width - 1).max(1) as f64));
-        }
-    }
-    image::save_buffer(
-        path,
-        &bytes,
-        width,
-        height + COLOUR_BAR_HEIGHT,
-        image::ColorType::Rgb8,
-    )
-    .map_err(|e| error(e.to_string()))
-}
-
-/// A five-stop approximation of viridis for `t` clamped to [0, 1].
-fn ramp(t: f64) -> [u8; 3] {
-    const STOPS: [[f64; 3]; 5] = [
-        [68.0, 1.0, 84.0],
-        [59.0, 82.0, 139.0],
-        [33.0, 145.0, 140.0],
-        [94.0, 201.0, 98.0],
-        [253.0, 231.0, 37.0],
-    ];
-    let x = t.clamp(0.0, 1.0) * 4.0;
-    let i = (x.floor() as usize).min(3);
-    let f = x - i as f64;
-    std::array::from_fn(|c| (STOPS[i][c] * (1.0 - f) + STOPS[i + 1][c] * f).round() as u8)
-}
-
-/// The `q`-quantile (0..=1) of the finite values, for colour-map scales robust to fireflies;
-/// 0 when there is none.
-pub fn quantile(values: &[f64], q: f64) -> f64 {
-    let mut finite: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
-    if finite.is_empty() {
-        return 0.0;
-    }
-    finite.sort_by(f64::total_cmp);
-    let at = ((finite.len() - 1) as f64 * q.clamp(0.0, 1.0)).round() as usize;
-    finite[at]
-}
-
-/// The per-pixel reference mean as linear RGB `f32` values (for image output).
-pub fn reference_pixels(reference: &Reference) -> Vec<glam::Vec3> {
-    reference
-        .mean()
-        .iter()
-        .map(|p: &DVec3| p.as_vec3())
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn ramp_is_ordered_and_clamped() {
-        assert_eq!(ramp(0.0), [68, 1, 84]);
-        assert_eq!(ramp(1.0), [253, 231, 37]);
-        assert_eq!(ramp(-3.0), ramp(0.0));
-        assert_eq!(ramp(7.0), ramp(1.0));
-        // Luminance-like ordering: green grows monotonically along the ramp.
-        let greens: Vec<u8> = (0..=20).map(|i| ramp(i as f64 / 20.0)[1]).collect();
-        assert!(greens.windows(2).all(|w| w[0] <= w[1]), "{greens:?}");
-    }
-
-    #[test]
-    fn quantile_ignores_non_finite_values() {
-        let values = [3.0, f64::NAN, 1.0, 2.0, f64::INFINITY, 4.0];
-        assert_eq!(quantile(&values, 0.0), 1.0);
-        assert_eq!(quantile(&values, 1.0), 4.0);
-        assert_eq!(quantile(&[], 0.5), 0.0);
-    }
+    use crate::progress::Silent;
+    use crate::scenes::with_resolution;
 
     #[test]
     fn equal_time_scales_the_spp_of_a_path_tracer() {
@@ -303,18 +230,43 @@ mod tests {
         assert_eq!(equal_time_method(&hybrid, 0.1, 0.02), hybrid);
     }
 
+    /// A whole comparison through the library: every file is written, the document agrees with
+    /// the rows, and a second run reuses the cached reference and reproduces the errors.
     #[test]
-    fn cache_key_names_every_field() {
-        let key = ReferenceKey {
-            scene: "bumpy".into(),
-            width: 64,
-            height: 48,
-            frame: 15,
-            spp_per_batch: 16,
-            batches: 32,
+    fn a_comparison_writes_its_outputs_and_reuses_the_reference() {
+        let dir = std::env::temp_dir().join(format!("reshift-compare-{}", std::process::id()));
+        let plan = Plan {
+            scene: with_resolution(Scene::builtin("bumpy").unwrap(), Some((12, 9))),
+            scene_key: "bumpy".into(),
+            methods: parse_methods(&["pt:2", "restir:hybrid"]).unwrap(),
+            replicas: 2,
+            frames: 2,
+            equal_time: None,
+            reference: ReferenceSource::Cache {
+                dir: dir.join("cache"),
+                spp: 8,
+                batch_spp: 4,
+            },
+            out: dir.join("out"),
+            backend: Backend::Cpu,
         };
-        assert_eq!(key.file_name(), "ref-bumpy-64x48-f15-32x16spp.rsref");
-        assert_eq!(key.spp(), 512);
-        assert_ne!(fnv1a(b"a = 1"), fnv1a(b"a = 2"));
+        let first = run(&plan, &mut Silent).unwrap();
+        assert_eq!(first.rows.len(), 2);
+        assert_eq!(first.results.methods.len(), 2);
+        assert!(!first.results.reference.cached && !first.results.interrupted);
+        for file in ["table.md", "table.csv", "results.json", "reference.exr"] {
+            assert!(first.out.join(file).is_file(), "{file}");
+        }
+        let written = std::fs::read_to_string(first.out.join("results.json")).unwrap();
+        assert_eq!(written, first.results.to_json_pretty());
+        let again = run(&plan, &mut Silent).unwrap();
+        assert!(again.results.reference.cached);
+        assert_eq!(again.rows[1].metrics, first.rows[1].metrics);
+        let empty = Plan {
+            methods: Vec::new(),
+            ..plan
+        };
+        assert!(matches!(run(&empty, &mut Silent), Err(Error::Invalid(_))));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -4,8 +4,8 @@
 
 use clap::Args;
 use lab::bias::{BiasRow, Protocol, Table, bias_rows, luminance, reference_images, summarize};
-use lab::compare::REFERENCE_SEED;
 use lab::methods::Method;
+use lab::reference_cache::REFERENCE_SEED;
 use lab::regions::Regions;
 use restir::stats::Verdict;
 use serde_json::{Value, json};

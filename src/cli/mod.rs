@@ -4,7 +4,6 @@ pub mod bias;
 pub mod common;
 pub mod compare;
 pub mod experiment;
-pub mod figures;
 pub mod reference;
 pub mod render;
 

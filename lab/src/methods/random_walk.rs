@@ -7,7 +7,7 @@ use engine::random_walk_method;
 use engine::{Backend, PipelineError};
 use sss::scene::{GBuffer, Scene};
 
-use super::{Entry, Estimator, Frame, Method, parse_spp};
+use super::estimator::{Entry, Estimator, Frame, Method, parse_spp};
 
 pub const ENTRY: Entry = Entry {
     family: "random-walk",

@@ -9,7 +9,7 @@ use engine::preset::PRESET_NAMES;
 use engine::{Backend, PassSpec, PipelineError, Preset, RunConfig, ShiftKind};
 use sss::scene::Scene;
 
-use super::{Entry, Estimator, Frame, Method};
+use super::estimator::{Entry, Estimator, Frame, Method};
 
 pub const ENTRY: Entry = Entry {
     family: "restir",

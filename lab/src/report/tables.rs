@@ -2,7 +2,7 @@
 
 use std::fmt::Write as _;
 
-use crate::compare::MethodResult;
+use crate::method_result::MethodResult;
 use crate::metrics::{AreaMetrics, efficiency};
 
 /// Column names of [`csv`], in order.

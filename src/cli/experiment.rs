@@ -4,40 +4,35 @@
 
 use std::path::PathBuf;
 
+use clap::builder::PossibleValue;
 use clap::{Args, ValueEnum};
 use lab::experiments::{Experiment, Settings};
 
 use super::common::{BackendArgs, Bars, CliResult, parse_resolution};
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum Name {
-    /// Fig. 6: the four shifts vs. path tracing at equal time, one large light (`bumpy`).
-    ShiftComparison,
-    /// Fig. 7: the shift comparison with 512 small lights (`many-lights`).
-    ManyLights,
-    /// Fig. 8: hybrid and sequential vs. path tracing on the ten measured materials (`materials`).
-    Materials,
-    /// Fig. 9: the gain of hybrid / sequential over equal-time path tracing vs. the mean free path.
-    MfpScaling,
-    /// Fig. 4: where the hybrid criterion picks reconnection, per region.
-    HybridMap,
-    /// Fig. 5: the fraction of improved samples, hybrid vs. sequential.
-    ImprovedFraction,
-    /// Fig. 10: reconnection vs. delayed reconnection in the sequential scheme's temporal pass.
-    TemporalShift,
-}
+/// An experiment name on the command line; the names and their help are
+/// `lab::experiments::Experiment`'s.
+#[derive(Clone, Copy, Debug)]
+pub struct Name(pub Experiment);
 
-impl From<Name> for Experiment {
-    fn from(name: Name) -> Experiment {
-        match name {
-            Name::ShiftComparison => Experiment::ShiftComparison,
-            Name::ManyLights => Experiment::ManyLights,
-            Name::Materials => Experiment::Materials,
-            Name::MfpScaling => Experiment::MfpScaling,
-            Name::HybridMap => Experiment::HybridMap,
-            Name::ImprovedFraction => Experiment::ImprovedFraction,
-            Name::TemporalShift => Experiment::TemporalShift,
-        }
+/// [`Experiment::ALL`] as [`Name`]s.
+const NAMES: [Name; Experiment::ALL.len()] = {
+    let mut names = [Name(Experiment::ALL[0]); Experiment::ALL.len()];
+    let mut i = 1;
+    while i < names.len() {
+        names[i] = Name(Experiment::ALL[i]);
+        i += 1;
+    }
+    names
+};
+
+impl ValueEnum for Name {
+    fn value_variants<'a>() -> &'a [Self] {
+        &NAMES
+    }
+
+    fn to_possible_value(&self) -> Option<PossibleValue> {
+        Some(PossibleValue::new(self.0.name()).help(self.0.about()))
     }
 }
 
@@ -75,7 +70,7 @@ pub fn command(args: &ExperimentArgs) -> CliResult<()> {
         cache: args.cache.clone(),
         backend: args.backend.open()?,
     };
-    let report = Experiment::from(args.name).run(&settings, &mut Bars::default())?;
+    let report = args.name.0.run(&settings, &mut Bars::default())?;
     if args.json {
         println!(
             "{}",

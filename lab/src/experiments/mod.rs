@@ -15,22 +15,15 @@ pub use setup::{Report, Settings, equal_time_plan};
 use crate::error::Error;
 use crate::progress::Progress;
 
-/// An experiment by name.
+/// An experiment by name ([`Experiment::name`]); [`Experiment::about`] says what it reproduces.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Experiment {
-    /// Fig. 6: the four shifts vs. path tracing at equal time, one large light (`bumpy`).
     ShiftComparison,
-    /// Fig. 7: the shift comparison with 512 small lights (`many-lights`).
     ManyLights,
-    /// Fig. 8: hybrid and sequential vs. path tracing on the ten measured materials.
     Materials,
-    /// Fig. 9: the gain of hybrid / sequential over path tracing vs. the mean free path.
     MfpScaling,
-    /// Fig. 4: where the hybrid criterion picks reconnection, per region.
     HybridMap,
-    /// Fig. 5: the fraction of improved samples, hybrid vs. sequential.
     ImprovedFraction,
-    /// Fig. 10: reconnection vs. delayed reconnection in the sequential scheme's temporal pass.
     TemporalShift,
 }
 
@@ -55,6 +48,33 @@ impl Experiment {
             Experiment::HybridMap => "hybrid-map",
             Experiment::ImprovedFraction => "improved-fraction",
             Experiment::TemporalShift => "temporal-shift",
+        }
+    }
+
+    /// The figure of seed 001 it reproduces and how, in one line.
+    pub fn about(self) -> &'static str {
+        match self {
+            Experiment::ShiftComparison => {
+                "Fig. 6: the four shifts vs. path tracing at equal time, one large light (`bumpy`)"
+            }
+            Experiment::ManyLights => {
+                "Fig. 7: the shift comparison with 512 small lights (`many-lights`)"
+            }
+            Experiment::Materials => {
+                "Fig. 8: hybrid and sequential vs. path tracing on the ten measured materials (`materials`)"
+            }
+            Experiment::MfpScaling => {
+                "Fig. 9: the gain of hybrid / sequential over equal-time path tracing vs. the mean free path"
+            }
+            Experiment::HybridMap => {
+                "Fig. 4: where the hybrid criterion picks reconnection, per region"
+            }
+            Experiment::ImprovedFraction => {
+                "Fig. 5: the fraction of improved samples, hybrid vs. sequential"
+            }
+            Experiment::TemporalShift => {
+                "Fig. 10: reconnection vs. delayed reconnection in the sequential scheme's temporal pass"
+            }
         }
     }
 

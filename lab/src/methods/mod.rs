@@ -1,4 +1,5 @@
-//! Rendering methods by name (DESIGN §7): `pt[:spp]`, `restir:<preset>`, `random-walk[:spp]`.
+//! Rendering methods by name (DESIGN §7): `pt[:spp]`, `restir:<preset>`, `random-walk[:spp]`,
+//! `pt-one-hit[:spp]`.
 //!
 //! A method renders the final frame of a scene's camera trajectory for one replica seed on a
 //! backend. Each family is one file implementing [`Estimator`] with its [`Entry`] (family,
@@ -7,6 +8,7 @@
 
 mod estimator;
 pub mod pt;
+pub mod pt_one_hit;
 pub mod random_walk;
 pub mod restir;
 
@@ -15,7 +17,12 @@ use std::fmt;
 pub use estimator::{Entry, Estimator, Frame, Method, Rendered, parse_spp};
 
 /// Every method family the CLI knows, in the order `reshift methods` lists them.
-pub const REGISTRY: &[Entry] = &[pt::ENTRY, restir::ENTRY, random_walk::ENTRY];
+pub const REGISTRY: &[Entry] = &[
+    pt::ENTRY,
+    restir::ENTRY,
+    random_walk::ENTRY,
+    pt_one_hit::ENTRY,
+];
 
 /// A method specification that could not be parsed.
 #[derive(Clone, Debug, PartialEq)]

@@ -1,10 +1,12 @@
 //! `pt[:spp]`: the path-traced baseline, BSSRDF importance sampling with every probe hit
 //! [001 Eq. 10] (`sss::integrator::pt`; on Vulkan its twin `method_pt.glsl`). It has no memory
-//! across frames, so only the final frame is rendered.
+//! across frames, so only the final frame is rendered. [`path_trace`] is the path tracer on
+//! either backend with any hit policy, for this method and its variants.
 
 use engine::image::Image;
+use engine::vulkan::{FrameInput, PT, render_pt_hits};
 use engine::{Backend, PipelineError};
-use sss::integrator::pt::{self, PtSettings};
+use sss::integrator::pt::{self, HitPolicy, PtSettings};
 use sss::scene::{GBuffer, Scene};
 
 use super::estimator::{Entry, Estimator, Frame, Method, parse_spp};
@@ -46,27 +48,56 @@ impl Estimator for Pt {
         frames: u32,
         seed: u64,
     ) -> Result<Frame, PipelineError> {
-        let last = frames - 1;
-        let (image, nonfinite) = match backend.renderer() {
-            Some(mut renderer) => renderer.pt(scene, last, seed, self.spp)?,
-            None => {
-                let gbuffer = GBuffer::render(scene, last);
-                let image = pt::render(scene, &gbuffer, &PtSettings::default(), seed, 0, self.spp);
-                let pixels = image.pixels.iter().map(|p| p.as_vec3()).collect();
-                let converted = Image {
-                    width: image.width,
-                    height: image.height,
-                    pixels,
-                };
-                (converted, image.nonfinite)
-            }
-        };
-        Ok(Frame {
-            image,
-            frames_rendered: 1,
-            nonfinite,
-        })
+        path_trace(backend, scene, frames - 1, seed, self.spp, HitPolicy::All)
     }
+}
+
+/// Frame `frame` of `scene` path-traced at `spp` samples per pixel with the probe hits chosen
+/// by `hits`: `sss::integrator::pt::render` on the CPU; on Vulkan the G-buffer kernel, then the
+/// `method_pt` kernel (`engine::vulkan::render_pt_hits`), both on the backend's renderer.
+pub fn path_trace(
+    backend: &Backend,
+    scene: &Scene,
+    frame: u32,
+    seed: u64,
+    spp: u32,
+    hits: HitPolicy,
+) -> Result<Frame, PipelineError> {
+    let (image, nonfinite) = match backend.renderer() {
+        Some(mut renderer) => {
+            let (gbuffer, params) = renderer.gbuffer(scene, frame, seed)?;
+            let (context, kernel, gpu) = renderer.parts(PT)?;
+            let input = FrameInput {
+                scene: gpu,
+                params: &params,
+                gbuffer: &gbuffer,
+                width: scene.camera.width(),
+                height: scene.camera.height(),
+            };
+            let out = render_pt_hits(context, kernel, &input, spp, hits)?;
+            (out.image, out.left_out)
+        }
+        None => {
+            let gbuffer = GBuffer::render(scene, frame);
+            let settings = PtSettings {
+                hits,
+                ..PtSettings::default()
+            };
+            let image = pt::render(scene, &gbuffer, &settings, seed, 0, spp);
+            let pixels = image.pixels.iter().map(|p| p.as_vec3()).collect();
+            let converted = Image {
+                width: image.width,
+                height: image.height,
+                pixels,
+            };
+            (converted, image.nonfinite)
+        }
+    };
+    Ok(Frame {
+        image,
+        frames_rendered: 1,
+        nonfinite,
+    })
 }
 
 #[cfg(test)]

@@ -31,7 +31,7 @@ pub fn run(
     Report::of_comparison(outcome, table)
 }
 
-/// Seed 001 §6.1: reconnection wins in shadow, delayed reconnection in the light, hybrid and
+/// Seed 001 §6 (Fig. 6, 7): reconnection wins in shadow, delayed reconnection in the light, hybrid and
 /// sequential over all translucent pixels, and every preset beats path tracing where the light
 /// is hard to reach.
 fn shift_findings(r: &[MethodResult]) -> Vec<Finding> {

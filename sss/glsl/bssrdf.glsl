@@ -141,7 +141,8 @@ vec2 bssrdf_selection_u_interval(TechniqueSelection s, uint t) {
 // ---------------------------------------------------------------- probe.rs
 
 // The exit point x1: frame of the camera-facing geometric normal (t, b, n), shading normal on the
-// same side, unit view direction, object and the per-channel profile `d` and `r_max`.
+// same side, unit view direction, object, the per-channel profile `d` and `r_max`, and the
+// material's Fresnel transmittance.
 struct ExitPoint {
     vec3 position;
     Frame frame;
@@ -150,6 +151,7 @@ struct ExitPoint {
     uint object;
     vec3 d;
     vec3 r_max;
+    FresnelTransmission fresnel;
 };
 
 // ExitPoint::new: `geometric_normal` must already face the camera; the shading normal is flipped
@@ -165,6 +167,7 @@ ExitPoint bssrdf_exit_point_new(vec3 position, vec3 geometric_normal, vec3 shadi
     x1.object = object;
     x1.d = material_d(material);
     x1.r_max = material_r_max(material);
+    x1.fresnel = material_fresnel(material);
     return x1;
 }
 
@@ -387,7 +390,7 @@ float bssrdf_p_disk(ExitPoint x1, TechniqueSelection selection, vec3 x2, vec3 n2
 // ---------------------------------------------------------------- eval.rs
 
 // bssrdf: S = (A/pi) R_d(|x1 - x2|) F_t(n1.wo) F_t(n2.wi) per channel [001 Eq. 2-3], truncated at
-// the widest r_max of x1's cached profiles.
+// the widest r_max of x1's cached profiles; F_t is x1's cached FresnelTransmission.
 vec3 bssrdf_bssrdf(GpuMaterial material, ExitPoint x1, EntryPoint x2, vec3 wi) {
     float r = glam_length(x2.position - x1.position);
     if (r > bssrdf_max_element(x1.r_max)) {
@@ -395,8 +398,8 @@ vec3 bssrdf_bssrdf(GpuMaterial material, ExitPoint x1, EntryPoint x2, vec3 wi) {
     }
     vec3 profile = vec3(burley_pdf_disk(x1.d.x, r), burley_pdf_disk(x1.d.y, r),
         burley_pdf_disk(x1.d.z, r));
-    precise float fresnel = material_fresnel_transmission(glam_dot(x1.shading_normal, x1.view))
-        * material_fresnel_transmission(glam_dot(x2.shading_normal, wi));
+    precise float fresnel = fresnel_transmission_eval(x1.fresnel, glam_dot(x1.shading_normal, x1.view))
+        * fresnel_transmission_eval(x1.fresnel, glam_dot(x2.shading_normal, wi));
     precise vec3 s = material_albedo(material) * profile * (BSSRDF_FRAC_1_PI * fresnel);
     return s;
 }

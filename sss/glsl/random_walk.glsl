@@ -1,5 +1,6 @@
 // Volumetric random walk in a homogeneous medium: the GLSL twin of sss/src/random_walk/
-// (phase.rs, interface.rs, boundary.rs MeshBoundary, walk.rs, estimate.rs; read them side by
+// (phase.rs, interface.rs — its fresnel_dielectric in fresnel.glsl —, boundary.rs MeshBoundary,
+// walk.rs, estimate.rs; read them side by
 // side: same stream draws in the same order, same operation order, `precise` locals).
 //
 // The including shader enables GL_EXT_shader_explicit_arithmetic_types_int64, includes rng.glsl
@@ -24,6 +25,7 @@
 #define SSS_RANDOM_WALK_GLSL
 
 #include "frame.glsl"
+#include "fresnel.glsl"
 
 const float RANDOM_WALK_TAU = 6.28318530717958647692;
 const float RANDOM_WALK_FRAC_1_PI = 0.318309886183790671538;
@@ -169,20 +171,6 @@ float henyey_greenstein_pdf(float g, vec3 dir_in, vec3 dir_out) {
 
 // ---- interface.rs ----
 
-// fresnel_dielectric: unpolarised reflectance, cos_i on the incident side, eta = eta_t / eta_i.
-float random_walk_fresnel_dielectric(float cos_i_in, float eta) {
-    precise float cos_i = rust_clamp(cos_i_in, 0.0, 1.0);
-    precise float sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
-    if (sin2_t >= 1.0) {
-        return 1.0;
-    }
-    precise float cos_t = sqrt(1.0 - sin2_t);
-    precise float r_parallel = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    precise float r_perpendicular = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    precise float f = 0.5 * (r_parallel * r_parallel + r_perpendicular * r_perpendicular);
-    return f;
-}
-
 // refract: false under total internal reflection; n faces the incident side.
 bool random_walk_refract(vec3 dir, vec3 n, float eta, out vec3 result) {
     result = vec3(0.0);
@@ -326,7 +314,7 @@ uint random_walk_walk(uint object, bool inward_winding, RandomWalkMedium medium,
                 // probability. As on the CPU, the number is drawn only when refraction is
                 // possible.
                 precise float inv_eta = 1.0 / medium.eta;
-                float fresnel = random_walk_fresnel_dielectric(glam_dot(dir, normal), inv_eta);
+                float fresnel = fresnel_dielectric(glam_dot(dir, normal), inv_eta);
                 leaves = random_walk_refract(dir, -normal, inv_eta, out_dir)
                     && stream_next_f32(stream) >= fresnel;
             }
@@ -433,7 +421,7 @@ uint random_walk_estimate_exitant(uint object, bool inward_winding, RandomWalkMe
         if (!random_walk_refract(-wo, n1, medium.eta, dir)) {
             return RANDOM_WALK_TERMINATED;
         }
-        entry_weight = 1.0 - random_walk_fresnel_dielectric(cos_o, medium.eta);
+        entry_weight = 1.0 - fresnel_dielectric(cos_o, medium.eta);
     } else {
         // Lambertian transmission: cosine-sampled inward direction, f cos / pdf = 1.
         vec2 u;

@@ -22,9 +22,15 @@ pub fn bssrdf(material: &Translucent, x1: &ExitPoint, x2: &EntryPoint, wi: Vec3)
         return Vec3::ZERO;
     }
     let profile = Vec3::from_array(std::array::from_fn(|c| x1.profiles[c].pdf_disk(r)));
+    bssrdf_of_profile(material.albedo * profile, x1, x2, wi)
+}
+
+/// `S = R(‖x1 − x2‖)/π · F_t(n1·ωo) F_t(n2·ωi)` for a radial profile value `profile` per channel
+/// (any sign; the caller truncates), with x1's Fresnel transmittance [001 Eq. 2].
+pub fn bssrdf_of_profile(profile: Vec3, x1: &ExitPoint, x2: &EntryPoint, wi: Vec3) -> Vec3 {
     let fresnel = x1.fresnel.eval(x1.shading_normal.dot(x1.view))
         * x1.fresnel.eval(x2.shading_normal.dot(wi));
-    material.albedo * profile * (FRAC_1_PI * fresnel)
+    profile * (FRAC_1_PI * fresnel)
 }
 
 /// `f = S · max(0, n2·ωi) · L_e` for a light sampled in solid angle at x2, unshadowed.

@@ -17,7 +17,7 @@ use super::phase::{HenyeyGreenstein, ISOTROPIC, PhaseFunction, PhaseSample};
 use super::walk::{WalkEnd, WalkSettings, walk};
 
 /// Gauss–Legendre nodes and weights on [0, 1] (Newton iteration on `P_n`).
-fn gauss_legendre_01(n: usize) -> Vec<(f64, f64)> {
+pub(crate) fn gauss_legendre_01(n: usize) -> Vec<(f64, f64)> {
     (1..=n)
         .map(|i| {
             let mut x = (std::f64::consts::PI * (i as f64 - 0.25) / (n as f64 + 0.5)).cos();
@@ -77,12 +77,12 @@ fn chandrasekhar_h(alpha: f64) -> impl Fn(f64) -> f64 {
 }
 
 /// Diffuse reflectance `R(μ0) = 1 − H(μ0)√(1 − α)` (index-matched, semi-infinite, isotropic).
-fn reflectance_exact(alpha: f64, mu0: f64) -> f64 {
+pub(crate) fn reflectance_exact(alpha: f64, mu0: f64) -> f64 {
     1.0 - chandrasekhar_h(alpha)(mu0) * (1.0 - alpha).sqrt()
 }
 
 /// Single-scattering part `R1(μ0) = (α/2)(1 − μ0 ln(1 + 1/μ0))`.
-fn single_scattering_exact(alpha: f64, mu0: f64) -> f64 {
+pub(crate) fn single_scattering_exact(alpha: f64, mu0: f64) -> f64 {
     0.5 * alpha * (1.0 - mu0 * (1.0 + 1.0 / mu0).ln())
 }
 

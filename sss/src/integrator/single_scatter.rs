@@ -226,7 +226,7 @@ fn scatter_on_chord<B: Boundary + ?Sized, P: PhaseFunction, L: ExitLighting>(
     }
     // [000 slide 68]: σs e^{−σt t} / p(t), the phase weight, then the exact escape.
     let weight = medium.sigma_s() * (-sigma_t * t).exp() * (scattered.value / scattered.pdf) / pdf;
-    let escape = unscattered(
+    unscattered(
         boundary,
         medium,
         pos + t * dir,
@@ -236,8 +236,7 @@ fn scatter_on_chord<B: Boundary + ?Sized, P: PhaseFunction, L: ExitLighting>(
         max_segments,
         stream,
         |_, _, _, _, _| {},
-    )?;
-    Some(escape)
+    )
 }
 
 /// Zero- and single-scattering estimate of the radiance leaving `x1` (on `boundary`, unit

@@ -550,8 +550,8 @@ fn walk_dielectric_reflectance(
                 if let WalkEnd::Exited(exit) =
                     walk(&boundary, medium, Vec3::ZERO, dir, &settings, &mut stream)
                 {
-                    for c in 0..3 {
-                        sum[c] += (entry * exit.weight[c]) as f64;
+                    for (s, w) in sum.iter_mut().zip(exit.weight.to_array()) {
+                        *s += (entry * w) as f64;
                     }
                 }
             }

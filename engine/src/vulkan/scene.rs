@@ -27,7 +27,7 @@ pub struct GpuTriangle {
     pub object: u32,
 }
 
-/// `material.glsl`'s `GpuMaterial` (std430, 56 bytes). `kind` 0 is Lambert (only `albedo` set),
+/// `material.glsl`'s `GpuMaterial` (std430, 60 bytes). `kind` 0 is Lambert (only `albedo` set),
 /// 1 is translucent with `Translucent`'s derived values.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -44,6 +44,8 @@ pub struct GpuMaterial {
     pub g: f32,
     /// κ_dist = 2 · max d, the hybrid shift's distance criterion [001 §5.1].
     pub kappa_dist: f32,
+    /// `Translucent::fresnel().normalization`, `1 − F_dr(ior)` (computed with logarithms).
+    pub fresnel_normalization: f32,
 }
 
 impl GpuMaterial {
@@ -68,6 +70,7 @@ impl GpuMaterial {
                     ior: t.ior,
                     g: t.g,
                     kappa_dist: 2.0 * d.max_element(),
+                    fresnel_normalization: t.fresnel().normalization,
                 }
             }
         }
@@ -371,7 +374,7 @@ mod tests {
         assert_eq!(offset_of!(GpuTriangle, object), 72);
         assert_eq!(
             (size_of::<GpuMaterial>(), align_of::<GpuMaterial>()),
-            (56, 4)
+            (60, 4)
         );
         assert_eq!(offset_of!(GpuMaterial, d), 16);
         assert_eq!(offset_of!(GpuMaterial, r_max), 28);

@@ -21,13 +21,16 @@ pub struct Fixture {
     pub frames: [GBuffer; 2],
 }
 
-/// The fixture of built-in scene `name` ("bumpy" or "half-shadow"), built once per test binary.
+/// The fixture of built-in scene `name` ("bumpy", "half-shadow" or "far-knot"), built once per
+/// test binary.
 pub fn fixture(name: &str) -> &'static Fixture {
     static BUMPY: OnceLock<Fixture> = OnceLock::new();
     static HALF_SHADOW: OnceLock<Fixture> = OnceLock::new();
+    static FAR_KNOT: OnceLock<Fixture> = OnceLock::new();
     let cell = match name {
         "bumpy" => &BUMPY,
         "half-shadow" => &HALF_SHADOW,
+        "far-knot" => &FAR_KNOT,
         _ => panic!("no test fixture for scene {name}"),
     };
     cell.get_or_init(|| Fixture::new(name))

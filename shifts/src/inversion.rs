@@ -43,9 +43,12 @@ pub enum IndexPolicy {
 /// (each direction its own) is biased where the two chords disagree
 /// (`shifts/tests/mis_weights.rs`). The deferred policy has no γ-dependent failure.
 ///
-/// Round trips are equal in path space (x2, x3), `J = 1` in both directions: the random numbers
-/// are an auxiliary variable re-sampled from its conditional distribution given the path, not a
-/// coordinate of the path, and the round trip re-draws them for the source pixel.
+/// Round trips are equal in path space (x2, x3) and in both γ's, `J = 1` in both directions; the
+/// stored random numbers are recomputed at each end, so the round trip re-draws them for the
+/// source pixel. Over runs `γ_e` is uniform and independent of the path (the run seed keys it),
+/// so the stored technique follows its posterior given x2, which a later delayed pass's mixture
+/// Jacobian `p_disk(x2|x1)/p_disk(y2|y1)` requires (`shifts/tests/jacobian.rs`); within a run it
+/// is fixed per pair, frame and pass.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct InvertingReconnection {
     pub policy: IndexPolicy,

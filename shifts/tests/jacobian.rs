@@ -443,7 +443,7 @@ fn per_technique_ratio_is_caught_under_the_nine_technique_selection() {
     let (label, nine) = &reports[0];
     let control = negative_control(
         "delayed reconnection with the per-technique ratio",
-        &[nine.clone()],
+        std::slice::from_ref(nine),
     );
     assert!(control.passed, "{label}: {control}");
     for (label, report) in &reports[1..] {

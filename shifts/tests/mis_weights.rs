@@ -22,7 +22,7 @@
 
 mod common;
 
-use common::{Fixture, SEED, UNSHADOWED, fixture, refs};
+use common::{SEED, UNSHADOWED, fixture, refs};
 use restir::check::{MisCase, ShiftCase, partition_of_unity, round_trip};
 use restir::mis::{DefensivePairwise, Gbh, MAX_DOMAINS, MisScheme};
 use restir::rng::StreamKey;
@@ -158,34 +158,21 @@ fn sum_weights<T: for<'s> Shift<SssDomain<'s>>>(
     }
 }
 
-/// The spatial steps (defensive pairwise) and temporal steps (GBH) of `fx`, as owned domains.
-fn steps(
-    fx: &Fixture,
-) -> (
-    Vec<(SssDomain<'_>, Vec<SssDomain<'_>>)>,
-    Vec<(SssDomain<'_>, SssDomain<'_>)>,
-) {
-    let spatial = (0..NEIGHBOURHOODS)
-        .map(|k| fx.neighbourhood(NEIGHBOURS, 100 + k as u32))
-        .collect();
-    (spatial, fx.temporal_pairs(TEMPORAL_PAIRS, 200))
-}
-
 /// The driver-level sums of `shift` over every step of `far-knot`.
 fn tally<T: for<'s> Shift<SssDomain<'s>>>(shift: &T) -> Tally {
     let fx = fixture("far-knot");
-    let (spatial, temporal) = steps(fx);
     let mut tally = Tally::default();
-    for (k, (receiver, neighbours)) in spatial.iter().enumerate() {
+    for k in 0..NEIGHBOURHOODS {
+        let (receiver, neighbours) = fx.neighbourhood(NEIGHBOURS, 100 + k as u32);
         let step = Step {
-            receiver,
+            receiver: &receiver,
             neighbours: neighbours.iter().collect(),
             confidences: vec![1.0; NEIGHBOURS + 1],
             mis: &DefensivePairwise,
         };
         sum_weights(shift, &step, 300 + k as u32, &mut tally);
     }
-    for (k, (previous, current)) in temporal.iter().enumerate() {
+    for (k, (previous, current)) in fx.temporal_pairs(TEMPORAL_PAIRS, 200).iter().enumerate() {
         let step = Step {
             receiver: current,
             neighbours: vec![previous],

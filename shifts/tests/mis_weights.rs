@@ -40,7 +40,7 @@ const TEMPORAL_PAIRS: usize = 64;
 const TEMPORAL_CONFIDENCE: f32 = 20.0;
 const SAMPLES: usize = 64;
 /// Least (sample, pixel pair) cases with an index re-trace failure the test must see: the point
-/// of the scene. About 14% of the cases fail (the printout has the counts).
+/// of the scene. About 15% of the cases fail (the printout has the counts).
 const MIN_INDEX_FAILURES: usize = 500;
 
 const EXACT: InvertingReconnection = InvertingReconnection {

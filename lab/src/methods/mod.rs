@@ -1,5 +1,5 @@
 //! Rendering methods by name (DESIGN §7): `pt[:spp]`, `restir:<preset>`, `random-walk[:spp]`,
-//! `pt-one-hit[:spp]`.
+//! `pt-one-hit[:spp]`, `single-scatter[:spp]`.
 //!
 //! A method renders the final frame of a scene's camera trajectory for one replica seed on a
 //! backend. Each family is one file implementing [`Estimator`] with its [`Entry`] (family,
@@ -11,6 +11,7 @@ pub mod pt;
 pub mod pt_one_hit;
 pub mod random_walk;
 pub mod restir;
+pub mod single_scatter;
 
 use std::fmt;
 
@@ -22,6 +23,7 @@ pub const REGISTRY: &[Entry] = &[
     restir::ENTRY,
     random_walk::ENTRY,
     pt_one_hit::ENTRY,
+    single_scatter::ENTRY,
 ];
 
 /// A method specification that could not be parsed.

@@ -17,9 +17,9 @@ use crate::candidates::{self, ProbeCounts};
 use crate::diagnostics::{Counters, HybridChoice};
 use crate::image::Image;
 use crate::layout::PixelReservoir;
-use crate::preset::{PassSpec, Preset};
 use crate::reuse::{self, PassInput, Previous, ShiftCounts};
 use crate::{PassTiming, PipelineError, Run, RunConfig, purpose};
+use shifts::preset::{PassSpec, Preset};
 
 /// Fills `out` (row-major, rows of `width`) with `kernel(pixel)` in parallel over rows; the
 /// first error in pixel order wins, so errors are as deterministic as results.

@@ -1,6 +1,7 @@
-//! `engine`: the reshift engine (DESIGN §6). This crate holds the ReSTIR SSS frame pipeline
-//! as data ([`Preset`], [`PassSpec`]) and its deterministic CPU backend ([`run`]), the
-//! path-traced baseline behind the same interface ([`run_pt`]), diagnostics and images.
+//! `engine`: the reshift engine (DESIGN §6). This crate runs the ReSTIR SSS frame pipeline
+//! described as data ([`Preset`], [`PassSpec`] of `shifts::preset`) on its deterministic CPU
+//! backend ([`run`]), the path-traced baseline behind the same interface ([`run_pt`]),
+//! diagnostics and images.
 //!
 //! Per frame: G-buffer → candidates [001 §3.1] → temporal reuse → spatial pass(es) → shade
 //! `f(Y)·W`. Every random number comes from `StreamKey { pixel, frame, pass, purpose }` with the
@@ -12,7 +13,6 @@ mod cpu;
 pub mod diagnostics;
 pub mod image;
 pub mod layout;
-pub mod preset;
 pub mod purpose;
 pub mod random_walk_method;
 pub mod reuse;
@@ -31,7 +31,9 @@ pub use backend::Backend;
 pub use diagnostics::Diagnostics;
 pub use image::Image;
 pub use layout::PixelReservoir;
-pub use preset::{MisKind, PassSpec, Preset, PresetError, ShiftKind};
+pub use restir::mis::MisKind;
+pub use shifts::ShiftKind;
+pub use shifts::preset::{PassSpec, Preset, PresetError};
 
 /// What a run does besides the preset: the replica seed, the number of frames of the camera
 /// trajectory, and whether diagnostics are collected (they re-apply shifts and cost time).

@@ -14,8 +14,8 @@ use shifts::{SssDomain, SssSample, resolve_deferred_index};
 use sss::scene::{GBuffer, GPixel, Scene};
 
 use crate::layout::PixelReservoir;
-use crate::preset::ShiftKind;
 use crate::purpose;
+use shifts::ShiftKind;
 
 /// Reprojection checks of temporal reuse: the previous pixel must show the same object at a view
 /// depth within this relative tolerance of x1's, with geometric normals at least this aligned.
@@ -276,8 +276,7 @@ pub fn shade(domain: &SssDomain, reservoir: &PixelReservoir) -> Vec3 {
 mod tests {
     use super::*;
     use crate::candidates;
-    use crate::preset::MisKind;
-    use shifts::IndexPolicy;
+    use restir::mis::MisKind;
 
     fn scene(name: &str, size: u32) -> Scene {
         let mut scene = Scene::builtin(name).unwrap();
@@ -325,7 +324,7 @@ mod tests {
             seed: 4,
             collect_diagnostics: false,
         };
-        let shift = ShiftKind::InvertingReconnection(IndexPolicy::Deferred);
+        let shift = ShiftKind::InvertingDeferred;
         let (mut moved, mut unknown, mut raw_unknown) = (0, 0, 0);
         for pixel in 0..reservoirs.len() as u32 {
             let Some((receiver, _)) = input.domain(pixel) else {

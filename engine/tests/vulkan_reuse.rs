@@ -8,7 +8,6 @@
 use bytemuck::{Pod, Zeroable};
 use engine::candidates;
 use engine::layout::PixelReservoir;
-use engine::preset::{MisKind, PassSpec, Preset, ShiftKind};
 use engine::reuse::{self, PassInput, Previous, ShiftCounts};
 use engine::vulkan::testing::{Tally, kernel_or_skip, rel_error, scaled_error};
 use engine::vulkan::{
@@ -16,10 +15,13 @@ use engine::vulkan::{
     TEMPORAL, groups_for,
 };
 use restir::mis::MAX_DOMAINS;
+use restir::mis::MisKind;
 use restir::reservoir::{InvalidCandidate, Ris};
 use restir::rng::StreamKey;
 use restir::shift::{Domain, Fail};
-use shifts::{IndexPolicy, SssSample};
+use shifts::ShiftKind;
+use shifts::SssSample;
+use shifts::preset::{PassSpec, Preset};
 use sss::scene::{GBuffer, Scene};
 
 /// `parity_reuse.glsl`: bindings 0–10 scene and pass inputs of the shift modes, 11 cases,
@@ -638,7 +640,7 @@ fn every_shift_kind_matches_the_cpu() {
             .filter(|&i| {
                 matches!(
                     ShiftKind::ALL[cases[i].kind as usize],
-                    ShiftKind::InvertingReconnection(_)
+                    ShiftKind::InvertingExact | ShiftKind::InvertingDeferred
                 ) && cpu[i].fail == 0
             })
             .collect();
@@ -804,14 +806,15 @@ fn reuse_passes_match_the_cpu() {
     let Some((spatial, mut context, temporal)) = opened else {
         return;
     };
-    let index = |kind: ShiftKind| ShiftKind::ALL.iter().position(|&k| k == kind).unwrap() as u32;
     // The wrong shift index of the control: where the camera barely moves between the frames
     // (y1 ≈ x1), delayed reconnection, its negative controls, the hybrid and reconnection all
     // return nearly the same sample (J ≈ 1), so a kind that re-draws the random numbers
     // (inversion) stands in for them, and DelayedWithoutJacobian for the inverting passes.
     let wrong_shift = |spec: &PassSpec| match spec.shift() {
-        Some(ShiftKind::InvertingReconnection(_)) => index(ShiftKind::DelayedWithoutJacobian),
-        _ => index(ShiftKind::InvertingReconnection(IndexPolicy::Deferred)),
+        Some(ShiftKind::InvertingExact | ShiftKind::InvertingDeferred) => {
+            ShiftKind::DelayedWithoutJacobian.code()
+        }
+        _ => ShiftKind::InvertingDeferred.code(),
     };
     for name in SCENES {
         let scene = scene(name);

@@ -10,9 +10,10 @@ use sss::integrator::pt::{self, PtSettings};
 use sss::scene::{GBuffer, Scene};
 
 use engine::image::Image;
-use engine::preset::{PRESET_NAMES, PassSpec, Preset, ShiftKind};
 use engine::random_walk_method;
 use engine::{Backend, PipelineError, RunConfig};
+use shifts::ShiftKind;
+use shifts::preset::{PRESET_NAMES, PassSpec, Preset};
 
 /// The final frame of one replica of a method, and what it cost.
 #[derive(Clone, Debug)]

@@ -45,6 +45,29 @@ pub trait MisScheme: Sync {
     fn weight(&self, i: usize, targets: &[f32], confidences: &[f32]) -> f32;
 }
 
+/// The schemes of this module by name, for pipelines described as data: a pass names its
+/// scheme with a `MisKind`, and the GPU twin (`restir/glsl/mis.glsl`) dispatches on its code.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum MisKind {
+    Gbh,
+    Pairwise,
+    DefensivePairwise,
+    /// `1/M` with confidences: biased unless supports agree (a control, not a default).
+    ConfidenceOnly,
+}
+
+impl MisKind {
+    /// The scheme itself.
+    pub fn scheme(&self) -> &'static dyn MisScheme {
+        match self {
+            MisKind::Gbh => &Gbh,
+            MisKind::Pairwise => &Pairwise,
+            MisKind::DefensivePairwise => &DefensivePairwise,
+            MisKind::ConfidenceOnly => &ConfidenceOnly,
+        }
+    }
+}
+
 /// `num / den`, 0 when `den` is not positive (all domains have `p̂_{←j}(y) = 0`).
 #[inline]
 fn ratio(num: f32, den: f32) -> f32 {

@@ -11,13 +11,17 @@
 //! | [`Hybrid`] | reconnection or delayed by the criterion of [001 §4.1] | as chosen |
 //! | [`InvertingReconnection`] | reconnection + probabilistic inversion [001 Alg. 4] | 1 |
 //!
-//! [`broken`] holds the deliberately wrong shifts the conformance tests must catch.
+//! [`broken`] holds the deliberately wrong shifts the conformance tests must catch. Every shift
+//! is registered by one line of `registry.rs`, which gives it its [`ShiftKind`]: a name, a GPU
+//! code and the CPU shift that presets ([`preset`]) and the backends use.
 
 pub mod broken;
 mod delayed;
 mod domain;
 mod hybrid;
 mod inversion;
+mod kind;
+pub mod preset;
 mod reconnection;
 mod sample;
 
@@ -25,5 +29,6 @@ pub use delayed::DelayedReconnection;
 pub use domain::{LightPath, SssDomain};
 pub use hybrid::Hybrid;
 pub use inversion::{IndexPolicy, InvertingReconnection, resolve_deferred_index};
+pub use kind::ShiftKind;
 pub use reconnection::{Identity, Reconnection};
 pub use sample::{INDEX_UNKNOWN, SssSample};

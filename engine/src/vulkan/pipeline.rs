@@ -31,9 +31,9 @@ use crate::candidates::ProbeCounts;
 use crate::diagnostics::{Counters, HybridChoice};
 use crate::image::Image;
 use crate::layout::PixelReservoir;
-use crate::preset::{PassSpec, Preset, ShiftKind};
 use crate::reuse::ShiftCounts;
 use crate::{PassTiming, PipelineError, Run, RunConfig};
+use shifts::preset::{PassSpec, Preset};
 
 /// `pass_candidates.glsl`: scene (0–8), G-buffer, reservoirs out, diag out.
 pub const CANDIDATES: Shader = Shader::new("pass_candidates", 12, 32);
@@ -49,7 +49,7 @@ pub const SPATIAL: Shader = Shader::new("pass_spatial", 13, 32);
 pub struct PassParams {
     /// The pass's index in the preset (the stream key's `pass`); the pass count for shade.
     pub pass: u32,
-    /// Index in [`ShiftKind::ALL`].
+    /// [`ShiftKind::code`].
     pub shift: u32,
     /// [`crate::MisKind`] in declaration order.
     pub mis: u32,
@@ -69,8 +69,6 @@ impl PassParams {
             collect_diagnostics: collect_diagnostics as u32,
             ..PassParams::default()
         };
-        let shift_index =
-            |s: ShiftKind| ShiftKind::ALL.iter().position(|&k| k == s).unwrap_or(0) as u32;
         match spec {
             None => base,
             Some(&PassSpec::Candidates {
@@ -86,7 +84,7 @@ impl PassParams {
                 mis,
                 confidence_cap,
             }) => PassParams {
-                shift: shift_index(shift),
+                shift: shift.code(),
                 mis: mis as u32,
                 confidence_cap,
                 ..base
@@ -97,7 +95,7 @@ impl PassParams {
                 neighbours,
                 confidence_cap,
             }) => PassParams {
-                shift: shift_index(shift),
+                shift: shift.code(),
                 mis: mis as u32,
                 neighbours,
                 confidence_cap: confidence_cap.unwrap_or(0.0),
@@ -871,7 +869,8 @@ impl Drop for FrameRun<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::preset::MisKind;
+    use restir::mis::MisKind;
+    use shifts::ShiftKind;
     use std::mem::offset_of;
 
     #[test]

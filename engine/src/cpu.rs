@@ -16,9 +16,9 @@ use sss::scene::{GBuffer, Scene};
 use crate::candidates::{self, ProbeCounts};
 use crate::diagnostics::{Counters, HybridChoice};
 use crate::image::Image;
-use crate::layout::PixelReservoir;
 use crate::reuse::{self, PassInput, Previous, ShiftCounts};
 use crate::{PassTiming, PipelineError, Run, RunConfig, purpose};
+use shifts::PixelReservoir;
 use shifts::preset::{PassSpec, Preset};
 
 /// Fills `out` (row-major, rows of `width`) with `kernel(pixel)` in parallel over rows; the

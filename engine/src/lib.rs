@@ -9,10 +9,21 @@
 
 pub mod backend;
 pub mod candidates;
+/// What the kernels (`engine/glsl/`) and the scene twins (`sss/glsl/`) share with the host: the
+/// device buffers' std430 structs, push constants, kinds, limits and diag codes
+/// (`twin::contract!`; rendered to `contract/engine.glsl` and one header per push-constant block
+/// by `build.rs`).
+pub mod contract;
 mod cpu;
 pub mod diagnostics;
 pub mod image;
-pub mod layout;
+pub mod plan;
+/// `purpose` tags of the pipeline's random streams. Every random number of a pass comes from
+/// `StreamKey { pixel, frame, pass, purpose }.stream(seed)`, with `pixel` the receiving pixel's
+/// linear index, `pass` the pass's index in the preset (0 = candidates) and `purpose` one of
+/// these (`PURPOSE_<NAME>` in GLSL). They stay below 2³⁰: the `shifts` crate keys its own
+/// streams (probabilistic inversion's γ, the deferred uniform pick) with the top two bits set,
+/// and the path tracer uses `sss::integrator::pt::PURPOSE_PT`.
 pub mod purpose;
 pub mod random_walk_method;
 pub mod reuse;
@@ -30,10 +41,9 @@ use sss::scene::{FRAMES, GBuffer, Scene};
 pub use backend::Backend;
 pub use diagnostics::Diagnostics;
 pub use image::Image;
-pub use layout::PixelReservoir;
 pub use restir::mis::MisKind;
-pub use shifts::ShiftKind;
 pub use shifts::preset::{PassSpec, Preset, PresetError};
+pub use shifts::{PixelReservoir, ShiftKind};
 
 /// What a run does besides the preset: the replica seed, the number of frames of the camera
 /// trajectory, and whether diagnostics are collected (they re-apply shifts and cost time).

@@ -13,8 +13,8 @@ use restir::shift::{Domain, Shift};
 use shifts::{SssDomain, SssSample, resolve_deferred_index};
 use sss::scene::{GBuffer, GPixel, Scene};
 
-use crate::layout::PixelReservoir;
 use crate::purpose;
+use shifts::PixelReservoir;
 use shifts::ShiftKind;
 
 /// Reprojection checks of temporal reuse: the previous pixel must show the same object at a view
@@ -340,21 +340,21 @@ mod tests {
             )
             .unwrap();
             let Some(y) = out.get().y else { continue };
-            if out.sample == reservoirs[pixel as usize].sample {
+            if out.y == reservoirs[pixel as usize].y {
                 continue;
             }
             moved += 1;
             unknown += y.index().is_none() as u32;
             let src = reservoirs.iter().position(|r| {
                 r.has_sample != 0
-                    && r.sample.prim() == y.prim()
-                    && r.sample.bary() == y.bary()
-                    && r.sample.x3() == y.x3()
+                    && r.y.prim() == y.prim()
+                    && r.y.bary() == y.bary()
+                    && r.y.x3() == y.x3()
             });
             let src = src.unwrap() as u32;
             let (src_domain, _) = input.domain(src).unwrap();
             let raw = shift.with_shift(receiver.material(), |s| {
-                s.shift(&reservoirs[src as usize].sample, &src_domain, &receiver)
+                s.shift(&reservoirs[src as usize].y, &src_domain, &receiver)
                     .unwrap()
             });
             raw_unknown += raw.y.index().is_none() as u32;

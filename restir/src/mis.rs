@@ -7,9 +7,7 @@
 
 use std::fmt;
 
-/// Most domains (receiver + neighbours) one resampling step combines; the weight buffers are
-/// stack arrays of this length.
-pub const MAX_DOMAINS: usize = 16;
+pub use crate::contract::{MAX_DOMAINS, MisKind};
 
 /// What a scheme promises about the estimate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -43,17 +41,6 @@ pub trait MisScheme: Sync {
     fn needs_all_targets(&self, i: usize) -> bool;
     /// `m_i(y)`; `targets.len() == confidences.len()` = number of domains. Finite, in [0, 1].
     fn weight(&self, i: usize, targets: &[f32], confidences: &[f32]) -> f32;
-}
-
-/// The schemes of this module by name, for pipelines described as data: a pass names its
-/// scheme with a `MisKind`, and the GPU twin (`restir/glsl/mis.glsl`) dispatches on its code.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum MisKind {
-    Gbh,
-    Pairwise,
-    DefensivePairwise,
-    /// `1/M` with confidences: biased unless supports agree (a control, not a default).
-    ConfidenceOnly,
 }
 
 impl MisKind {

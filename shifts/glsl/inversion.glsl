@@ -4,10 +4,6 @@
 #ifndef SHIFTS_INVERSION_GLSL
 #define SHIFTS_INVERSION_GLSL
 
-// IndexPolicy.
-const uint INDEX_POLICY_EXACT = 0u;
-const uint INDEX_POLICY_DEFERRED = 1u;
-
 // InvertingReconnection::shift: reconnection (J = 1), then the technique drawn from its
 // posterior with γ, the first number of the receiver's PURPOSE_INVERSION stream, and inverted;
 // the exact policy re-traces the chord for the index (NotInvertible if x2 is not found).
@@ -22,7 +18,7 @@ uint inversion_shift(uint policy, SssSample x, SssDomain src, SssDomain dst, out
     if (!domain_entry_point(dst, y, x2)) {
         return SHIFT_FAIL_REJECTED;
     }
-    Stream stream = domain_shift_stream(dst, DOMAIN_PURPOSE_INVERSION, src);
+    Stream stream = domain_shift_stream(dst, PURPOSE_INVERSION, src);
     float gamma = stream_next_f32(stream);
     Probe probe;
     float p_disk;
@@ -51,6 +47,20 @@ void inversion_resolve_deferred_index(SssDomain domain, inout SssSample y) {
     uint index;
     bssrdf_find_index(domain.x1, Probe(y.technique, y.u_radius, y.u_angle), x2, index);
     y.index = index;
+}
+
+// The registered InvertingReconnection kinds: inversion_shift with their policy (run by
+// shift_shift).
+void inversion_exact_shift(ShiftSpec spec, SssSample x, SssDomain src, SssDomain dst,
+                           inout ShiftPlan plan) {
+    plan.invert = true;
+    plan.index_policy = INDEX_POLICY_EXACT;
+}
+
+void inversion_deferred_shift(ShiftSpec spec, SssSample x, SssDomain src, SssDomain dst,
+                              inout ShiftPlan plan) {
+    plan.invert = true;
+    plan.index_policy = INDEX_POLICY_DEFERRED;
 }
 
 #endif

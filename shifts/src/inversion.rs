@@ -9,16 +9,7 @@ use crate::domain::{PURPOSE_INVERSION, SssDomain};
 use crate::reconnection::reconnect;
 use crate::sample::SssSample;
 
-/// How the intersection index of an inverted sample is found (DESIGN §5).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum IndexPolicy {
-    /// Re-trace the chord during the shift; fail (`NotInvertible`) if x2 is not among its hits
-    /// (matched by triangle and `t`). Unbiased.
-    Exact,
-    /// Leave the index unknown; [`resolve_deferred_index`] sets it for the selected sample after
-    /// the pass. Seed 001's fast choice, slightly biased.
-    Deferred,
-}
+pub use crate::contract::IndexPolicy;
 
 /// Reconnection (`J = 1`, same failures as [`crate::Reconnection`]) followed by probabilistic
 /// inversion of x2 for y1 [001 Alg. 4]: the technique is drawn from its posterior

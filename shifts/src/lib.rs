@@ -16,6 +16,10 @@
 //! code and the CPU shift that presets ([`preset`]) and the backends use.
 
 pub mod broken;
+/// What the GLSL twins (`shifts/glsl/`) share with this crate: the stored sample and reservoir,
+/// the index policy, the shifts' stream purposes (`twin::contract!`; rendered to
+/// `contract/shifts.glsl` by `engine/build.rs`). The shift kinds come from `registry.rs`.
+pub mod contract;
 mod delayed;
 mod domain;
 mod hybrid;
@@ -25,10 +29,10 @@ pub mod preset;
 mod reconnection;
 mod sample;
 
+pub use contract::{INDEX_UNKNOWN, IndexPolicy, PixelReservoir, SssSample};
 pub use delayed::DelayedReconnection;
 pub use domain::{LightPath, SssDomain};
 pub use hybrid::Hybrid;
-pub use inversion::{IndexPolicy, InvertingReconnection, resolve_deferred_index};
+pub use inversion::{InvertingReconnection, resolve_deferred_index};
 pub use kind::ShiftKind;
 pub use reconnection::{Identity, Reconnection};
-pub use sample::{INDEX_UNKNOWN, SssSample};

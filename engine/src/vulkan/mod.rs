@@ -28,16 +28,16 @@ pub use compute::{Dispatch, Kernel, groups_for};
 pub use device::{Context, DEVICE_ENV, DeviceInfo, DeviceKind, choose_device};
 pub use error::VulkanError;
 pub use memory::Buffer;
-pub use pipeline::{CANDIDATES, PassParams, Renderer, SPATIAL, TEMPORAL, decode_error};
-pub use pt::{
-    DeviceImage, FrameInput, MethodParams, PT, PT_MAX_HITS, PtParams, SHADE, render_pt,
-    render_pt_hits, shade,
-};
+pub use pipeline::{CANDIDATES, Renderer, SPATIAL, TEMPORAL, decode_error};
+pub use pt::{DeviceImage, FrameInput, PT, SHADE, render_pt, render_pt_hits, shade};
 pub use random_walk::{
     GpuMedium, RANDOM_WALK, RandomWalkImage, WalkStats, render_random_walk, scene_media,
 };
-pub use scene::{
-    FrameParams, GBUFFER, GpuCamera, GpuLight, GpuMaterial, GpuPixel, GpuScene, GpuTriangle,
+pub use scene::{GBUFFER, GpuScene};
+
+pub use crate::contract::{
+    FrameParams, GpuCamera, GpuLight, GpuMaterial, GpuPixel, GpuTriangle, MethodParams, PassParams,
+    PtParams,
 };
 pub use shaders::Shader;
 

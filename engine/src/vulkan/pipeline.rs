@@ -13,7 +13,6 @@ use std::collections::HashMap;
 use std::collections::hash_map::Entry;
 
 use ash::vk;
-use bytemuck::{Pod, Zeroable};
 use restir::resample::ResampleError;
 use restir::reservoir::InvalidCandidate;
 use sss::scene::Scene;
@@ -23,43 +22,28 @@ use super::device::Context;
 use super::error::{VulkanError, api};
 use super::memory::{Allocation, Buffer, Placement, barrier};
 use super::random_walk::{RANDOM_WALK, render_random_walk, scene_media};
-use super::scene::{FrameParams, GBUFFER, GpuPixel, GpuScene};
+use super::scene::{GBUFFER, GpuScene};
 use super::shaders::Shader;
 use super::timing::Timestamps;
 use super::{FrameInput, Kernel, PT, SHADE, groups_for, render_pt};
 use crate::candidates::ProbeCounts;
+use crate::contract::{
+    FrameParams, GpuPixel, HIT_OVERFLOW, KEPT_HITS, LOOP_BUDGET_CUT, PassParams,
+};
 use crate::diagnostics::{Counters, HybridChoice};
 use crate::image::Image;
-use crate::layout::PixelReservoir;
+use crate::plan::PassKernel;
 use crate::reuse::ShiftCounts;
 use crate::{PassTiming, PipelineError, Run, RunConfig};
+use shifts::PixelReservoir;
 use shifts::preset::{PassSpec, Preset};
 
-/// `pass_candidates.glsl`: scene (0–8), G-buffer, reservoirs out, diag out.
-pub const CANDIDATES: Shader = Shader::new("pass_candidates", 12, 32);
-/// `pass_temporal.glsl`: scene, G-buffer, reservoirs in, previous G-buffer, previous
-/// reservoirs, reservoirs out, diag out.
-pub const TEMPORAL: Shader = Shader::new("pass_temporal", 15, 32);
-/// `pass_spatial.glsl`: scene, G-buffer, reservoirs in, reservoirs out, diag out.
-pub const SPATIAL: Shader = Shader::new("pass_spatial", 13, 32);
-
-/// Push constants of every pass shader (contract: 32 bytes, std430 scalars).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct PassParams {
-    /// The pass's index in the preset (the stream key's `pass`); the pass count for shade.
-    pub pass: u32,
-    /// [`ShiftKind::code`].
-    pub shift: u32,
-    /// [`crate::MisKind`] in declaration order.
-    pub mis: u32,
-    pub neighbours: u32,
-    /// ≤ 0: no cap (a spatial pass's `None`).
-    pub confidence_cap: f32,
-    pub bssrdf_samples: u32,
-    pub shared_light: u32,
-    pub collect_diagnostics: u32,
-}
+/// `pass_candidates.glsl` ([`PassKernel::Candidates`]).
+pub const CANDIDATES: Shader = Shader::of(PassKernel::Candidates);
+/// `pass_temporal.glsl` ([`PassKernel::Temporal`]).
+pub const TEMPORAL: Shader = Shader::of(PassKernel::Temporal);
+/// `pass_spatial.glsl` ([`PassKernel::Spatial`]).
+pub const SPATIAL: Shader = Shader::of(PassKernel::Spatial);
 
 impl PassParams {
     /// The push constants of pass `pass` of a preset (`spec = None`: G-buffer or shade).
@@ -85,7 +69,7 @@ impl PassParams {
                 confidence_cap,
             }) => PassParams {
                 shift: shift.code(),
-                mis: mis as u32,
+                mis: mis.code(),
                 confidence_cap,
                 ..base
             },
@@ -96,7 +80,7 @@ impl PassParams {
                 confidence_cap,
             }) => PassParams {
                 shift: shift.code(),
-                mis: mis as u32,
+                mis: mis.code(),
                 neighbours,
                 confidence_cap: confidence_cap.unwrap_or(0.0),
                 ..base
@@ -105,41 +89,14 @@ impl PassParams {
     }
 }
 
-/// The diag `w` of a pixel whose loops the device cut short (`restir/glsl/loop_budget.glsl`).
-pub const LOOP_BUDGET_CUT: u32 = 0xFF;
-/// The diag `w` of a pixel with a BSSRDF probe of more than [`KEPT_HITS`] hits
-/// (`pass_candidates.glsl`).
-pub const HIT_OVERFLOW: u32 = 0xFE;
-/// Hits per probe that the pass shaders keep (their `BVH_MAX_HITS`).
-pub const KEPT_HITS: u32 = 16;
-
 /// Decodes a pass's per-pixel error code (diag `w`; 0 = none, [`LOOP_BUDGET_CUT`] and
-/// [`HIT_OVERFLOW`] are handled before). Low byte: 1–4 an
-/// [`InvalidCandidate`] (`Weight`, `Target`, `Confidence`, `Ucw`), 5 `TooManyDomains`, 6
-/// `BadPdf`, 7 `BadJacobian`; bits 8–15: the domain index `source` of a resampling error. The
-/// offending value is not carried (it reads as NaN); a code outside this table is reported as
-/// a `Weight(NaN)` of the pass.
+/// [`HIT_OVERFLOW`] are handled before) with [`ResampleError::from_gpu`]. A code outside the
+/// contract's `ResampleCode`s is reported as a `Weight(NaN)` of the pass.
 pub fn decode_error(code: u32) -> ResampleError {
-    let source = ((code >> 8) & 0xff) as usize;
-    let nan = f32::NAN;
-    let candidate = |kind| match kind {
-        2 => InvalidCandidate::Target(nan),
-        3 => InvalidCandidate::Confidence(nan),
-        4 => InvalidCandidate::Ucw(nan),
-        _ => InvalidCandidate::Weight(nan),
-    };
-    match code & 0xff {
-        5 => ResampleError::TooManyDomains(source),
-        6 => ResampleError::BadPdf(nan),
-        7 => ResampleError::BadJacobian {
-            source,
-            jacobian: nan,
-        },
-        kind => ResampleError::Candidate {
-            source,
-            error: candidate(kind),
-        },
-    }
+    ResampleError::from_gpu(code).unwrap_or(ResampleError::Candidate {
+        source: ((code >> 8) & 0xff) as usize,
+        error: InvalidCandidate::Weight(f32::NAN),
+    })
 }
 
 /// A Vulkan device with its kernels and the last uploaded scene, reused across runs.
@@ -519,7 +476,7 @@ impl<'a> FrameRun<'a> {
                     (0, count) => {
                         return Err(PipelineError::Vulkan(VulkanError::TooManyHits {
                             shader,
-                            kept: KEPT_HITS,
+                            kept: KEPT_HITS as u32,
                             count,
                         }));
                     }
@@ -896,24 +853,16 @@ mod tests {
     }
 
     #[test]
-    fn error_codes_decode_to_the_cpu_errors() {
-        assert!(matches!(
-            decode_error(0x0204),
-            ResampleError::Candidate {
-                source: 2,
-                error: InvalidCandidate::Ucw(_)
-            }
-        ));
+    fn unknown_error_codes_are_errors_too() {
         assert!(matches!(
             decode_error(0x0107),
             ResampleError::BadJacobian { source: 1, .. }
         ));
-        assert!(matches!(decode_error(6), ResampleError::BadPdf(_)));
         assert!(matches!(
-            decode_error(2),
+            decode_error(0x0309),
             ResampleError::Candidate {
-                source: 0,
-                error: InvalidCandidate::Target(_)
+                source: 3,
+                error: InvalidCandidate::Weight(_)
             }
         ));
     }

@@ -25,7 +25,7 @@ use super::random_walk::{RANDOM_WALK, render_random_walk, scene_media};
 use super::scene::{GBUFFER, GpuScene};
 use super::shaders::Shader;
 use super::timing::Timestamps;
-use super::{FrameInput, Kernel, PT, SHADE, groups_for, render_pt};
+use super::{FrameInput, Kernel, PT, groups_for, render_pt};
 use crate::candidates::ProbeCounts;
 use crate::contract::{
     FrameParams, GpuPixel, HIT_OVERFLOW, KEPT_HITS, LOOP_BUDGET_CUT, PassParams,
@@ -37,6 +37,8 @@ use crate::reuse::ShiftCounts;
 use crate::{PassTiming, PipelineError, Run, RunConfig};
 use shifts::PixelReservoir;
 use shifts::preset::{PassSpec, Preset};
+
+use crate::plan::{Plan, Resource, Rotation, Step};
 
 /// `pass_candidates.glsl` ([`PassKernel::Candidates`]).
 pub const CANDIDATES: Shader = Shader::of(PassKernel::Candidates);
@@ -249,21 +251,12 @@ impl Renderer {
         preset: &Preset,
         config: &RunConfig,
     ) -> Result<Run, PipelineError> {
-        let mut shaders = vec![GBUFFER, SHADE];
-        shaders.extend(preset.passes.iter().map(shader_of));
+        let plan = Plan::lower(preset);
+        let shaders: Vec<Shader> = plan.steps.iter().map(|s| Shader::of(s.kernel)).collect();
         self.prepare(&shaders)?;
         self.upload(scene)?;
         let gpu = self.gpu_scene()?;
-        FrameRun::new(&self.context, gpu, &self.kernels, scene, preset, config)?.run(scene)
-    }
-}
-
-/// The shader of a pass.
-fn shader_of(pass: &PassSpec) -> Shader {
-    match pass {
-        PassSpec::Candidates { .. } => CANDIDATES,
-        PassSpec::Temporal { .. } => TEMPORAL,
-        PassSpec::Spatial { .. } => SPATIAL,
+        FrameRun::new(&self.context, gpu, &self.kernels, scene, &plan, config)?.run(scene)
     }
 }
 
@@ -304,7 +297,9 @@ struct FrameRun<'a> {
     context: &'a Context,
     scene: &'a GpuScene,
     kernels: &'a HashMap<&'static str, Kernel>,
-    preset: &'a Preset,
+    plan: &'a Plan,
+    /// [`Plan::waits`]: where a step waits for the steps before it (a barrier).
+    waits: Vec<bool>,
     config: &'a RunConfig,
     width: u32,
     height: u32,
@@ -318,16 +313,14 @@ struct FrameRun<'a> {
     /// Image, then each pass's diag, then the final reservoirs.
     readback: Allocation,
     descriptor_pool: vk::DescriptorPool,
-    /// Recorded frames by (current G-buffer, previous final reservoir buffer).
-    recorded: HashMap<(usize, usize), Recorded>,
+    /// Recorded frames by (current G-buffer, reservoir rotation).
+    recorded: HashMap<(usize, Rotation), Recorded>,
 }
 
 /// A recorded frame.
 struct Recorded {
     cb: vk::CommandBuffer,
     timestamps: Option<Timestamps>,
-    /// The reservoir buffer holding the frame's final reservoirs.
-    final_reservoirs: usize,
 }
 
 impl<'a> FrameRun<'a> {
@@ -336,15 +329,16 @@ impl<'a> FrameRun<'a> {
         scene_gpu: &'a GpuScene,
         kernels: &'a HashMap<&'static str, Kernel>,
         scene: &Scene,
-        preset: &'a Preset,
+        plan: &'a Plan,
         config: &'a RunConfig,
     ) -> Result<FrameRun<'a>, VulkanError> {
         let (width, height) = (scene.camera.width(), scene.camera.height());
         let n = width as usize * height as usize;
         let zeroed = |bytes| Buffer::zeroed(context, bytes);
         let reservoir_bytes = n * PixelReservoir::BYTES;
-        let passes = preset.passes.len();
-        let per_frame = 6 * (passes + 2) as u32;
+        let passes = plan.passes().count();
+        // At most six recorded frames (two G-buffers × three rotations), one set per step.
+        let per_frame = 6 * plan.steps.len() as u32;
         let sizes = [vk::DescriptorPoolSize::default()
             .ty(vk::DescriptorType::STORAGE_BUFFER)
             .descriptor_count(per_frame * 16)];
@@ -362,7 +356,8 @@ impl<'a> FrameRun<'a> {
             context,
             scene: scene_gpu,
             kernels,
-            preset,
+            plan,
+            waits: plan.waits(),
             config,
             width,
             height,
@@ -407,28 +402,27 @@ impl<'a> FrameRun<'a> {
     fn run(&mut self, scene: &Scene) -> Result<Run, PipelineError> {
         let n = self.pixels();
         let config = *self.config;
-        let passes = self.preset.passes.len();
-        let reuse_labels = self
-            .preset
-            .passes
-            .iter()
-            .filter(|p| p.shift().is_some())
-            .map(PassSpec::label);
+        let plan = self.plan;
+        let passes = plan.passes().count();
+        let reuse_labels = plan
+            .passes()
+            .filter(|(_, step)| step.spec.is_some_and(|s| s.shift().is_some()))
+            .map(|(_, step)| step.label.clone());
         let mut counters = config
             .collect_diagnostics
             .then(|| Counters::new(self.width, self.height, reuse_labels.collect()));
-        let mut seconds = vec![0.0f64; passes + 2];
+        let mut seconds = vec![0.0f64; plan.steps.len()];
         let mut timed = true;
         let mut frames = Vec::with_capacity(config.frames as usize);
         let mut nan_count = 0;
-        let mut previous_final = 2;
+        let mut rotation = Rotation::FIRST;
         for frame in 0..config.frames {
             let params = FrameParams::new(scene, frame, frame.checked_sub(1), config.seed);
             self.params_staging
                 .mapped_mut()
                 .ok_or(VulkanError::NoMemoryType)?[..size_of::<FrameParams>()]
                 .copy_from_slice(bytemuck::bytes_of(&params));
-            let key = ((frame % 2) as usize, previous_final);
+            let key = ((frame % 2) as usize, rotation);
             if !self.recorded.contains_key(&key) {
                 let recorded = self.record(key)?;
                 self.recorded.insert(key, recorded);
@@ -453,7 +447,7 @@ impl<'a> FrameRun<'a> {
                 }
                 None => timed = false,
             }
-            previous_final = recorded.final_reservoirs;
+            rotation = rotation.next(plan);
             let bytes = self.readback.mapped().ok_or(VulkanError::NoMemoryType)?;
             let texels: &[[f32; 4]] = bytemuck::cast_slice(&bytes[..n * TEXEL]);
             nan_count += texels.iter().filter(|t| t[3] != 0.0).count() as u64;
@@ -465,80 +459,12 @@ impl<'a> FrameRun<'a> {
                     .map(|t| glam::Vec3::new(t[0], t[1], t[2]))
                     .collect(),
             });
-            let mut reuse_pass = 0;
-            for (index, pass) in self.preset.passes.iter().enumerate() {
+            for (index, step) in plan.passes() {
                 let start = (index + 1) * n * TEXEL;
                 let diag: &[[u32; 4]] = bytemuck::cast_slice(&bytes[start..start + n * TEXEL]);
-                let pixels_with = |code| diag.iter().filter(|d| d[3] == code).count() as u64;
-                let shader = shader_of(pass).name;
-                match (pixels_with(LOOP_BUDGET_CUT), pixels_with(HIT_OVERFLOW)) {
-                    (0, 0) => {}
-                    (0, count) => {
-                        return Err(PipelineError::Vulkan(VulkanError::TooManyHits {
-                            shader,
-                            kept: KEPT_HITS as u32,
-                            count,
-                        }));
-                    }
-                    (count, _) => {
-                        return Err(PipelineError::Vulkan(VulkanError::LoopsCut {
-                            shader,
-                            count,
-                        }));
-                    }
-                }
-                if let Some(pixel) = diag.iter().position(|d| d[3] != 0) {
-                    let error = decode_error(diag[pixel][3]);
-                    let pixel = pixel as u32;
-                    return Err(match (pass, error) {
-                        (PassSpec::Candidates { .. }, ResampleError::Candidate { error, .. }) => {
-                            PipelineError::Candidate {
-                                frame,
-                                pixel,
-                                error,
-                            }
-                        }
-                        (_, error) => PipelineError::Resample {
-                            frame,
-                            pass: index,
-                            pixel,
-                            error,
-                        },
-                    });
-                }
-                let Some(counters) = &mut counters else {
-                    continue;
-                };
-                if pass.shift().is_some() {
-                    let shifts: Vec<ShiftCounts> = diag
-                        .iter()
-                        .map(|d| ShiftCounts {
-                            shifted: d[0],
-                            failed: d[1],
-                            improved: d[2],
-                        })
-                        .collect();
-                    counters.add_shifts(reuse_pass, &shifts);
-                    reuse_pass += 1;
-                } else {
-                    let probes: Vec<_> = diag
-                        .iter()
-                        .map(|d| {
-                            let choice = match d[2] {
-                                1 => HybridChoice::Reconnection,
-                                2 => HybridChoice::Delayed,
-                                _ => HybridChoice::None,
-                            };
-                            (
-                                ProbeCounts {
-                                    probes: d[0],
-                                    hits: d[1],
-                                },
-                                choice,
-                            )
-                        })
-                        .collect();
-                    counters.add_candidates(&probes);
+                check_diag(frame, index, step, diag)?;
+                if let Some(counters) = &mut counters {
+                    add_diag(counters, index, step, diag);
                 }
             }
         }
@@ -547,11 +473,13 @@ impl<'a> FrameRun<'a> {
         let reservoirs: &[PixelReservoir] =
             bytemuck::cast_slice(&bytes[start..start + n * PixelReservoir::BYTES]);
         let timings = if timed {
-            std::iter::once("gbuffer".to_string())
-                .chain(self.preset.passes.iter().map(PassSpec::label))
-                .chain(std::iter::once("shade".to_string()))
+            plan.steps
+                .iter()
                 .zip(seconds)
-                .map(|(label, seconds)| PassTiming { label, seconds })
+                .map(|(step, seconds)| PassTiming {
+                    label: step.label.clone(),
+                    seconds,
+                })
                 .collect()
         } else {
             Vec::new()
@@ -565,13 +493,26 @@ impl<'a> FrameRun<'a> {
         })
     }
 
-    /// Records the frame whose current G-buffer is `gpixels[current]` and whose previous final
-    /// reservoirs are `reservoirs[previous]`.
-    fn record(&self, (current, previous): (usize, usize)) -> Result<Recorded, VulkanError> {
+    /// The buffer that plays `resource` in the frame whose G-buffer is `gpixels[current]` and
+    /// whose reservoir buffers rotate as `rotation`.
+    fn buffer(&self, resource: Resource, current: usize, rotation: Rotation) -> &Buffer {
+        match resource {
+            Resource::GBuffer => &self.gpixels[current],
+            Resource::PreviousGBuffer => &self.gpixels[1 - current],
+            Resource::Reservoirs(slot) => &self.reservoirs[rotation.buffer(slot)],
+            Resource::Diag(pass) => &self.diags[pass],
+            Resource::Image => &self.image,
+        }
+    }
+
+    /// Records the frame whose current G-buffer is `gpixels[current]` and whose reservoir
+    /// buffers rotate as `rotation`: the plan's steps, each bound to the frame's buffers in its
+    /// kernel's binding order, a barrier where [`Plan::waits`] says, then the read-back copies.
+    fn record(&self, (current, rotation): (usize, Rotation)) -> Result<Recorded, VulkanError> {
         let device = &self.context.shared.device;
         let n = self.pixels();
-        let passes = self.preset.passes.len();
-        let timestamps = Timestamps::new(self.context, passes as u32 + 2)?;
+        let passes = self.plan.passes().count();
+        let timestamps = Timestamps::new(self.context, self.plan.steps.len() as u32)?;
         let cb = {
             let submit = self.context.shared.lock();
             // SAFETY: allocation from the pool while its lock is held.
@@ -586,14 +527,7 @@ impl<'a> FrameRun<'a> {
             .map_err(api("vkAllocateCommandBuffers"))?[0]
         };
         // The command buffer is freed with the pool's other buffers in `Drop` from here on.
-        let mut recorded = Recorded {
-            cb,
-            timestamps,
-            final_reservoirs: previous,
-        };
-        let work: Vec<usize> = (0..3).filter(|&i| i != previous).collect();
-        let gcur = &self.gpixels[current];
-        let gprev = &self.gpixels[1 - current];
+        let recorded = Recorded { cb, timestamps };
         let groups = groups_for(n as u32, 64);
         // SAFETY: `cb` is recorded here from live objects of this run, which outlive it.
         unsafe {
@@ -636,55 +570,40 @@ impl<'a> FrameRun<'a> {
                     vk::AccessFlags::SHADER_READ,
                 ),
             );
-            let push = PassParams::new(0, None, false);
-            self.dispatch(
-                cb,
-                &recorded,
-                0,
-                GBUFFER,
-                &self.bindings(&[gcur]),
-                &push,
-                groups,
-            )?;
-            let mut input = previous;
-            for (index, pass) in self.preset.passes.iter().enumerate() {
-                let output = work[index % 2];
-                let diag = &self.diags[index];
-                let rin = &self.reservoirs[input];
-                let rout = &self.reservoirs[output];
-                let rprev = &self.reservoirs[previous];
-                let buffers = match pass {
-                    PassSpec::Candidates { .. } => self.bindings(&[gcur, rout, diag]),
-                    PassSpec::Temporal { .. } => {
-                        self.bindings(&[gcur, rin, gprev, rprev, rout, diag])
-                    }
-                    PassSpec::Spatial { .. } => self.bindings(&[gcur, rin, rout, diag]),
-                };
-                let push =
-                    PassParams::new(index as u32, Some(pass), self.config.collect_diagnostics);
+            for (section, (step, wait)) in self.plan.steps.iter().zip(&self.waits).enumerate() {
+                if *wait {
+                    barrier(
+                        device,
+                        cb,
+                        (
+                            vk::PipelineStageFlags::COMPUTE_SHADER,
+                            vk::AccessFlags::SHADER_WRITE,
+                        ),
+                        (
+                            vk::PipelineStageFlags::COMPUTE_SHADER,
+                            vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE,
+                        ),
+                    );
+                }
+                let mut buffers: Vec<&Buffer> = self.scene.buffers().to_vec();
+                buffers.push(&self.params);
+                buffers.extend(
+                    step.buffers
+                        .iter()
+                        .map(|&(resource, _)| self.buffer(resource, current, rotation)),
+                );
+                let push = step.params(self.config.collect_diagnostics);
+                let shader = Shader::of(step.kernel);
                 self.dispatch(
                     cb,
                     &recorded,
-                    index as u32 + 1,
-                    shader_of(pass),
+                    section as u32,
+                    shader,
                     &buffers,
                     &push,
                     groups,
                 )?;
-                input = output;
             }
-            recorded.final_reservoirs = input;
-            let push = PassParams::new(passes as u32, None, false);
-            let buffers = self.bindings(&[gcur, &self.reservoirs[input], &self.image]);
-            self.dispatch(
-                cb,
-                &recorded,
-                passes as u32 + 1,
-                SHADE,
-                &buffers,
-                &push,
-                groups,
-            )?;
             barrier(
                 device,
                 cb,
@@ -707,7 +626,7 @@ impl<'a> FrameRun<'a> {
                 copy(diag, (index as u64 + 1) * texels, texels);
             }
             copy(
-                &self.reservoirs[input],
+                &self.reservoirs[rotation.buffer(self.plan.final_reservoirs)],
                 (passes as u64 + 1) * texels,
                 (n * PixelReservoir::BYTES) as u64,
             );
@@ -727,15 +646,7 @@ impl<'a> FrameRun<'a> {
         Ok(recorded)
     }
 
-    /// The scene's buffers (0–8: its eight, then `FrameParams`), then `rest`.
-    fn bindings<'b>(&'b self, rest: &[&'b Buffer]) -> Vec<&'b Buffer> {
-        let mut all: Vec<&Buffer> = self.scene.buffers().to_vec();
-        all.push(&self.params);
-        all.extend_from_slice(rest);
-        all
-    }
-
-    /// Records one timed pass: bind, push, dispatch, then a barrier for the next pass.
+    /// Records one timed step: bind, push, dispatch.
     #[allow(clippy::too_many_arguments)]
     fn dispatch(
         &self,
@@ -791,21 +702,93 @@ impl<'a> FrameRun<'a> {
             if let Some(t) = &recorded.timestamps {
                 t.end(cb, section);
             }
-            barrier(
-                device,
-                cb,
-                (
-                    vk::PipelineStageFlags::COMPUTE_SHADER,
-                    vk::AccessFlags::SHADER_WRITE,
-                ),
-                (
-                    vk::PipelineStageFlags::COMPUTE_SHADER,
-                    vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE,
-                ),
-            );
         }
         Ok(())
     }
+}
+
+/// The error a pass's diag reports, if any: loops the device cut short
+/// ([`LOOP_BUDGET_CUT`]), probes with more hits than kept ([`HIT_OVERFLOW`]), or the first
+/// pixel's resampling error ([`decode_error`]).
+fn check_diag(
+    frame: u32,
+    pass: usize,
+    step: &Step,
+    diag: &[[u32; 4]],
+) -> Result<(), PipelineError> {
+    let pixels_with = |code| diag.iter().filter(|d| d[3] == code).count() as u64;
+    let shader = step.kernel.name();
+    match (pixels_with(LOOP_BUDGET_CUT), pixels_with(HIT_OVERFLOW)) {
+        (0, 0) => {}
+        (0, count) => {
+            return Err(PipelineError::Vulkan(VulkanError::TooManyHits {
+                shader,
+                kept: KEPT_HITS as u32,
+                count,
+            }));
+        }
+        (count, _) => {
+            return Err(PipelineError::Vulkan(VulkanError::LoopsCut {
+                shader,
+                count,
+            }));
+        }
+    }
+    let Some(pixel) = diag.iter().position(|d| d[3] != 0) else {
+        return Ok(());
+    };
+    let pixel = pixel as u32;
+    Err(match (step.kernel, decode_error(diag[pixel as usize][3])) {
+        (PassKernel::Candidates, ResampleError::Candidate { error, .. }) => {
+            PipelineError::Candidate {
+                frame,
+                pixel,
+                error,
+            }
+        }
+        (_, error) => PipelineError::Resample {
+            frame,
+            pass,
+            pixel,
+            error,
+        },
+    })
+}
+
+/// Adds a pass's diag counters: shifted / failed / improved of a reuse pass, or probes, hits
+/// and the hybrid choice (1 reconnection, 2 delayed) of the candidates pass.
+fn add_diag(counters: &mut Counters, pass: usize, step: &Step, diag: &[[u32; 4]]) {
+    if step.spec.is_some_and(|s| s.shift().is_some()) {
+        let shifts: Vec<ShiftCounts> = diag
+            .iter()
+            .map(|d| ShiftCounts {
+                shifted: d[0],
+                failed: d[1],
+                improved: d[2],
+            })
+            .collect();
+        // Candidates are pass 0 and every later pass reuses (Preset::validate).
+        counters.add_shifts(pass - 1, &shifts);
+        return;
+    }
+    let probes: Vec<_> = diag
+        .iter()
+        .map(|d| {
+            let choice = match d[2] {
+                1 => HybridChoice::Reconnection,
+                2 => HybridChoice::Delayed,
+                _ => HybridChoice::None,
+            };
+            (
+                ProbeCounts {
+                    probes: d[0],
+                    hits: d[1],
+                },
+                choice,
+            )
+        })
+        .collect();
+    counters.add_candidates(&probes);
 }
 
 impl Drop for FrameRun<'_> {

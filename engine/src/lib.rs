@@ -16,6 +16,7 @@ pub mod candidates;
 pub mod contract;
 mod cpu;
 pub mod diagnostics;
+pub mod hash;
 pub mod image;
 pub mod plan;
 /// `purpose` tags of the pipeline's random streams. Every random number of a pass comes from

@@ -71,11 +71,7 @@ impl ReferenceKey {
 }
 
 /// A stable 64-bit FNV-1a hash (file-scene cache keys).
-pub fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
-        (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
-    })
-}
+pub use engine::hash::fnv1a;
 
 /// Checks that `reference` (read from `path`) is of `width × height` at `frame`: a reference
 /// of another size or frame is an input error, not a silent mismatch.

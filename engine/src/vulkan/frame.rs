@@ -1,44 +1,33 @@
-//! The ReSTIR frame pipeline on the GPU (DESIGN §6): the twin of `cpu::run`.
+//! One run of a preset's [`Plan`] on the device: the twin of `cpu::run`.
 //!
-//! A [`Renderer`] holds the [`Context`], the compiled kernels and the uploaded [`GpuScene`]
-//! across runs (creating a pipeline on lavapipe compiles LLVM code: it is done once per shader).
-//! A run allocates its buffers once and records each distinct frame — G-buffer, the preset's
-//! passes, shade, then read-back copies — into a command buffer once; frames are re-submitted.
-//! Frames differ only in which buffers play "current" and "previous" (the G-buffer alternates,
-//! the final reservoir buffer rotates among three), so a run records at most six command
-//! buffers. `FrameParams` is copied from a staging buffer at the start of every frame, and a
-//! timestamp pair around each pass gives [`Run::timings`] in GPU seconds.
+//! A run allocates its buffers once and records each distinct frame — the plan's steps, each
+//! bound to the frame's buffers in its kernel's binding order with a barrier where
+//! [`Plan::waits`] says, then read-back copies — into a command buffer once; frames are
+//! re-submitted. Frames differ only in which buffers play "current" and "previous" (the
+//! G-buffer alternates, the reservoir buffers rotate as [`Rotation`] says), so a run records at
+//! most six command buffers. `FrameParams` is copied from a staging buffer at the start of
+//! every frame, and a timestamp pair around each step gives [`Run::timings`] in GPU seconds.
 
 use std::collections::HashMap;
-use std::collections::hash_map::Entry;
 
 use ash::vk;
-use restir::resample::ResampleError;
-use restir::reservoir::InvalidCandidate;
 use sss::scene::Scene;
 
 use super::compute::bind_buffers;
+use super::decode::{add_diag, check_diag};
 use super::device::Context;
 use super::error::{VulkanError, api};
 use super::memory::{Allocation, Buffer, Placement, barrier};
-use super::random_walk::{RANDOM_WALK, render_random_walk, scene_media};
-use super::scene::{GBUFFER, GpuScene};
+use super::scene::GpuScene;
 use super::shaders::Shader;
 use super::timing::Timestamps;
-use super::{FrameInput, Kernel, PT, groups_for, render_pt};
-use crate::candidates::ProbeCounts;
-use crate::contract::{
-    FrameParams, GpuPixel, HIT_OVERFLOW, KEPT_HITS, LOOP_BUDGET_CUT, PassParams,
-};
-use crate::diagnostics::{Counters, HybridChoice};
+use super::{Kernel, groups_for};
+use crate::contract::{FrameParams, GpuPixel, PassParams};
+use crate::diagnostics::Counters;
 use crate::image::Image;
-use crate::plan::PassKernel;
-use crate::reuse::ShiftCounts;
+use crate::plan::{PassKernel, Plan, Resource, Rotation};
 use crate::{PassTiming, PipelineError, Run, RunConfig};
 use shifts::PixelReservoir;
-use shifts::preset::{PassSpec, Preset};
-
-use crate::plan::{Plan, Resource, Rotation, Step};
 
 /// `pass_candidates.glsl` ([`PassKernel::Candidates`]).
 pub const CANDIDATES: Shader = Shader::of(PassKernel::Candidates);
@@ -47,253 +36,11 @@ pub const TEMPORAL: Shader = Shader::of(PassKernel::Temporal);
 /// `pass_spatial.glsl` ([`PassKernel::Spatial`]).
 pub const SPATIAL: Shader = Shader::of(PassKernel::Spatial);
 
-impl PassParams {
-    /// The push constants of pass `pass` of a preset (`spec = None`: G-buffer or shade).
-    pub fn new(pass: u32, spec: Option<&PassSpec>, collect_diagnostics: bool) -> PassParams {
-        let base = PassParams {
-            pass,
-            collect_diagnostics: collect_diagnostics as u32,
-            ..PassParams::default()
-        };
-        match spec {
-            None => base,
-            Some(&PassSpec::Candidates {
-                bssrdf_samples,
-                shared_light,
-            }) => PassParams {
-                bssrdf_samples,
-                shared_light: shared_light as u32,
-                ..base
-            },
-            Some(&PassSpec::Temporal {
-                shift,
-                mis,
-                confidence_cap,
-            }) => PassParams {
-                shift: shift.code(),
-                mis: mis.code(),
-                confidence_cap,
-                ..base
-            },
-            Some(&PassSpec::Spatial {
-                shift,
-                mis,
-                neighbours,
-                confidence_cap,
-            }) => PassParams {
-                shift: shift.code(),
-                mis: mis.code(),
-                neighbours,
-                confidence_cap: confidence_cap.unwrap_or(0.0),
-                ..base
-            },
-        }
-    }
-}
-
-/// Decodes a pass's per-pixel error code (diag `w`; 0 = none, [`LOOP_BUDGET_CUT`] and
-/// [`HIT_OVERFLOW`] are handled before) with [`ResampleError::from_gpu`]. A code outside the
-/// contract's `ResampleCode`s is reported as a `Weight(NaN)` of the pass.
-pub fn decode_error(code: u32) -> ResampleError {
-    ResampleError::from_gpu(code).unwrap_or(ResampleError::Candidate {
-        source: ((code >> 8) & 0xff) as usize,
-        error: InvalidCandidate::Weight(f32::NAN),
-    })
-}
-
-/// A Vulkan device with its kernels and the last uploaded scene, reused across runs.
-pub struct Renderer {
-    context: Context,
-    kernels: HashMap<&'static str, Kernel>,
-    /// The uploaded scene and the fingerprint of the [`Scene`] it came from.
-    scene: Option<(u64, GpuScene)>,
-}
-
-impl Renderer {
-    /// A renderer on `context`; kernels are built on first use.
-    pub fn new(context: Context) -> Renderer {
-        Renderer {
-            context,
-            kernels: HashMap::new(),
-            scene: None,
-        }
-    }
-
-    /// The device the renderer runs on.
-    pub fn context(&self) -> &Context {
-        &self.context
-    }
-
-    /// Builds (once) the kernels of `shaders`.
-    pub fn prepare(&mut self, shaders: &[Shader]) -> Result<(), VulkanError> {
-        for &shader in shaders {
-            if let Entry::Vacant(slot) = self.kernels.entry(shader.name) {
-                slot.insert(Kernel::for_shader(&self.context, shader)?);
-            }
-        }
-        Ok(())
-    }
-
-    /// Uploads `scene` unless the cached upload came from an identical scene (cameras aside:
-    /// the camera travels in [`FrameParams`]).
-    pub fn upload(&mut self, scene: &Scene) -> Result<(), VulkanError> {
-        let key = fingerprint(scene);
-        if self.scene.as_ref().is_none_or(|(k, _)| *k != key) {
-            self.scene = None;
-            self.scene = Some((key, GpuScene::upload(&self.context, scene)?));
-        }
-        Ok(())
-    }
-
-    /// The uploaded scene (after [`Renderer::upload`]).
-    pub fn gpu_scene(&self) -> Result<&GpuScene, VulkanError> {
-        self.scene
-            .as_ref()
-            .map(|(_, s)| s)
-            .ok_or_else(|| VulkanError::Binding("no scene was uploaded".into()))
-    }
-
-    /// The context, a built kernel and the uploaded scene, borrowed together.
-    pub fn parts(
-        &mut self,
-        shader: Shader,
-    ) -> Result<(&mut Context, &Kernel, &GpuScene), VulkanError> {
-        self.prepare(&[shader])?;
-        let scene = self
-            .scene
-            .as_ref()
-            .map(|(_, s)| s)
-            .ok_or_else(|| VulkanError::Binding("no scene was uploaded".into()))?;
-        Ok((&mut self.context, &self.kernels[shader.name], scene))
-    }
-
-    /// The G-buffer of `frame` of `scene`'s trajectory on the device (uploading the scene if
-    /// needed), with the frame's parameter buffer: the input of the memoryless methods.
-    pub fn gbuffer(
-        &mut self,
-        scene: &Scene,
-        frame: u32,
-        seed: u64,
-    ) -> Result<(Buffer, Buffer), VulkanError> {
-        self.upload(scene)?;
-        let n = pixel_count(scene);
-        let params = FrameParams::new(scene, frame, frame.checked_sub(1), seed);
-        let params = Buffer::from_slice(&self.context, &[params])?;
-        let gpixels = Buffer::zeroed(&self.context, n * size_of::<GpuPixel>())?;
-        let (context, kernel, gpu) = self.parts(GBUFFER)?;
-        let mut buffers: Vec<&Buffer> = gpu.buffers().to_vec();
-        buffers.extend([&params, &gpixels]);
-        let push = PassParams::new(0, None, false);
-        context.dispatch(
-            kernel,
-            &buffers,
-            bytemuck::bytes_of(&push),
-            [groups_for(n as u32, GBUFFER.local_size), 1, 1],
-        )?;
-        Ok((gpixels, params))
-    }
-
-    /// The `pt:spp` method at `frame`: the image and the samples left out of the means.
-    pub fn pt(
-        &mut self,
-        scene: &Scene,
-        frame: u32,
-        seed: u64,
-        spp: u32,
-    ) -> Result<(Image, u64), VulkanError> {
-        let (gbuffer, params) = self.gbuffer(scene, frame, seed)?;
-        let (context, kernel, gpu) = self.parts(PT)?;
-        let input = FrameInput {
-            scene: gpu,
-            params: &params,
-            gbuffer: &gbuffer,
-            width: scene.camera.width(),
-            height: scene.camera.height(),
-        };
-        let out = render_pt(context, kernel, &input, spp)?;
-        Ok((out.image, out.left_out))
-    }
-
-    /// The `random-walk:spp` method at `frame`: the image and the samples left out.
-    pub fn random_walk(
-        &mut self,
-        scene: &Scene,
-        frame: u32,
-        seed: u64,
-        spp: u32,
-    ) -> Result<(Image, u64), PipelineError> {
-        let media = scene_media(scene)?;
-        let (gbuffer, params) = self.gbuffer(scene, frame, seed)?;
-        let (context, kernel, gpu) = self.parts(RANDOM_WALK)?;
-        let input = FrameInput {
-            scene: gpu,
-            params: &params,
-            gbuffer: &gbuffer,
-            width: scene.camera.width(),
-            height: scene.camera.height(),
-        };
-        let out = render_random_walk(context, kernel, &input, &media, spp)?;
-        if out.cut > 0 {
-            return Err(PipelineError::Vulkan(VulkanError::LoopsCut {
-                shader: RANDOM_WALK.name,
-                count: out.cut,
-            }));
-        }
-        Ok((out.image.image, out.image.left_out))
-    }
-
-    /// Renders `config.frames` frames of `scene` with `preset` (validated by the caller) on
-    /// the device: the GPU twin of [`crate::run`]. `Run::timings` are GPU seconds from the
-    /// timestamps; they are empty on a queue that writes no timestamps.
-    pub fn run(
-        &mut self,
-        scene: &Scene,
-        preset: &Preset,
-        config: &RunConfig,
-    ) -> Result<Run, PipelineError> {
-        let plan = Plan::lower(preset);
-        let shaders: Vec<Shader> = plan.steps.iter().map(|s| Shader::of(s.kernel)).collect();
-        self.prepare(&shaders)?;
-        self.upload(scene)?;
-        let gpu = self.gpu_scene()?;
-        FrameRun::new(&self.context, gpu, &self.kernels, scene, &plan, config)?.run(scene)
-    }
-}
-
-fn pixel_count(scene: &Scene) -> usize {
-    scene.camera.width() as usize * scene.camera.height() as usize
-}
-
-/// FNV-1a over what [`GpuScene`] is built from: materials, objects, lights, every triangle's
-/// vertices, shading normals and object. Two scenes with the same fingerprint upload the same
-/// buffers.
-fn fingerprint(scene: &Scene) -> u64 {
-    let mut hash = 0xcbf2_9ce4_8422_2325u64;
-    let mut eat = |bytes: &[u8]| {
-        for &b in bytes {
-            hash = (hash ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
-        }
-    };
-    eat(format!("{:?}{:?}{:?}", scene.materials, scene.objects, scene.lights).as_bytes());
-    let geometry = &scene.geometry;
-    for prim in 0..geometry.triangle_count() {
-        for v in geometry.vertices(prim) {
-            eat(bytemuck::bytes_of(&v.to_array()));
-        }
-        for bary in [[0.0f32, 0.0], [1.0, 0.0], [0.0, 1.0]] {
-            let n = geometry.shading_normal(prim, glam::Vec2::from_array(bary));
-            eat(bytemuck::bytes_of(&n.to_array()));
-        }
-        eat(&geometry.object_of(prim).to_le_bytes());
-    }
-    hash
-}
-
 /// Bytes per pixel of a diag buffer (`uvec4`) and of the shaded image (`vec4`).
 const TEXEL: usize = 16;
 
 /// One run's buffers, recorded frames and read-back staging.
-struct FrameRun<'a> {
+pub(super) struct FrameRun<'a> {
     context: &'a Context,
     scene: &'a GpuScene,
     kernels: &'a HashMap<&'static str, Kernel>,
@@ -324,7 +71,7 @@ struct Recorded {
 }
 
 impl<'a> FrameRun<'a> {
-    fn new(
+    pub(super) fn new(
         context: &'a Context,
         scene_gpu: &'a GpuScene,
         kernels: &'a HashMap<&'static str, Kernel>,
@@ -399,7 +146,7 @@ impl<'a> FrameRun<'a> {
     }
 
     /// Runs every frame and assembles the [`Run`].
-    fn run(&mut self, scene: &Scene) -> Result<Run, PipelineError> {
+    pub(super) fn run(&mut self, scene: &Scene) -> Result<Run, PipelineError> {
         let n = self.pixels();
         let config = *self.config;
         let plan = self.plan;
@@ -707,90 +454,6 @@ impl<'a> FrameRun<'a> {
     }
 }
 
-/// The error a pass's diag reports, if any: loops the device cut short
-/// ([`LOOP_BUDGET_CUT`]), probes with more hits than kept ([`HIT_OVERFLOW`]), or the first
-/// pixel's resampling error ([`decode_error`]).
-fn check_diag(
-    frame: u32,
-    pass: usize,
-    step: &Step,
-    diag: &[[u32; 4]],
-) -> Result<(), PipelineError> {
-    let pixels_with = |code| diag.iter().filter(|d| d[3] == code).count() as u64;
-    let shader = step.kernel.name();
-    match (pixels_with(LOOP_BUDGET_CUT), pixels_with(HIT_OVERFLOW)) {
-        (0, 0) => {}
-        (0, count) => {
-            return Err(PipelineError::Vulkan(VulkanError::TooManyHits {
-                shader,
-                kept: KEPT_HITS as u32,
-                count,
-            }));
-        }
-        (count, _) => {
-            return Err(PipelineError::Vulkan(VulkanError::LoopsCut {
-                shader,
-                count,
-            }));
-        }
-    }
-    let Some(pixel) = diag.iter().position(|d| d[3] != 0) else {
-        return Ok(());
-    };
-    let pixel = pixel as u32;
-    Err(match (step.kernel, decode_error(diag[pixel as usize][3])) {
-        (PassKernel::Candidates, ResampleError::Candidate { error, .. }) => {
-            PipelineError::Candidate {
-                frame,
-                pixel,
-                error,
-            }
-        }
-        (_, error) => PipelineError::Resample {
-            frame,
-            pass,
-            pixel,
-            error,
-        },
-    })
-}
-
-/// Adds a pass's diag counters: shifted / failed / improved of a reuse pass, or probes, hits
-/// and the hybrid choice (1 reconnection, 2 delayed) of the candidates pass.
-fn add_diag(counters: &mut Counters, pass: usize, step: &Step, diag: &[[u32; 4]]) {
-    if step.spec.is_some_and(|s| s.shift().is_some()) {
-        let shifts: Vec<ShiftCounts> = diag
-            .iter()
-            .map(|d| ShiftCounts {
-                shifted: d[0],
-                failed: d[1],
-                improved: d[2],
-            })
-            .collect();
-        // Candidates are pass 0 and every later pass reuses (Preset::validate).
-        counters.add_shifts(pass - 1, &shifts);
-        return;
-    }
-    let probes: Vec<_> = diag
-        .iter()
-        .map(|d| {
-            let choice = match d[2] {
-                1 => HybridChoice::Reconnection,
-                2 => HybridChoice::Delayed,
-                _ => HybridChoice::None,
-            };
-            (
-                ProbeCounts {
-                    probes: d[0],
-                    hits: d[1],
-                },
-                choice,
-            )
-        })
-        .collect();
-    counters.add_candidates(&probes);
-}
-
 impl Drop for FrameRun<'_> {
     fn drop(&mut self) {
         let device = &self.context.shared.device;
@@ -803,50 +466,5 @@ impl Drop for FrameRun<'_> {
             }
             device.destroy_descriptor_pool(self.descriptor_pool, None);
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use restir::mis::MisKind;
-    use shifts::ShiftKind;
-    use std::mem::offset_of;
-
-    #[test]
-    fn pass_params_match_the_contract() {
-        assert_eq!(size_of::<PassParams>(), 32);
-        assert_eq!(offset_of!(PassParams, confidence_cap), 16);
-        assert_eq!(offset_of!(PassParams, collect_diagnostics), 28);
-        let spatial = PassSpec::Spatial {
-            shift: ShiftKind::ALL[3],
-            mis: MisKind::DefensivePairwise,
-            neighbours: 4,
-            confidence_cap: None,
-        };
-        let p = PassParams::new(2, Some(&spatial), true);
-        assert_eq!((p.pass, p.shift, p.mis, p.neighbours), (2, 3, 2, 4));
-        assert_eq!((p.confidence_cap, p.collect_diagnostics), (0.0, 1));
-        let candidates = PassSpec::Candidates {
-            bssrdf_samples: 3,
-            shared_light: true,
-        };
-        let p = PassParams::new(0, Some(&candidates), false);
-        assert_eq!((p.bssrdf_samples, p.shared_light, p.shift), (3, 1, 0));
-    }
-
-    #[test]
-    fn unknown_error_codes_are_errors_too() {
-        assert!(matches!(
-            decode_error(0x0107),
-            ResampleError::BadJacobian { source: 1, .. }
-        ));
-        assert!(matches!(
-            decode_error(0x0309),
-            ResampleError::Candidate {
-                source: 3,
-                error: InvalidCandidate::Weight(_)
-            }
-        ));
     }
 }

@@ -246,43 +246,19 @@ fn run_pass(
             }
             Ok(())
         }),
-        PassSpec::Temporal {
-            shift,
-            mis,
-            confidence_cap,
-        } => per_pixel(cells, width, |pixel, cell| {
-            let (reservoir, shifts) =
-                reuse::temporal(input, previous, pixel, shift, mis.scheme(), confidence_cap)
-                    .map_err(|e| PixelError::Resample(pixel, e))?;
-            *cell = Cell {
-                reservoir,
-                shifts,
-                ..Cell::default()
-            };
-            Ok(())
-        }),
-        PassSpec::Spatial {
-            shift,
-            mis,
-            neighbours,
-            confidence_cap,
-        } => per_pixel(cells, width, |pixel, cell| {
-            let (reservoir, shifts) = reuse::spatial(
-                input,
-                pixel,
-                shift,
-                mis.scheme(),
-                neighbours,
-                confidence_cap,
-            )
-            .map_err(|e| PixelError::Resample(pixel, e))?;
-            *cell = Cell {
-                reservoir,
-                shifts,
-                ..Cell::default()
-            };
-            Ok(())
-        }),
+        PassSpec::Temporal { .. } | PassSpec::Spatial { .. } => {
+            per_pixel(cells, width, |pixel, cell| {
+                if let Some(result) = reuse::pass(input, previous, pixel, spec) {
+                    let (reservoir, shifts) = result.map_err(|e| PixelError::Resample(pixel, e))?;
+                    *cell = Cell {
+                        reservoir,
+                        shifts,
+                        ..Cell::default()
+                    };
+                }
+                Ok(())
+            })
+        }
     }
 }
 

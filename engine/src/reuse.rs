@@ -16,6 +16,7 @@ use sss::scene::{GBuffer, GPixel, Scene};
 use crate::purpose;
 use shifts::PixelReservoir;
 use shifts::ShiftKind;
+use shifts::preset::PassSpec;
 
 /// Reprojection checks of temporal reuse: the previous pixel must show the same object at a view
 /// depth within this relative tolerance of x1's, with geometric normals at least this aligned.
@@ -264,6 +265,37 @@ pub fn sample_disk(radius: f32, u_radius: f32, u_angle: f32) -> Vec2 {
     let r = radius * u_radius.sqrt();
     let phi = std::f32::consts::TAU * u_angle;
     r * Vec2::new(phi.cos(), phi.sin())
+}
+
+/// The reuse pass `spec` at `pixel`: [`temporal`] or [`spatial`] with the pass's shift, MIS
+/// scheme, neighbours and cap; `None` for candidate generation, which is not a reuse pass.
+pub fn pass(
+    input: &PassInput,
+    previous: Option<&Previous>,
+    pixel: u32,
+    spec: &PassSpec,
+) -> Option<Result<(PixelReservoir, ShiftCounts), ResampleError>> {
+    Some(match *spec {
+        PassSpec::Candidates { .. } => return None,
+        PassSpec::Temporal {
+            shift,
+            mis,
+            confidence_cap,
+        } => temporal(input, previous, pixel, shift, mis.scheme(), confidence_cap),
+        PassSpec::Spatial {
+            shift,
+            mis,
+            neighbours,
+            confidence_cap,
+        } => spatial(
+            input,
+            pixel,
+            shift,
+            mis.scheme(),
+            neighbours,
+            confidence_cap,
+        ),
+    })
 }
 
 /// The shaded value `f(Y) · W` of a final reservoir (no ray: visibility is already in `W`).

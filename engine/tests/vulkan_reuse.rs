@@ -698,28 +698,9 @@ fn cpu_reuse(
 ) -> Vec<(PixelReservoir, [u32; 4])> {
     (0..input.gbuffer.pixels.len() as u32)
         .map(|pixel| {
-            let (r, c): (PixelReservoir, ShiftCounts) = match *spec {
-                PassSpec::Temporal {
-                    shift,
-                    mis,
-                    confidence_cap,
-                } => reuse::temporal(input, previous, pixel, shift, mis.scheme(), confidence_cap),
-                PassSpec::Spatial {
-                    shift,
-                    mis,
-                    neighbours,
-                    confidence_cap,
-                } => reuse::spatial(
-                    input,
-                    pixel,
-                    shift,
-                    mis.scheme(),
-                    neighbours,
-                    confidence_cap,
-                ),
-                PassSpec::Candidates { .. } => unreachable!("only reuse passes are compared"),
-            }
-            .unwrap();
+            let (r, c): (PixelReservoir, ShiftCounts) = reuse::pass(input, previous, pixel, spec)
+                .expect("only reuse passes are compared")
+                .unwrap();
             (r, [c.shifted, c.failed, c.improved, 0])
         })
         .collect()

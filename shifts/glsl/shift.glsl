@@ -6,8 +6,9 @@
 // includes the twins' files. Include this file after `#define SCENE_BINDING ...`; the including
 // shader enables GL_EXT_shader_explicit_arithmetic_types_int64.
 //
-// A twin is `void <file>_<name>_shift(ShiftSpec spec, SssSample x, SssDomain src,
-// SssDomain dst, inout ShiftPlan plan)`. It runs the shift's own checks and fills the plan:
+// A twin is the function its registry line names (`<module>_..._shift` of
+// shifts/glsl/<module>.glsl): `void f(ShiftSpec spec, SssSample x, SssDomain src, SssDomain dst,
+// inout ShiftPlan plan)`. It runs the shift's own checks and fills the plan:
 // SHIFT_OK or a Fail code (SHIFT_FAIL_*) in `plan.fail`, `y = T(x)` and `J = |T'(x)|` so far,
 // and which of the shared steps that trace rays should follow (probabilistic inversion,
 // delayed-reconnection replay). shift_shift runs those steps once for every kind: Mesa inlines

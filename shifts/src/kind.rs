@@ -89,11 +89,9 @@ macro_rules! registry_flag {
 use restir::shift::Shift;
 use sss::material::Translucent;
 
-use crate::broken;
 use crate::domain::SssDomain;
-use crate::{
-    DelayedReconnection, Hybrid, Identity, IndexPolicy, InvertingReconnection, Reconnection,
-};
+// The registry's CPU expressions name the shifts as the crate root exports them.
+use crate::*;
 
 include!("registry.rs");
 

@@ -18,6 +18,8 @@ shift_registry! {
     InvertingExact = "inverting-reconnection-exact", inversion::inversion_exact_shift, |_| InvertingReconnection { policy: IndexPolicy::Exact };
     /// Reconnection + probabilistic inversion, index resolved for the selected sample only.
     InvertingDeferred = "inverting-reconnection-deferred", inversion::inversion_deferred_shift, |_| InvertingReconnection { policy: IndexPolicy::Deferred }, resolves_deferred_index;
+    /// Reconnection where x2 lies at least 2·max d from both exit points (the worked example).
+    DistantReconnection = "distant-reconnection", distant::distant_shift, DistantReconnection::for_material;
     /// Negative control: delayed reconnection with `J = 1`.
     DelayedWithoutJacobian = "broken:delayed-without-jacobian", broken::broken_delayed_without_jacobian_shift, |_| broken::DelayedWithoutJacobian;
     /// Negative control: delayed reconnection without the y2↔x3 visibility test.

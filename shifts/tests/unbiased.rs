@@ -26,8 +26,8 @@ use restir::shift::{Domain, Shift};
 use restir::stats::{Equivalence, Summary, Verdict, equivalence};
 use shifts::broken::{DelayedWithoutJacobian, DelayedWithoutVisibility};
 use shifts::{
-    DelayedReconnection, Hybrid, IndexPolicy, InvertingReconnection, Reconnection, SssDomain,
-    SssSample,
+    DelayedReconnection, DistantReconnection, Hybrid, IndexPolicy, InvertingReconnection,
+    Reconnection, SssDomain, SssSample,
 };
 use sss::bssrdf::{BssrdfSample, EntryPoint, Probe};
 
@@ -205,6 +205,7 @@ where
 /// (δ = [`DELTA`], α = [`ALPHA`], N = `setup.replicas`).
 fn assert_correct_shifts_unbiased(label: &str, setup: &Setup, reference: &Summary) {
     let hybrid = Hybrid::for_material(setup.receiver.material());
+    let distant = DistantReconnection::for_material(setup.receiver.material());
     let exact = InvertingReconnection {
         policy: IndexPolicy::Exact,
     };
@@ -215,6 +216,7 @@ fn assert_correct_shifts_unbiased(label: &str, setup: &Setup, reference: &Summar
             verdict(setup, reference, &DelayedReconnection),
         ),
         ("hybrid", verdict(setup, reference, &hybrid)),
+        ("distant reconnection", verdict(setup, reference, &distant)),
         (
             "inverting reconnection (exact)",
             verdict(setup, reference, &exact),

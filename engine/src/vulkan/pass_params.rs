@@ -68,7 +68,10 @@ mod tests {
         };
         let p = PassParams::new(2, Some(&spatial), true);
         assert_eq!((p.pass, p.shift, p.mis, p.neighbours), (2, 3, 2, 4));
-        assert_eq!((ShiftKind::Hybrid.code(), MisKind::DefensivePairwise.code()), (3, 2));
+        assert_eq!(
+            (ShiftKind::Hybrid.code(), MisKind::DefensivePairwise.code()),
+            (3, 2)
+        );
         assert_eq!((p.confidence_cap, p.collect_diagnostics), (0.0, 1));
         let candidates = PassSpec::Candidates {
             bssrdf_samples: 3,

@@ -61,6 +61,11 @@ impl Relative {
             high: value + t * se,
         }
     }
+
+    /// Whether the interval excludes 0: a model error detected at level 1 − [`CONFIDENCE`].
+    pub fn is_detected(&self) -> bool {
+        self.low > 0.0 || self.high < 0.0
+    }
 }
 
 /// One method in one region.

@@ -226,7 +226,21 @@ fn magnitude(r: &RegionMeasure) -> [f64; 2] {
     }
 }
 
-/// What the numbers say, per scene: whether single-scatter's model error is smaller than the
+/// The methods of `result` whose model error in `region` is detected (its interval excludes 0).
+pub fn detected(result: &SceneResult, region: Region) -> Vec<&str> {
+    result
+        .measures
+        .iter()
+        .filter(|m| {
+            m.region(region)
+                .is_some_and(|r| r.model_error.is_detected())
+        })
+        .map(|m| m.method.as_str())
+        .collect()
+}
+
+/// What the numbers say, per scene: which methods have a detected model error over translucent
+/// pixels; whether single-scatter's model error is smaller than the
 /// BSSRDF path tracer's over translucent pixels (`yes` / **no** only when the intervals of
 /// `|model error|` are disjoint, else inconclusive), and whether the walk's own replicas agree
 /// with the ground truth (their 99% CI contains 0).
@@ -241,6 +255,14 @@ pub fn findings(results: &[SceneResult]) -> String {
             .cloned()
     };
     for result in results {
+        let flagged = detected(result, Region::Translucent);
+        let _ = writeln!(
+            out,
+            "| {} | model error detected (translucent, 99% CI excludes 0) | {} | {} |",
+            result.scene,
+            if flagged.is_empty() { "none" } else { "yes" },
+            flagged.join(", ")
+        );
         if let (Some(ss), Some(pt)) = (family(result, "single-scatter"), family(result, "pt")) {
             let ([ss_low, ss_high], [pt_low, pt_high]) = (magnitude(&ss), magnitude(&pt));
             let holds = if ss_high < pt_low {

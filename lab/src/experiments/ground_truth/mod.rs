@@ -239,8 +239,7 @@ mod tests {
     /// 1 − β = 0.99 needs `δ ≥ (t₀.₉₉₅ + z₀.₉₉) · se ≈ (2.9 + 2.33) · se`, i.e. `se ≤ 0.96%`.
     /// A pilot at half the samples (64 and 128 spp) gave relative standard errors of 0.83%
     /// (ground truth) and 0.88% (method), so these sample counts give `se ≈ 0.86%` (measured:
-    /// 0.69%); the test
-    /// checks that bound before it checks the verdicts.
+    /// 0.69%); the test checks that bound before it checks the verdicts.
     #[test]
     fn a_known_model_error_is_detected() {
         const DELTA: f64 = 0.05;

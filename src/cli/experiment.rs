@@ -40,14 +40,14 @@ impl ValueEnum for Name {
 #[derive(Args, Clone, Debug)]
 pub struct ExperimentArgs {
     pub name: Name,
-    /// Independent replicas per method [default: 16; ground-truth 8].
+    /// Independent replicas per method [default: 16].
     #[arg(long)]
     pub replicas: Option<u32>,
     /// Image size WxH [default: 128x96; ground-truth and model-gap 32x24].
     #[arg(long)]
     pub resolution: Option<String>,
     /// Samples per pixel of the references [default: 8192]; ground-truth: of the random walk
-    /// [1024]; model-gap: of each estimator over all replicas [256].
+    /// [4096]; model-gap: of each estimator over all replicas [256].
     #[arg(long)]
     pub reference_spp: Option<u32>,
     /// Comma-separated scenes, for ground-truth [default: every built-in scene and

@@ -133,10 +133,13 @@ pub fn run(plan: &Plan, progress: &mut dyn Progress) -> Result<Outcome, Error> {
     plan.check()?;
     let out = output_dir(&plan.out)?;
     let scene = &plan.scene;
+    // The last frame's reference first: it is the one that matters most, and an interrupted
+    // comparison leaves its checkpoint.
+    let last_frame = plan.frames - 1;
     let mut references = Vec::new();
     let mut frame_entries = Vec::new();
     let mut last: Option<Obtained> = None;
-    for frame in 0..plan.frames {
+    for frame in std::iter::once(last_frame).chain(0..last_frame) {
         let Some(source) = plan.reference_of(frame) else {
             continue;
         };
@@ -144,8 +147,12 @@ pub fn run(plan: &Plan, progress: &mut dyn Progress) -> Result<Outcome, Error> {
         let regions = Regions::classify(scene, &GBuffer::render(scene, frame), REFERENCE_SEED);
         frame_entries.push(FrameReferenceEntry::new(&obtained));
         references.push((FrameReference::new(&obtained.reference), regions));
-        last = Some(obtained);
+        if frame == last_frame {
+            last = Some(obtained);
+        }
     }
+    references.rotate_left(1);
+    frame_entries.rotate_left(1);
     let last = last.expect("the last frame always has a reference");
     let frames: Vec<u32> = references.iter().map(|(r, _)| r.frame).collect();
     let runs = render_replicas(plan, &frames, progress)?;

@@ -1,270 +1,91 @@
-//! Mesh files: Wavefront OBJ (via `tobj`, triangulated) and PLY (via `ply-rs`; ascii and binary;
-//! `vertex` and `face` elements only, faces with n ≥ 3 vertices fan-triangulated).
+//! Mesh files: Wavefront OBJ ([`obj`]) and PLY ([`ply`]: ascii and binary; vertices, faces
+//! and triangle strips), read within the limits of [`crate::limits`].
 //!
-//! Every problem is an [`InputError`] naming the file, the element/field and the value.
+//! Every problem is an [`InputError`] naming the file, the element and the value.
 //! Degenerate triangles are kept here; callers drop and count them with
 //! [`TriangleMesh::drop_degenerate`].
 
-use std::fs::File;
-use std::io::BufReader;
+pub mod obj;
+pub mod ply;
+
 use std::path::Path;
 
 use glam::Vec3;
-use ply_rs::parser::Parser;
-use ply_rs::ply::{DefaultElement, Property};
 
 use super::mesh::TriangleMesh;
 use crate::InputError;
+use crate::limits::{MAX_COORDINATE, MAX_MESH_FILE_BYTES, read_file};
 
-/// Loads a triangle mesh, choosing the format by extension (`.obj` or `.ply`, any case).
-pub fn load_mesh(path: &Path) -> Result<TriangleMesh, InputError> {
-    let extension = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    let mut mesh = match extension.as_deref() {
-        Some("obj") => load_obj(path)?,
-        Some("ply") => load_ply(path)?,
-        _ => {
-            return Err(InputError::new(
+/// A mesh file format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshFormat {
+    Obj,
+    Ply,
+}
+
+impl MeshFormat {
+    /// The format of `path` by its extension (`.obj` or `.ply`, any case).
+    pub fn of(path: &Path) -> Result<MeshFormat, InputError> {
+        let extension = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match extension.as_deref() {
+            Some("obj") => Ok(MeshFormat::Obj),
+            Some("ply") => Ok(MeshFormat::Ply),
+            _ => Err(InputError::new(
                 path,
                 "extension",
                 format!("{:?}", path.extension().unwrap_or_default()),
                 "unsupported mesh format (expected .obj or .ply)",
-            ));
+            )),
         }
+    }
+}
+
+/// Loads a triangle mesh, choosing the format by extension.
+pub fn load_mesh(path: &Path) -> Result<TriangleMesh, InputError> {
+    let format = MeshFormat::of(path)?;
+    parse_mesh(&read_file(path, MAX_MESH_FILE_BYTES)?, path, format)
+}
+
+/// Parses the bytes of a mesh file; `path` names it in errors. Normals are normalised.
+pub fn parse_mesh(
+    bytes: &[u8],
+    path: &Path,
+    format: MeshFormat,
+) -> Result<TriangleMesh, InputError> {
+    let mut mesh = match format {
+        MeshFormat::Obj => obj::parse(bytes, path)?,
+        MeshFormat::Ply => ply::parse(bytes, path)?,
     };
-    validate(path, &mesh)?;
     if let Some(normals) = &mut mesh.normals {
         normals.iter_mut().for_each(|n| *n = n.normalize_or_zero());
     }
     Ok(mesh)
 }
 
-fn load_obj(path: &Path) -> Result<TriangleMesh, InputError> {
-    if !path.is_file() {
-        return Err(InputError::new(
-            path,
-            "file",
-            path.display().to_string(),
-            "mesh file not found",
-        ));
+/// A vertex position, finite and within [`MAX_COORDINATE`], or `(value, reason)`.
+fn position(xyz: [f32; 3]) -> Result<Vec3, (String, String)> {
+    let p = Vec3::from(xyz);
+    if p.is_finite() && p.abs().max_element() <= MAX_COORDINATE {
+        Ok(p)
+    } else {
+        Err((
+            format!("{:?}", p.to_array()),
+            format!("a vertex position must be finite, each |coordinate| ≤ {MAX_COORDINATE:e}"),
+        ))
     }
-    let options = tobj::LoadOptions {
-        triangulate: true,
-        single_index: true,
-        ..Default::default()
-    };
-    let (models, _materials) = tobj::load_obj(path, &options)
-        .map_err(|e| InputError::new(path, "obj", e.to_string(), "malformed OBJ"))?;
-    let mut mesh = TriangleMesh::default();
-    let mut normals = Some(Vec::new());
-    for model in &models {
-        let m = &model.mesh;
-        let base = mesh.positions.len() as u32;
-        mesh.positions.extend(
-            m.positions
-                .chunks_exact(3)
-                .map(|p| Vec3::new(p[0], p[1], p[2])),
-        );
-        mesh.indices.extend(
-            m.indices
-                .chunks_exact(3)
-                .map(|t| [t[0] + base, t[1] + base, t[2] + base]),
-        );
-        // Shading normals only if every model has one per vertex; otherwise flat shading.
-        normals = match normals {
-            Some(mut all) if m.normals.len() == m.positions.len() => {
-                all.extend(
-                    m.normals
-                        .chunks_exact(3)
-                        .map(|n| Vec3::new(n[0], n[1], n[2])),
-                );
-                Some(all)
-            }
-            _ => None,
-        };
-    }
-    mesh.normals = normals.filter(|n| !n.is_empty());
-    if mesh.indices.is_empty() {
-        return Err(InputError::new(path, "f", "none", "OBJ file has no faces"));
-    }
-    Ok(mesh)
 }
 
-fn load_ply(path: &Path) -> Result<TriangleMesh, InputError> {
-    let file = File::open(path)
-        .map_err(|e| InputError::new(path, "file", path.display().to_string(), e.to_string()))?;
-    let ply = Parser::<DefaultElement>::new()
-        .read_ply(&mut BufReader::new(file))
-        .map_err(|e| InputError::new(path, "ply", e.to_string(), "malformed PLY"))?;
-    if let Some(name) = ply
-        .header
-        .elements
-        .keys()
-        .find(|name| *name != "vertex" && *name != "face")
-    {
-        let count = ply.header.elements[name].count;
-        return Err(InputError::new(
-            path,
-            format!("element {name}"),
-            count.to_string(),
-            "unsupported PLY element (only `vertex` and `face` are read)",
-        ));
+/// A vertex normal, finite (any length; normalised later), or `(value, reason)`.
+fn normal(xyz: [f32; 3]) -> Result<Vec3, (String, String)> {
+    let n = Vec3::from(xyz);
+    if n.is_finite() {
+        Ok(n)
+    } else {
+        Err((format!("{n}"), "a vertex normal must be finite".into()))
     }
-    let no_elements = Vec::new();
-    let vertices = ply.payload.get("vertex").unwrap_or(&no_elements);
-    let faces = ply.payload.get("face").unwrap_or(&no_elements);
-    if vertices.is_empty() || faces.is_empty() {
-        return Err(InputError::new(
-            path,
-            "element face",
-            "0",
-            "PLY file has no vertices or no faces",
-        ));
-    }
-
-    let scalar =
-        |element: &DefaultElement, i: usize, key: &str| -> Result<Option<f32>, InputError> {
-            let value = match element.get(key) {
-                None => return Ok(None),
-                Some(Property::Float(x)) => *x,
-                Some(Property::Double(x)) => *x as f32,
-                Some(Property::Char(x)) => *x as f32,
-                Some(Property::UChar(x)) => *x as f32,
-                Some(Property::Short(x)) => *x as f32,
-                Some(Property::UShort(x)) => *x as f32,
-                Some(Property::Int(x)) => *x as f32,
-                Some(Property::UInt(x)) => *x as f32,
-                Some(other) => {
-                    return Err(InputError::new(
-                        path,
-                        format!("vertex[{i}].{key}"),
-                        format!("{other:?}"),
-                        "expected a number",
-                    ));
-                }
-            };
-            Ok(Some(value))
-        };
-    let mut positions = Vec::with_capacity(vertices.len());
-    let mut normals = Some(Vec::with_capacity(vertices.len()));
-    for (i, vertex) in vertices.iter().enumerate() {
-        let mut p = [0.0f32; 3];
-        for (axis, key) in ["x", "y", "z"].into_iter().enumerate() {
-            p[axis] = scalar(vertex, i, key)?.ok_or_else(|| {
-                InputError::new(
-                    path,
-                    format!("vertex[{i}].{key}"),
-                    "missing",
-                    "vertex needs x, y, z",
-                )
-            })?;
-        }
-        positions.push(Vec3::from(p));
-        let n = [
-            scalar(vertex, i, "nx")?,
-            scalar(vertex, i, "ny")?,
-            scalar(vertex, i, "nz")?,
-        ];
-        normals = match (normals, n) {
-            (Some(mut all), [Some(x), Some(y), Some(z)]) => {
-                all.push(Vec3::new(x, y, z));
-                Some(all)
-            }
-            _ => None,
-        };
-    }
-
-    let mut indices = Vec::with_capacity(faces.len());
-    for (i, face) in faces.iter().enumerate() {
-        let field = || format!("face[{i}].vertex_indices");
-        let list: Vec<i64> = match face
-            .get("vertex_indices")
-            .or_else(|| face.get("vertex_index"))
-        {
-            Some(Property::ListChar(l)) => l.iter().map(|&v| v as i64).collect(),
-            Some(Property::ListUChar(l)) => l.iter().map(|&v| v as i64).collect(),
-            Some(Property::ListShort(l)) => l.iter().map(|&v| v as i64).collect(),
-            Some(Property::ListUShort(l)) => l.iter().map(|&v| v as i64).collect(),
-            Some(Property::ListInt(l)) => l.iter().map(|&v| v as i64).collect(),
-            Some(Property::ListUInt(l)) => l.iter().map(|&v| v as i64).collect(),
-            other => {
-                return Err(InputError::new(
-                    path,
-                    field(),
-                    format!("{other:?}"),
-                    "expected an integer list",
-                ));
-            }
-        };
-        if list.len() < 3 {
-            return Err(InputError::new(
-                path,
-                field(),
-                format!("{list:?}"),
-                "a face needs at least 3 vertices",
-            ));
-        }
-        if let Some(&bad) = list.iter().find(|&&v| v < 0 || v >= positions.len() as i64) {
-            return Err(InputError::new(
-                path,
-                field(),
-                bad.to_string(),
-                format!("index out of range 0..{}", positions.len()),
-            ));
-        }
-        // Fan triangulation: (0, k, k + 1).
-        indices.extend(
-            (1..list.len() - 1).map(|k| [list[0] as u32, list[k] as u32, list[k + 1] as u32]),
-        );
-    }
-    Ok(TriangleMesh {
-        positions,
-        indices,
-        normals,
-    })
-}
-
-/// Rejects out-of-range indices and non-finite positions or normals.
-fn validate(path: &Path, mesh: &TriangleMesh) -> Result<(), InputError> {
-    if let Some((i, p)) = mesh
-        .positions
-        .iter()
-        .enumerate()
-        .find(|(_, p)| !p.is_finite())
-    {
-        return Err(InputError::new(
-            path,
-            format!("vertex[{i}]"),
-            format!("{p}"),
-            "non-finite vertex position",
-        ));
-    }
-    let normals = mesh.normals.as_deref().unwrap_or_default();
-    if let Some((i, n)) = normals.iter().enumerate().find(|(_, n)| !n.is_finite()) {
-        return Err(InputError::new(
-            path,
-            format!("normal[{i}]"),
-            format!("{n}"),
-            "non-finite vertex normal",
-        ));
-    }
-    let count = mesh.positions.len() as u32;
-    if let Some((i, t)) = mesh
-        .indices
-        .iter()
-        .enumerate()
-        .find(|(_, t)| t.iter().any(|&v| v >= count))
-    {
-        return Err(InputError::new(
-            path,
-            format!("face[{i}]"),
-            format!("{t:?}"),
-            format!("index out of range 0..{count}"),
-        ));
-    }
-    Ok(())
 }
 
 #[cfg(test)]
@@ -384,56 +205,202 @@ mod tests {
         expect_error(&write("mesh.stl", b"solid"), "extension", "stl");
         expect_error(
             &write("bad.obj", b"v 0 0 zero\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
-            "obj",
-            "",
+            "line 1: v 1.z",
+            "zero",
         );
         expect_error(
             &write("nan.obj", b"v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n"),
-            "vertex[1]",
+            "line 2: v 2",
             "NaN",
+        );
+        expect_error(
+            &write("far.obj", b"v 0 0 0\nv 1e30 0 0\nv 0 1 0\nf 1 2 3\n"),
+            "line 2: v 2",
+            "1e30",
         );
         expect_error(
             &write(
                 "bad.ply",
                 b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float\nend_header\n",
             ),
-            "ply",
-            "",
-        );
-        let strips = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
-            element tristrips 1\nproperty list int int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
-        expect_error(
-            &write("strips.ply", strips.as_bytes()),
-            "element tristrips",
-            "1",
+            "header line 4",
+            "property float",
         );
         let nan = binary_ply(
             &[(0.0, 0.0, 0.0), (1.0, 0.0, f64::NAN), (0.0, 1.0, 0.0)],
             &[[0, 1, 2]],
         );
-        expect_error(&write("nan.ply", &nan), "vertex[1]", "NaN");
-        // ply-rs's ascii grammar has no NaN: the parse error names the line and its text.
+        expect_error(&write("nan.ply", &nan), "element vertex[1]", "NaN");
         let body =
             "0 0 0 0 0 1\nnan 0 0 0 0 1\n1 1 0 0 0 1\n0 1 0 0 0 1\n0 0 1 0 0 1\n3 0 1 2\n3 0 2 3\n";
         expect_error(
             &write("nan_ascii.ply", format!("{PLY_HEADER}{body}").as_bytes()),
-            "ply",
-            "nan 0 0",
+            "element vertex[1]",
+            "NaN",
         );
         let body =
             "0 0 0 0 0 1\n1 0 0 0 0 1\n1 1 0 0 0 1\n0 1 0 0 0 1\n0 0 1 0 0 1\n3 0 1 9\n3 0 2 3\n";
         expect_error(
             &write("range.ply", format!("{PLY_HEADER}{body}").as_bytes()),
-            "face[0]",
+            "element face[0].vertex_indices",
             "9",
         );
         let body =
             "0 0 0 0 0 1\n1 0 0 0 0 1\n1 1 0 0 0 1\n0 1 0 0 0 1\n0 0 1 0 0 1\n2 0 1\n3 0 2 3\n";
         expect_error(
             &write("short.ply", format!("{PLY_HEADER}{body}").as_bytes()),
-            "face[0]",
+            "element face[0]",
             "[0, 1]",
         );
+        let body =
+            "0 0 0 0 0 1\n1 0 0 0 0 1 7\n1 1 0 0 0 1\n0 1 0 0 0 1\n0 0 1 0 0 1\n3 0 1 2\n3 0 2 3\n";
+        expect_error(
+            &write("extra.ply", format!("{PLY_HEADER}{body}").as_bytes()),
+            "element vertex[1] (payload line 2)",
+            "7",
+        );
+    }
+
+    /// OBJ face errors name the line, the face, the corner and the index as written.
+    #[test]
+    fn obj_face_errors_name_face_and_index() {
+        let vertices = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+        for (face, corner, value, reason) in [
+            ("f 1 2 4", 3, "4", "1..=3"),
+            ("f 0 1 2", 1, "0", "start at 1"),
+            ("f 1 -4 2", 2, "-4", "-3..=-1"),
+            ("f 1 2 x", 3, "x", "not an integer"),
+            ("f 1//1 2 3", 1, "1", "no normal is defined"),
+        ] {
+            let path = write(
+                "face.obj",
+                format!("{vertices}f 1 2 3\n{face}\n").as_bytes(),
+            );
+            let error = expect_error(&path, &format!("line 5: face 2 corner {corner}"), value);
+            assert_eq!(error.value, value);
+            assert!(error.reason.contains(reason), "{error}");
+        }
+    }
+
+    /// Negative indices are relative to the vertices defined so far; `vt` is ignored.
+    #[test]
+    fn obj_relative_indices_and_texture_coordinates() {
+        let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf -3/1 -2/1 -1/1\nv 1 1 0\nf 2 4 3\n";
+        let mesh = load_mesh(&write("relative.obj", obj.as_bytes())).unwrap();
+        assert_eq!(mesh.indices, vec![[0, 1, 2], [1, 3, 2]]);
+        assert_eq!(mesh.normals, None);
+    }
+
+    /// The header's counts are checked against the limits and the file's size before anything
+    /// is allocated: a 3-vertex file that claims 60 000 000 000 vertices is a one-line error.
+    #[test]
+    fn ply_header_counts_are_not_trusted() {
+        let huge = PLY_HEADER.replace("element vertex 5", "element vertex 60000000000");
+        let error = expect_error(
+            &write("huge.ply", format!("{huge}0 0 0 0 0 1\n").as_bytes()),
+            "element vertex",
+            "60000000000",
+        );
+        assert!(error.reason.contains("limit"), "{error}");
+        let many = PLY_HEADER.replace("element vertex 5", "element vertex 1000000");
+        let error = expect_error(
+            &write("many.ply", format!("{many}0 0 0 0 0 1\n").as_bytes()),
+            "element vertex",
+            "1000000",
+        );
+        assert!(error.reason.contains("after the header"), "{error}");
+        let binary = binary_ply(&[(0.0, 0.0, 0.0); 3], &[[0, 1, 2]]);
+        let text = String::from_utf8_lossy(&binary).replace("element face 1", "element face 99");
+        let error = expect_error(
+            &write("short_binary.ply", &binary_with_header(&binary, &text)),
+            "element face",
+            "99",
+        );
+        assert!(error.reason.contains("after the header"), "{error}");
+    }
+
+    /// `binary` with its header replaced by the header of `text` (same payload).
+    fn binary_with_header(binary: &[u8], text: &str) -> Vec<u8> {
+        let end = b"end_header\n";
+        let split = binary.windows(end.len()).position(|w| w == end).unwrap() + end.len();
+        let header_end = text.find("end_header\n").unwrap() + end.len();
+        let mut out = text.as_bytes()[..header_end].to_vec();
+        out.extend_from_slice(&binary[split..]);
+        out
+    }
+
+    /// A 2×3 grid of vertices as one strip, with a restart (`-1`) and a stitching triangle that
+    /// repeats a vertex, equals the triangle list it encodes (same winding), in ascii and in
+    /// binary little-endian.
+    #[test]
+    fn ply_triangle_strips_match_the_triangle_list() {
+        // 3 4 5
+        // 0 1 2      strip 0 3 1 4 2 5 = (0 3 1), (1 3 4) swapped, (1 4 2), (2 4 5) swapped.
+        let vertices = [
+            (0.0, 0.0, 0.0),
+            (1.0, 0.0, 0.0),
+            (2.0, 0.0, 0.0),
+            (0.0, 1.0, 0.0),
+            (1.0, 1.0, 0.0),
+            (2.0, 1.0, 0.0),
+        ];
+        let list = [[0, 3, 1], [1, 3, 4], [1, 4, 2], [2, 4, 5]];
+        // The strip in two pieces: 0 3 1 4 with a stitch (4 4), then a restart and 1 4 2 5.
+        let strips: &[i32] = &[0, 3, 1, 4, 4, -1, 1, 4, 2, 5];
+        let expected = load_mesh(&write("list.ply", &binary_ply(&vertices, &list))).unwrap();
+        let header = |format: &str| {
+            format!(
+                "ply\nformat {format} 1.0\nelement vertex 6\nproperty float x\nproperty float y\n\
+                 property float z\nelement tristrips 1\nproperty list int int vertex_indices\nend_header\n"
+            )
+        };
+        let mut ascii = header("ascii");
+        for (x, y, z) in vertices {
+            ascii += &format!("{x} {y} {z}\n");
+        }
+        let items: Vec<String> = strips.iter().map(i32::to_string).collect();
+        ascii += &format!("{} {}\n", strips.len(), items.join(" "));
+        let mut binary = header("binary_little_endian").into_bytes();
+        for (x, y, z) in vertices {
+            for v in [x, y, z as f32] {
+                binary.extend(v.to_le_bytes());
+            }
+        }
+        binary.extend((strips.len() as i32).to_le_bytes());
+        strips.iter().for_each(|i| binary.extend(i.to_le_bytes()));
+        for (name, bytes) in [("strip.ply", ascii.into_bytes()), ("strip_le.ply", binary)] {
+            let mesh = load_mesh(&write(name, &bytes)).unwrap();
+            assert_eq!(mesh.positions, expected.positions, "{name}");
+            assert_eq!(mesh.indices, expected.indices, "{name}");
+            // One winding: every triangle's geometric normal is −z, like the list's.
+            for i in 0..mesh.triangle_count() {
+                let [a, b, c] = mesh.triangle(i);
+                assert!((b - a).cross(c - a).z < 0.0, "{name} triangle {i}");
+            }
+        }
+    }
+
+    /// Big-endian binary and a face element before the vertices, with extra properties on both.
+    #[test]
+    fn ply_big_endian_with_extra_properties() {
+        let mut bytes = "ply\nformat binary_big_endian 1.0\ncomment made by hand\n\
+            element face 1\nproperty uchar flags\nproperty list uchar ushort vertex_index\n\
+            element vertex 3\nproperty double x\nproperty double y\nproperty double z\n\
+            property uchar red\nelement edge 1\nproperty int a\nend_header\n"
+            .as_bytes()
+            .to_vec();
+        bytes.extend([7u8, 3]);
+        [0u16, 1, 2]
+            .iter()
+            .for_each(|i| bytes.extend(i.to_be_bytes()));
+        for p in [[0.0f64, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+            p.iter().for_each(|x| bytes.extend(x.to_be_bytes()));
+            bytes.push(255);
+        }
+        bytes.extend(5i32.to_be_bytes());
+        let mesh = load_mesh(&write("big.ply", &bytes)).unwrap();
+        assert_eq!(mesh.indices, vec![[0, 1, 2]]);
+        assert_eq!(mesh.positions[1], Vec3::X);
     }
 
     #[test]

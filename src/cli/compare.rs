@@ -9,8 +9,10 @@ use lab::compare::{self, DEFAULT_METHODS, Plan, parse_methods};
 use lab::reference_cache::ReferenceSource;
 use lab::report::file_stem;
 
+use sss::limits::{MAX_FRAMES, MAX_REPLICAS};
+
 use super::common::{
-    BackendArgs, Bars, CliError, CliResult, LoadedScene, load_scene, parse_resolution,
+    BackendArgs, Bars, CliError, CliResult, LoadedScene, flag_count, load_scene, parse_resolution,
     with_resolution,
 };
 
@@ -84,9 +86,8 @@ fn plan(args: &CompareArgs) -> CliResult<Plan> {
     if methods.is_empty() {
         return Err(CliError("--methods: no method given".into()));
     }
-    if args.replicas == 0 || args.frames == 0 {
-        return Err(CliError("--replicas and --frames must be ≥ 1".into()));
-    }
+    flag_count("--replicas", args.replicas, 1, MAX_REPLICAS)?;
+    flag_count("--frames", args.frames, 1, MAX_FRAMES)?;
     if let Some(t) = args.equal_time
         && !(t.is_finite() && t > 0.0)
     {

@@ -8,8 +8,10 @@ use lab::methods::Method;
 use lab::report::{file_stem, output_dir};
 use serde_json::json;
 
+use sss::limits::MAX_FRAMES;
+
 use super::common::{
-    BackendArgs, CliResult, json_number, load_scene, parse_resolution, with_resolution,
+    BackendArgs, CliResult, flag_count, json_number, load_scene, parse_resolution, with_resolution,
 };
 
 #[derive(Args, Clone, Debug)]
@@ -40,6 +42,7 @@ pub struct RenderArgs {
 }
 
 pub fn command(args: &RenderArgs) -> CliResult<()> {
+    flag_count("--frames", args.frames, 1, MAX_FRAMES)?;
     let method = Method::parse(&args.method)?;
     let loaded = load_scene(&args.scene)?;
     let resolution = args

@@ -5,6 +5,8 @@ use std::path::{Path, PathBuf};
 
 use engine::Backend;
 use serde_json::Value;
+use sss::InputError;
+use sss::limits::{self, MAX_REPLICAS};
 
 use crate::compare::{Outcome, Plan, parse_methods};
 use crate::error::Error;
@@ -48,6 +50,20 @@ pub struct Report {
 }
 
 impl Settings {
+    /// The replicas and the resolution within [`sss::limits`].
+    pub fn check(&self) -> Result<(), InputError> {
+        let origin = Path::new("(experiment settings)");
+        let (width, height) = self.resolution;
+        limits::count(
+            origin,
+            "replicas",
+            self.replicas as u64,
+            1,
+            MAX_REPLICAS as u64,
+        )?;
+        limits::resolution(origin, "resolution", width, height)
+    }
+
     /// The output folder of experiment `name`.
     pub fn out_dir(&self, name: &str) -> PathBuf {
         self.out

@@ -317,6 +317,11 @@ impl Reference {
 
     /// Writes the checkpoint (format in the module documentation).
     pub fn save(&self, path: &Path) -> std::io::Result<()> {
+        std::fs::write(path, self.to_bytes())
+    }
+
+    /// The checkpoint's bytes (format in the module documentation).
+    pub fn to_bytes(&self) -> Vec<u8> {
         let c = &self.config;
         let mut out = Vec::with_capacity(96 + c.scene.len() + self.sum.len() * 192);
         out.extend_from_slice(MAGIC);
@@ -348,7 +353,7 @@ impl Reference {
                 out.extend_from_slice(&limb.to_le_bytes());
             }
         }
-        std::fs::write(path, out)
+        out
     }
 
     /// Reads a checkpoint written by [`Reference::save`].

@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# Runs every fuzz target (or the ones named) for SECONDS each at the lowest CPU priority, then
+# reports, per target, what libFuzzer found: crashes, out-of-memory and timeout inputs, which it
+# saves in fuzz/artifacts/<target>/. New interesting inputs go to fuzz/work/<target>/ (ignored by
+# git); the committed seeds in fuzz/corpus/<target>/ are read, never written.
+#
+#   fuzz/run-all.sh [SECONDS] [TARGET...]        (default: 60 seconds, every target)
+#
+# Needs cargo-fuzz (`cargo install cargo-fuzz`) and a nightly toolchain (`rustup toolchain install
+# nightly`). Exit status: 0 when no target found anything, 1 otherwise, 2 when the build fails.
+set -uo pipefail
+cd "$(dirname "$0")/.."
+seconds=${1:-60}
+shift || true
+if [ $# -gt 0 ]; then
+  targets=("$@")
+else
+  mapfile -t targets < <(cargo +nightly fuzz list)
+fi
+# libFuzzer options: per-input time and memory limits, and inputs up to 64 KiB.
+options=(-max_total_time="$seconds" -timeout=20 -rss_limit_mb=4096 -max_len=65536 -print_final_stats=1)
+nice -n 19 cargo +nightly fuzz build || exit 2
+found=0
+printf '%-12s %10s %8s %s\n' target runs corpus findings
+for target in "${targets[@]}"; do
+  mkdir -p "fuzz/work/$target" "fuzz/artifacts/$target"
+  log="fuzz/artifacts/$target.log"
+  before=$(find "fuzz/artifacts/$target" -type f | sort)
+  nice -n 19 cargo +nightly fuzz run "$target" "fuzz/work/$target" "fuzz/corpus/$target" \
+    -- "${options[@]}" >"$log" 2>&1
+  after=$(find "fuzz/artifacts/$target" -type f | sort)
+  new=$(comm -13 <(echo "$before") <(echo "$after") | grep -v '^$' || true)
+  runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo '?')
+  corpus=$(find "fuzz/work/$target" -type f | wc -l)
+  if [ -n "$new" ]; then
+    found=1
+    printf '%-12s %10s %8s %s\n' "$target" "$runs" "$corpus" "$(echo "$new" | tr '\n' ' ')"
+    grep -m1 -E 'panicked at|ERROR: libFuzzer|SUMMARY' "$log" | sed 's/^/             /'
+  else
+    printf '%-12s %10s %8s %s\n' "$target" "$runs" "$corpus" none
+  fi
+done
+[ "$found" = 0 ] || echo "Reproduce: cargo +nightly fuzz run <target> <artifact>; log: fuzz/artifacts/<target>.log"
+exit "$found"

@@ -2,7 +2,7 @@
 //! panic), `compare` and `bias` on every built-in scene with JSON validated against
 //! docs/results-schema.md, the reference cache, and sharded references merged bit for bit.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use serde_json::Value;
@@ -34,6 +34,23 @@ fn scratch(name: &str) -> PathBuf {
 fn ok(o: &Output) -> String {
     assert!(o.status.success(), "exit {:?}\n{}", o.status, stderr(o));
     stdout(o)
+}
+
+/// Writes a complete 8×6 reference of `bumpy` (2 batches of 2 spp) to `path`.
+fn small_reference(path: &Path) {
+    ok(&reshift(&[
+        "reference",
+        "--scene",
+        "bumpy",
+        "--resolution",
+        "8x6",
+        "--spp",
+        "4",
+        "--batch-spp",
+        "2",
+        "--out",
+        path.to_str().unwrap(),
+    ]));
 }
 
 /// Exit status 1 and exactly one stderr line `reshift: …` of at most 200 characters after the
@@ -155,19 +172,7 @@ fn bad_input_is_one_line_and_non_zero() {
     );
     // A reference of the wrong size.
     let reference = dir.join("small.rsref");
-    ok(&reshift(&[
-        "reference",
-        "--scene",
-        "bumpy",
-        "--resolution",
-        "8x6",
-        "--spp",
-        "4",
-        "--batch-spp",
-        "2",
-        "--out",
-        reference.to_str().unwrap(),
-    ]));
+    small_reference(&reference);
     fails_with(
         &[
             "compare",
@@ -260,19 +265,7 @@ fn huge_sizes_in_files_are_one_line_errors() {
         ],
         "huge.toml: field `camera.resolution` = 100000×100000",
     );
-    ok(&reshift(&[
-        "reference",
-        "--scene",
-        "bumpy",
-        "--resolution",
-        "8x6",
-        "--spp",
-        "4",
-        "--batch-spp",
-        "2",
-        "--out",
-        &path("small.rsref"),
-    ]));
+    small_reference(Path::new(&path("small.rsref")));
     let bytes = std::fs::read(path("small.rsref")).unwrap();
     let with_size = |width: u32, height: u32| {
         let mut b = bytes.clone();

@@ -9,7 +9,7 @@
 use std::path::{Path, PathBuf};
 
 use engine::Backend;
-use sss::limits::{self, IMAGE_BYTES_PER_PIXEL, MAX_FRAMES, MAX_REPLICAS};
+use sss::limits::{self, IMAGE_BYTES_PER_PIXEL};
 use sss::scene::{GBuffer, Scene};
 
 use crate::error::Error;
@@ -79,14 +79,8 @@ impl Plan {
             return invalid("no method given");
         }
         let origin = Path::new("(comparison plan)");
-        limits::count(
-            origin,
-            "replicas",
-            self.replicas as u64,
-            1,
-            MAX_REPLICAS as u64,
-        )?;
-        limits::count(origin, "frames", self.frames as u64, 1, MAX_FRAMES as u64)?;
+        limits::replicas(origin, "replicas", self.replicas)?;
+        limits::frames(origin, "frames", self.frames)?;
         if self.equal_time.is_some_and(|t| !(t.is_finite() && t > 0.0)) {
             return invalid("the equal-time budget must be a positive number of seconds");
         }

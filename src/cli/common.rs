@@ -104,16 +104,9 @@ impl BackendArgs {
 /// The command line as the "file" of flag errors.
 pub const COMMAND_LINE: &str = "(command line)";
 
-/// `value` of `flag` if it lies in `min..=max`; else an error naming the flag and the value.
-pub fn flag_count(flag: &str, value: u32, min: u32, max: u32) -> CliResult<u32> {
-    limits::count(
-        Path::new(COMMAND_LINE),
-        flag,
-        value as u64,
-        min as u64,
-        max as u64,
-    )?;
-    Ok(value)
+/// [`COMMAND_LINE`] as a path, for `sss::limits` checks of flags.
+pub fn command_line() -> &'static Path {
+    Path::new(COMMAND_LINE)
 }
 
 /// Parses `WxH` within `sss::limits` (sides, pixels).
@@ -137,7 +130,7 @@ pub fn parse_resolution(text: &str) -> CliResult<(u32, u32)> {
     };
     match (parse(w), parse(h)) {
         (Some(w), Some(h)) => {
-            limits::resolution(Path::new(COMMAND_LINE), "--resolution", w, h)?;
+            limits::resolution(command_line(), "--resolution", w, h)?;
             Ok((w, h))
         }
         _ => Err(bad(&format!(

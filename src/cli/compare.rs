@@ -9,11 +9,11 @@ use lab::compare::{self, DEFAULT_METHODS, Plan, parse_methods};
 use lab::reference_cache::ReferenceSource;
 use lab::report::file_stem;
 
-use sss::limits::{MAX_FRAMES, MAX_REPLICAS};
+use sss::limits;
 
 use super::common::{
-    BackendArgs, Bars, CliError, CliResult, LoadedScene, flag_count, load_scene, parse_resolution,
-    with_resolution,
+    BackendArgs, Bars, CliError, CliResult, LoadedScene, command_line, load_scene,
+    parse_resolution, with_resolution,
 };
 
 #[derive(Args, Clone, Debug)]
@@ -86,8 +86,8 @@ fn plan(args: &CompareArgs) -> CliResult<Plan> {
     if methods.is_empty() {
         return Err(CliError("--methods: no method given".into()));
     }
-    flag_count("--replicas", args.replicas, 1, MAX_REPLICAS)?;
-    flag_count("--frames", args.frames, 1, MAX_FRAMES)?;
+    limits::replicas(command_line(), "--replicas", args.replicas)?;
+    limits::frames(command_line(), "--frames", args.frames)?;
     if let Some(t) = args.equal_time
         && !(t.is_finite() && t > 0.0)
     {

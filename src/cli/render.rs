@@ -8,10 +8,11 @@ use lab::methods::Method;
 use lab::report::{file_stem, output_dir};
 use serde_json::json;
 
-use sss::limits::MAX_FRAMES;
+use sss::limits;
 
 use super::common::{
-    BackendArgs, CliResult, flag_count, json_number, load_scene, parse_resolution, with_resolution,
+    BackendArgs, CliResult, command_line, json_number, load_scene, parse_resolution,
+    with_resolution,
 };
 
 #[derive(Args, Clone, Debug)]
@@ -42,7 +43,7 @@ pub struct RenderArgs {
 }
 
 pub fn command(args: &RenderArgs) -> CliResult<()> {
-    flag_count("--frames", args.frames, 1, MAX_FRAMES)?;
+    limits::frames(command_line(), "--frames", args.frames)?;
     let method = Method::parse(&args.method)?;
     let loaded = load_scene(&args.scene)?;
     let resolution = args

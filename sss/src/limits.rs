@@ -68,6 +68,16 @@ pub fn count(file: &Path, field: &str, value: u64, min: u64, max: u64) -> Result
     }
 }
 
+/// A replica count in `1..=`[`MAX_REPLICAS`], or an error at `field` of `file`.
+pub fn replicas(file: &Path, field: &str, n: u32) -> Result<u32, InputError> {
+    count(file, field, n as u64, 1, MAX_REPLICAS as u64).map(|_| n)
+}
+
+/// A frame count in `1..=`[`MAX_FRAMES`], or an error at `field` of `file`.
+pub fn frames(file: &Path, field: &str, n: u32) -> Result<u32, InputError> {
+    count(file, field, n as u64, 1, MAX_FRAMES as u64).map(|_| n)
+}
+
 /// An image of `width × height`: both sides in `1..=`[`MAX_IMAGE_SIDE`], at most [`MAX_PIXELS`].
 pub fn resolution(file: &Path, field: &str, width: u32, height: u32) -> Result<(), InputError> {
     let value = || format!("{width}×{height}");

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use engine::Backend;
 use serde_json::Value;
 use sss::InputError;
-use sss::limits::{self, MAX_REPLICAS};
+use sss::limits;
 
 use crate::compare::{Outcome, Plan, parse_methods};
 use crate::error::Error;
@@ -54,13 +54,7 @@ impl Settings {
     pub fn check(&self) -> Result<(), InputError> {
         let origin = Path::new("(experiment settings)");
         let (width, height) = self.resolution;
-        limits::count(
-            origin,
-            "replicas",
-            self.replicas as u64,
-            1,
-            MAX_REPLICAS as u64,
-        )?;
+        limits::replicas(origin, "replicas", self.replicas)?;
         limits::resolution(origin, "resolution", width, height)
     }
 

@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use engine::image::Image;
 use engine::{Backend, PipelineError};
-use sss::limits::{self, MAX_FRAMES, MAX_SPP};
+use sss::limits::{self, MAX_SPP};
 use sss::scene::Scene;
 
 /// One family of methods: `family[:argument]`.
@@ -113,7 +113,7 @@ impl Method {
     ) -> Result<Rendered, PipelineError> {
         let origin = Path::new("(run)");
         let (width, height) = (scene.camera.width(), scene.camera.height());
-        limits::count(origin, "frames", frames as u64, 1, MAX_FRAMES as u64)
+        limits::frames(origin, "frames", frames)
             .and_then(|_| limits::resolution(origin, "width×height", width, height))
             .and_then(|_| {
                 let bytes = limits::run_bytes(width as u64 * height as u64, frames);

@@ -231,34 +231,39 @@ mod tests {
             &[[0, 1, 2]],
         );
         expect_error(&write("nan.ply", &nan), "element vertex[1]", "NaN");
-        let body =
-            "0 0 0 0 0 1\nnan 0 0 0 0 1\n1 1 0 0 0 1\n0 1 0 0 0 1\n0 0 1 0 0 1\n3 0 1 2\n3 0 2 3\n";
-        expect_error(
-            &write("nan_ascii.ply", format!("{PLY_HEADER}{body}").as_bytes()),
-            "element vertex[1]",
-            "NaN",
-        );
-        let body =
-            "0 0 0 0 0 1\n1 0 0 0 0 1\n1 1 0 0 0 1\n0 1 0 0 0 1\n0 0 1 0 0 1\n3 0 1 9\n3 0 2 3\n";
-        expect_error(
-            &write("range.ply", format!("{PLY_HEADER}{body}").as_bytes()),
-            "element face[0].vertex_indices",
-            "9",
-        );
-        let body =
-            "0 0 0 0 0 1\n1 0 0 0 0 1\n1 1 0 0 0 1\n0 1 0 0 0 1\n0 0 1 0 0 1\n2 0 1\n3 0 2 3\n";
-        expect_error(
-            &write("short.ply", format!("{PLY_HEADER}{body}").as_bytes()),
-            "element face[0]",
-            "[0, 1]",
-        );
-        let body =
-            "0 0 0 0 0 1\n1 0 0 0 0 1 7\n1 1 0 0 0 1\n0 1 0 0 0 1\n0 0 1 0 0 1\n3 0 1 2\n3 0 2 3\n";
-        expect_error(
-            &write("extra.ply", format!("{PLY_HEADER}{body}").as_bytes()),
-            "element vertex[1] (payload line 2)",
-            "7",
-        );
+        // Bodies for PLY_HEADER (5 vertices, 2 faces), each with one fault.
+        for (name, body, field, value) in [
+            (
+                "nan_ascii.ply",
+                "0 0 0 0 0 1\nnan 0 0 0 0 1\n1 1 0 0 0 1\n0 1 0 0 0 1\n0 0 1 0 0 1\n3 0 1 2\n3 0 2 3\n",
+                "element vertex[1]",
+                "NaN",
+            ),
+            (
+                "range.ply",
+                "0 0 0 0 0 1\n1 0 0 0 0 1\n1 1 0 0 0 1\n0 1 0 0 0 1\n0 0 1 0 0 1\n3 0 1 9\n3 0 2 3\n",
+                "element face[0].vertex_indices",
+                "9",
+            ),
+            (
+                "short.ply",
+                "0 0 0 0 0 1\n1 0 0 0 0 1\n1 1 0 0 0 1\n0 1 0 0 0 1\n0 0 1 0 0 1\n2 0 1\n3 0 2 3\n",
+                "element face[0]",
+                "[0, 1]",
+            ),
+            (
+                "extra.ply",
+                "0 0 0 0 0 1\n1 0 0 0 0 1 7\n1 1 0 0 0 1\n0 1 0 0 0 1\n0 0 1 0 0 1\n3 0 1 2\n3 0 2 3\n",
+                "element vertex[1] (payload line 2)",
+                "7",
+            ),
+        ] {
+            expect_error(
+                &write(name, format!("{PLY_HEADER}{body}").as_bytes()),
+                field,
+                value,
+            );
+        }
     }
 
     /// OBJ face errors name the line, the face, the corner and the index as written.

@@ -447,7 +447,7 @@ impl Reference {
             return Err(InputError::new(
                 path,
                 "pixels",
-                format!("{}", human(left)),
+                human(left),
                 format!(
                     "the header's {width}×{height} pixels need {}",
                     human(pixel_bytes)

@@ -315,7 +315,9 @@ fn header(bytes: &[u8], path: &Path) -> Result<Header, InputError> {
     let mut at = 0;
     let mut encoding = None;
     let mut elements: Vec<Element> = Vec::new();
-    for number in 1.. {
+    let mut number = 0;
+    loop {
+        number += 1;
         let Some(length) = bytes[at..].iter().position(|&b| b == b'\n') else {
             return Err(InputError::new(
                 path,
@@ -410,7 +412,6 @@ fn header(bytes: &[u8], path: &Path) -> Result<Header, InputError> {
             _ => return Err(bad("not a PLY header line")),
         }
     }
-    unreachable!("the loop returns")
 }
 
 /// The vertex element has scalar `x`, `y`, `z`; faces and strips have an integer index list.

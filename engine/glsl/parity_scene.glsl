@@ -89,7 +89,8 @@ void main() {
     res.radius_px = camera_spatial_radius_px(frame_params.camera, x, q.max_d);
     GpuMaterial m = scene_materials[q.material];
     res.profile = to_array(material_is_translucent(m) ? material_profile_rgb(m, q.r) : vec3(0.0));
-    res.fresnel = material_fresnel_transmission(q.mu);
+    res.fresnel =
+        material_is_translucent(m) ? fresnel_transmission_eval(material_fresnel(m), q.mu) : 0.0;
     res.pdf_at = lights_pdf(x, q.light, p);
     results[i] = res;
 }

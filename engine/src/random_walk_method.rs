@@ -5,11 +5,13 @@
 //! its difference to the BSSRDF reference, not only its noise):
 //! * the medium is the material's by seed 000's colour mapping ([`Medium::from_translucent`]),
 //!   so `fit = "dmfp"` materials are an input error;
-//! * the boundary is Fresnel-free Lambertian transmission ([`Interface::Diffuse`]), the exit lobe
-//!   `1/π` of the diffusion profiles, which lets exits use next-event estimation (a smooth
-//!   dielectric exit could only reach area lights by chance);
+//! * the boundary is the material's `boundary` ([`Interface::of`]); the default, Fresnel-free
+//!   Lambertian transmission, has the exit lobe `1/π` of the diffusion profiles and lets exits
+//!   use next-event estimation (a smooth dielectric exit reaches area lights only by chance);
 //! * the boundary is the hit object's own mesh; x1's outward normal comes from its winding as
 //!   seen by the camera (the camera sees closed objects from outside).
+//!
+//! [`Interface::of`]: sss::random_walk::Interface::of
 //!
 //! [`SceneLighting`] adapts the scene's lights to [`ExitLighting`], with shadow rays.
 
@@ -19,17 +21,14 @@ use glam::{DVec3, Vec3, Vec3A};
 use restir::rng::{Stream, StreamKey};
 use sss::geometry::Ray;
 use sss::integrator::pt::{self, PtSettings};
-use sss::material::Material;
-use sss::random_walk::{self, ExitLighting, Interface, Medium, MeshBoundary, estimate_exitant};
+use sss::random_walk::{self, ExitLighting, Medium, MeshBoundary, estimate_exitant};
 use sss::scene::{GBuffer, Light, Scene};
 
 use crate::PipelineError;
 use crate::image::Image;
 
-/// `purpose` of the walks' streams (ASCII "RW" + 1).
-pub const PURPOSE_WALK: u32 = 0x5257_0001;
-/// `purpose` of the light-selection numbers of [`SceneLighting`].
-pub const PURPOSE_WALK_LIGHT: u32 = 0x5257_0002;
+/// `purpose` of the walks' streams and of the light-selection numbers of [`SceneLighting`].
+pub use crate::purpose::{WALK as PURPOSE_WALK, WALK_LIGHT as PURPOSE_WALK_LIGHT};
 
 /// The scene's lights as seen from boundary points where a walk leaves, with visibility.
 /// [`Lights::sample`](sss::scene::Lights::sample) takes three numbers and the walk supplies two:
@@ -154,22 +153,8 @@ pub fn render(
     seed: u64,
     spp: u32,
 ) -> Result<(Image, u64), PipelineError> {
-    let media = scene
-        .materials
-        .iter()
-        .enumerate()
-        .map(|(i, m)| match m {
-            Material::Translucent(t) => Medium::from_translucent(
-                t,
-                Interface::Diffuse,
-                std::path::Path::new(&scene.name),
-                &format!("materials[{i}]"),
-            )
-            .map(Some),
-            Material::Lambert(_) => Ok(None),
-        })
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(|e| PipelineError::Config(format!("random-walk: {e}")))?;
+    let media =
+        Medium::of_scene(scene).map_err(|e| PipelineError::Config(format!("random-walk: {e}")))?;
     let base = pt::render(scene, gbuffer, &PtSettings::default(), seed, 0, spp);
     let mut nonfinite = base.nonfinite;
     let mut pixels: Vec<DVec3> = base.pixels;

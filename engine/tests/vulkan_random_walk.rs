@@ -72,7 +72,7 @@ fn cpu_walks(scene: &Scene, gbuffer: &GBuffer, seed: u64, spp: u32) -> (Vec<[u32
         else {
             continue;
         };
-        let medium = Medium::from_translucent(t, Interface::Diffuse, Path::new("x"), "m").unwrap();
+        let medium = Medium::from_translucent(t, Path::new("x"), "m").unwrap();
         let n = scene.geometry.geometric_normal(g.prim);
         let inward_winding = n.dot(g.view) < 0.0;
         let boundary = MeshBoundary {
@@ -253,8 +253,7 @@ fn gray_media(scene: &Scene, absorption: f32, interface: Interface) -> Vec<GpuMe
         .iter()
         .map(|m| match m {
             Material::Translucent(t) => {
-                let cpu =
-                    Medium::from_translucent(t, Interface::Diffuse, Path::new("x"), "m").unwrap();
+                let cpu = Medium::from_translucent(t, Path::new("x"), "m").unwrap();
                 let sigma_t = Vec3::splat(cpu.sigma_t().y);
                 let medium = Medium::new(
                     sigma_t * (1.0 - absorption),

@@ -19,7 +19,7 @@ use engine::vulkan::{
 };
 use glam::Vec3;
 use restir::rng::{Stream, StreamKey};
-use sss::material::{Material, fresnel_transmission};
+use sss::material::Material;
 use sss::scene::{GBuffer, LightSample, Scene, luminance};
 
 /// The run seed of every stream in this file.
@@ -507,7 +507,13 @@ fn compare_rest(scene: &Scene, q: &SceneQuery, got: &SceneResult, frame: u32) ->
             got.radius_px,
             scene.camera.spatial_radius_px(frame, x, q.max_d),
         ),
-        ulps(got.fresnel, fresnel_transmission(q.mu)),
+        ulps(
+            got.fresnel,
+            match scene.materials[q.material as usize] {
+                Material::Translucent(t) => t.fresnel().eval(q.mu),
+                Material::Lambert(_) => 0.0,
+            },
+        ),
     ]
     .into_iter()
     .max()

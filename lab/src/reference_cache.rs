@@ -47,6 +47,12 @@ pub struct Obtained {
     pub cached: bool,
 }
 
+/// The version of the transport model a cached reference was computed with. Bump it whenever the
+/// reference's estimate changes (the BSSRDF, the path tracer, the scenes' defaults: the `pt` rows
+/// of `lab/tests/pinned_output.rs` change), so that no stale cache file is ever reused.
+/// 2: the BSSRDF's Fresnel transmittance uses the material's `ior`.
+pub const MODEL_VERSION: u32 = 2;
+
 /// What identifies a cached reference.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ReferenceKey {
@@ -65,10 +71,10 @@ impl ReferenceKey {
         self.spp_per_batch as u64 * self.batches as u64
     }
 
-    /// `ref-<scene>-<W>x<H>-f<frame>-<batches>x<spp_per_batch>spp.rsref`.
+    /// `ref-v<MODEL_VERSION>-<scene>-<W>x<H>-f<frame>-<batches>x<spp_per_batch>spp.rsref`.
     pub fn file_name(&self) -> String {
         format!(
-            "ref-{}-{}x{}-f{}-{}x{}spp.rsref",
+            "ref-v{MODEL_VERSION}-{}-{}x{}-f{}-{}x{}spp.rsref",
             self.scene, self.width, self.height, self.frame, self.batches, self.spp_per_batch
         )
     }
@@ -273,7 +279,10 @@ mod tests {
             spp_per_batch: 16,
             batches: 32,
         };
-        assert_eq!(key.file_name(), "ref-bumpy-64x48-f15-32x16spp.rsref");
+        assert_eq!(
+            key.file_name(),
+            format!("ref-v{MODEL_VERSION}-bumpy-64x48-f15-32x16spp.rsref")
+        );
         assert_eq!(key.spp(), 512);
     }
 

@@ -15,11 +15,8 @@
 //! dispatches whose loops were cut anyway; [`RandomWalkImage::cut`] sums them, and a caller must
 //! treat a non-zero count as a failed render.
 
-use std::path::Path;
-
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
-use sss::material::Material;
 use sss::random_walk::{Interface, Medium};
 use sss::scene::Scene;
 
@@ -77,26 +74,16 @@ impl GpuMedium {
     }
 }
 
-/// The media of `scene`'s materials as the CPU method builds them: translucent materials by
-/// [`Medium::from_translucent`] with a diffuse interface, Lambert ones a zeroed placeholder.
-/// The CPU's error for a material the walk cannot take (`fit = "dmfp"`).
+/// The media of `scene`'s materials as the CPU method builds them ([`Medium::of_scene`]),
+/// Lambert ones a zeroed placeholder. The CPU's error for a material the walk cannot take
+/// (`fit = "dmfp"`).
 pub fn scene_media(scene: &Scene) -> Result<Vec<GpuMedium>, PipelineError> {
-    scene
-        .materials
+    let media =
+        Medium::of_scene(scene).map_err(|e| PipelineError::Config(format!("random-walk: {e}")))?;
+    Ok(media
         .iter()
-        .enumerate()
-        .map(|(i, m)| match m {
-            Material::Translucent(t) => Medium::from_translucent(
-                t,
-                Interface::Diffuse,
-                Path::new(&scene.name),
-                &format!("materials[{i}]"),
-            )
-            .map(|medium| GpuMedium::new(&medium)),
-            Material::Lambert(_) => Ok(GpuMedium::default()),
-        })
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(|e| PipelineError::Config(format!("random-walk: {e}")))
+        .map(|m| m.as_ref().map_or_else(GpuMedium::default, GpuMedium::new))
+        .collect())
 }
 
 /// `method_random_walk.glsl`'s `RandomWalkStats` (std430, 36 bytes): how one pixel's walks
@@ -201,7 +188,9 @@ pub fn render_random_walk(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use sss::material::{BoundaryKind, Material};
     use std::mem::offset_of;
+    use std::path::Path;
 
     #[test]
     fn buffer_structs_match_std430() {
@@ -220,8 +209,9 @@ mod tests {
         assert_eq!(size_of::<MethodParams>() as u32, RANDOM_WALK.push_bytes);
     }
 
-    /// `bumpy`'s translucent material maps to the CPU's medium bit for bit; its Lambert ones are
-    /// opaque; a `dmfp` material is the CPU's configuration error.
+    /// `bumpy`'s translucent material maps to the CPU's medium bit for bit, with the material's
+    /// boundary (diffuse by default, a dielectric with its `ior` when asked); its Lambert ones
+    /// are opaque; a `dmfp` material is the CPU's configuration error.
     #[test]
     fn scene_media_are_the_cpu_media() {
         let scene = Scene::builtin("bumpy").expect("built-in");
@@ -230,12 +220,26 @@ mod tests {
         for (m, gpu) in scene.materials.iter().zip(&media) {
             match m {
                 Material::Translucent(t) => {
-                    let cpu = Medium::from_translucent(t, Interface::Diffuse, Path::new("x"), "m")
-                        .unwrap();
+                    let cpu = Medium::from_translucent(t, Path::new("x"), "m").unwrap();
                     assert_eq!(*gpu, GpuMedium::new(&cpu));
                     assert_eq!(gpu.interface, GpuMedium::DIFFUSE);
                 }
                 Material::Lambert(_) => assert_eq!(*gpu, GpuMedium::default()),
+            }
+        }
+        let mut dielectric = Scene::builtin("bumpy").expect("built-in");
+        for m in &mut dielectric.materials {
+            if let Material::Translucent(t) = m {
+                t.boundary = BoundaryKind::Dielectric;
+            }
+        }
+        for (m, gpu) in dielectric
+            .materials
+            .iter()
+            .zip(scene_media(&dielectric).unwrap())
+        {
+            if let Material::Translucent(t) = m {
+                assert_eq!((gpu.interface, gpu.eta), (GpuMedium::DIELECTRIC, t.ior));
             }
         }
         let mut dmfp = Scene::builtin("bumpy").expect("built-in");

@@ -14,7 +14,7 @@ mod probe;
 mod sample;
 mod technique;
 
-pub use eval::{bssrdf, contribution, target};
+pub use eval::{bssrdf, bssrdf_of_profile, contribution, target};
 pub use invert::{InvertFail, find_index, invert, invert_random_numbers, invert_technique};
 pub use pdf::{p_disk, technique_terms};
 pub use probe::{EntryPoint, ExitPoint, chord, probe_ray, trace_probe};

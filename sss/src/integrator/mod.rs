@@ -1,9 +1,12 @@
 //! Integrators (DESIGN §4): the path-tracing baseline ([`pt`]) and the progressive reference
-//! ([`reference`]) built on it, with exact order-independent accumulation ([`exact`]).
+//! ([`reference`]) built on it, with exact order-independent accumulation ([`exact`]); seed
+//! 000's hybrid of path-traced zero and single scattering with `R − R1` diffusion
+//! ([`single_scatter`]).
 
 pub mod exact;
 pub mod pt;
 pub mod reference;
+pub mod single_scatter;
 
 pub use exact::ExactSum;
 pub use pt::{HitPolicy, Image, PtSettings, Shading};

@@ -312,6 +312,28 @@ fn huge_sizes_in_files_are_one_line_errors() {
         &["compare", "--replicas", "0", "--out", &out],
         "field `--replicas` = 0: must be in 1..=",
     );
+    let bias = |flags: &[&str], needle: &str| {
+        let args = [&["bias", "--method", "pt"][..], flags].concat();
+        fails_with(&args, needle);
+    };
+    bias(
+        &["--replicas", "1"],
+        "field `--replicas` = 1: must be in 2..=65536",
+    );
+    bias(
+        &["--replicas", "4294967295"],
+        "field `--replicas` = 4294967295: must be in 2..=65536",
+    );
+    bias(
+        &["--reference-batches", "100000"],
+        "field `--reference-batches` = 100000: must be in 2..=65536",
+    );
+    bias(&["--frames", "0"], "field `--frames` = 0");
+    bias(
+        &["--replicas", "65536", "--resolution", "1024x1024"],
+        "field `--replicas` = 65536 replicas, 32 reference batches, 16 frames at 1024×1024: the \
+         bias test would need",
+    );
     fails_with(
         &[
             "render", "--scene", "bumpy", "--method", "pt", "--frames", "0", "--out", &out,

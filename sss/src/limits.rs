@@ -27,7 +27,8 @@ pub const MEMORY_BUDGET: u64 = 16 << 30;
 
 /// Most frames of one run (the trajectory has 16; later frames repeat the last camera).
 pub const MAX_FRAMES: u32 = 1 << 16;
-/// Most replicas of one method in a comparison or a bias test.
+/// Most replicas of one method in a comparison or a bias test (and reference batches of a bias
+/// test).
 pub const MAX_REPLICAS: u32 = 1 << 16;
 /// Most samples per pixel per frame of one method (`pt:N`, `random-walk:N`).
 pub const MAX_SPP: u32 = 1 << 20;

@@ -19,9 +19,8 @@
 const uint PT_PURPOSE_PT = 0x50540001u;
 // SHADOW_EPSILON: shadow-ray origin offset along the normal and shortening at the light.
 const float PT_SHADOW_EPSILON = 1e-4;
-// HitPolicy in declaration order (engine::vulkan::PtParams::hits).
-const uint PT_HITS_UNIFORM_ONE = 0u;
-const uint PT_HITS_ALL = 1u;
+// PtParams::hits: PT_HITS_UNIFORM_ONE, PT_HITS_ALL (engine/src/contract.rs).
+#include "contract/engine.glsl"
 // std::f32::consts::FRAC_1_PI.
 const float PT_FRAC_1_PI = 0.31830987;
 

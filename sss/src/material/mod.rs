@@ -1,12 +1,14 @@
 //! Materials (DESIGN §4): translucent objects with the Burley BSSRDF, Lambert backgrounds, and
-//! the measured presets of Jensen et al. 2001.
+//! the measured presets of Jensen et al. 2001, and the dipole profiles of a translucent material.
 
 pub mod color;
+pub mod dipole;
 pub mod measured;
 pub mod translucent;
 
 use glam::Vec3;
 
+pub use dipole::DipoleProfiles;
 pub use measured::{MEASURED_NAMES, measured};
 pub use translucent::{Translucent, fresnel_transmission};
 

@@ -13,7 +13,7 @@ mod many_lights;
 use std::path::Path;
 
 pub use camera::{Camera, FRAMES};
-pub use gbuffer::{GBuffer, GPixel};
+pub use gbuffer::{GBuffer, GPixel, REPROJECTION_DEPTH_TOLERANCE, REPROJECTION_NORMAL_COSINE};
 pub use light::{DIRECTIONAL_DISTANCE, Light, LightSample, Lights, luminance};
 pub use many_lights::ManyLights;
 

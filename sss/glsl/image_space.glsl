@@ -115,8 +115,10 @@ float image_space_projection_jacobian(vec3 eye, vec3 p_prime, vec3 n_prime, vec3
     return j;
 }
 
-// lookup_pixel: the pixel whose (jittered) sample lies nearest to the projection of p' under
-// `camera` (the frame's), an entry point if it shows `object`.
+// lookup_pixel: the pixel q whose (jittered) sample lies nearest to the projection of p' under
+// `camera` (the frame's), an entry point if it shows `object`: x where the eye ray through p'
+// meets q's tangent plane, q's geometric normal and irradiance; occluded where that ray runs
+// parallel to the plane or meets it behind the eye.
 uint image_space_lookup_pixel(GpuCamera camera, uint object, vec3 p_prime, out vec3 position,
         out vec3 normal, out vec3 irradiance) {
     position = vec3(0.0);
@@ -135,8 +137,16 @@ uint image_space_lookup_pixel(GpuCamera camera, uint object, vec3 p_prime, out v
     if (g.valid == 0u || g.object != object) {
         return IMAGE_SPACE_OCCLUDED;
     }
-    position = pt_vec3(g.position);
-    normal = pt_vec3(g.geometric_normal);
+    vec3 eye = camera_eye(camera);
+    vec3 n = pt_vec3(g.geometric_normal);
+    precise vec3 ray = p_prime - eye;
+    precise float t = glam_dot(n, pt_vec3(g.position) - eye) / glam_dot(n, ray);
+    if (!(t > 0.0 && rust_is_finite(t))) {
+        return IMAGE_SPACE_OCCLUDED;
+    }
+    precise vec3 x = eye + ray * t;
+    position = x;
+    normal = n;
     irradiance = image_space_fetch_irradiance(pixel);
     return IMAGE_SPACE_ENTRY;
 }

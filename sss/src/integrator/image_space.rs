@@ -585,6 +585,33 @@ mod tests {
         }
     }
 
+    /// `Σ B` over the receiver pixels `receivers` of `gbuffer` seen from `eye` (their gather
+    /// streams of pass 0 under `seed`), entry points from `lookup`.
+    fn gather_receivers(
+        eye: Vec3,
+        gbuffer: &GBuffer,
+        receivers: &[usize],
+        profile: &GatherProfile,
+        settings: &ImageSpaceSettings,
+        seed: u64,
+        counts: &mut EntryCounts,
+        lookup: impl Fn(Vec3) -> Lookup,
+    ) -> DVec3 {
+        receivers
+            .iter()
+            .map(|&p| {
+                let g = gbuffer.pixels[p].unwrap();
+                let receiver = Receiver {
+                    position: g.position,
+                    frame: Frame::from_normal(g.geometric_normal),
+                    eye,
+                };
+                let mut rng = StreamKey::new(p as u32, 0, 0, PURPOSE_GATHER).stream(seed);
+                gather_pixel(&receiver, profile, settings, &lookup, &mut rng, counts).as_dvec3()
+            })
+            .sum()
+    }
+
     /// `|dA_x/dA_p′|` against central differences: the images under the central projection of a
     /// small square on the plane (p′, n′) onto the plane (x, n), area ratio, for random eyes,
     /// planes and points (relative 1e-3, f64 projection).
@@ -847,27 +874,18 @@ mod tests {
         let replicas: Vec<DVec3> = (0..R)
             .map(|replica| {
                 let e = irradiance(&scene, &gbuffer, &settings, replica as u64, 0);
-                let mut sum = DVec3::ZERO;
-                for &p in &inside {
-                    let g = gbuffer.pixels[p].unwrap();
-                    let receiver = Receiver {
-                        position: g.position,
-                        frame: Frame::from_normal(g.geometric_normal),
-                        eye,
-                    };
-                    let mut rng =
-                        StreamKey::new(p as u32, 0, 0, PURPOSE_GATHER).stream(replica as u64);
-                    sum += gather_pixel(
-                        &receiver,
-                        &profile,
-                        &settings,
-                        |q| lookup_pixel(&scene, &gbuffer, &e, 0, q),
-                        &mut rng,
-                        &mut counts,
-                    )
-                    .as_dvec3();
-                }
-                sum
+                let lookup = |q| lookup_pixel(&scene, &gbuffer, &e, 0, q);
+                let seed = replica as u64;
+                gather_receivers(
+                    eye,
+                    &gbuffer,
+                    &inside,
+                    &profile,
+                    &settings,
+                    seed,
+                    &mut counts,
+                    lookup,
+                )
             })
             .collect();
         assert_eq!(counts.off_screen + counts.occluded, 0, "{counts:?}");
@@ -1066,42 +1084,33 @@ mod tests {
             (0..R)
                 .map(|replica| {
                     let e = irradiance(&scene, &gbuffer, &settings, replica as u64, 0);
-                    let mut counts = EntryCounts::default();
-                    let mut sum = DVec3::ZERO;
-                    for &p in &receivers {
-                        let g = gbuffer.pixels[p].unwrap();
-                        let receiver = Receiver {
-                            position: g.position,
-                            frame: Frame::from_normal(g.geometric_normal),
-                            eye,
-                        };
-                        let lookup = |q: Vec3| match lookup_pixel(&scene, &gbuffer, &e, 0, q) {
+                    let lookup = |q: Vec3| match lookup_pixel(&scene, &gbuffer, &e, 0, q) {
+                        Lookup::Entry {
+                            normal, irradiance, ..
+                        } if depth_only => {
+                            // The pixel lookup_pixel took (no jitter in this scene).
+                            let c = scene.camera.project(0, q).unwrap();
+                            let depth = gbuffer.get(c.x as u32, c.y as u32).unwrap().depth;
                             Lookup::Entry {
-                                normal, irradiance, ..
-                            } if depth_only => {
-                                // The pixel lookup_pixel took (no jitter in this scene).
-                                let c = scene.camera.project(0, q).unwrap();
-                                let depth = gbuffer.get(c.x as u32, c.y as u32).unwrap().depth;
-                                Lookup::Entry {
-                                    position: eye + (q - eye) * (depth / (q - eye).length()),
-                                    normal,
-                                    irradiance,
-                                }
+                                position: eye + (q - eye) * (depth / (q - eye).length()),
+                                normal,
+                                irradiance,
                             }
-                            other => other,
-                        };
-                        let mut rng =
-                            StreamKey::new(p as u32, 0, 0, PURPOSE_GATHER).stream(replica as u64);
-                        sum += gather_pixel(
-                            &receiver,
-                            &profile,
-                            &settings,
-                            lookup,
-                            &mut rng,
-                            &mut counts,
-                        )
-                        .as_dvec3();
-                    }
+                        }
+                        other => other,
+                    };
+                    let mut counts = EntryCounts::default();
+                    let seed = replica as u64;
+                    let sum = gather_receivers(
+                        eye,
+                        &gbuffer,
+                        &receivers,
+                        &profile,
+                        &settings,
+                        seed,
+                        &mut counts,
+                        lookup,
+                    );
                     assert_eq!(counts.off_screen + counts.occluded + counts.edge_on, 0);
                     sum
                 })

@@ -29,7 +29,7 @@ use sss::integrator::pt::{self, PtSettings};
 use sss::profile::ProfileKind;
 use sss::scene::{GBuffer, Scene, luminance};
 
-use experiments::regions::{Region, Regions};
+use lab::regions::{Region, Regions};
 
 const FRAME: u32 = 15;
 const REFERENCE_BATCHES: u32 = 16;
@@ -376,7 +376,7 @@ fn adaptive_efficiency(
         ),
     );
     if let Some(counts) = last_counts {
-        let image = experiments::Image {
+        let image = engine::Image {
             width: counts.width,
             height: counts.height,
             pixels: counts

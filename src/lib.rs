@@ -2,7 +2,8 @@
 //!
 //! This facade re-exports the workspace crates; see `docs/architecture.md` for the layout.
 
-pub use experiments;
+pub use engine;
+pub use lab;
 pub use restir;
 pub use shifts;
 pub use sss;

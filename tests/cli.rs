@@ -446,7 +446,7 @@ fn compare_runs_on_every_builtin_scene_and_validates() {
 
 /// `bias` on every built-in scene (16×12, 2 frames, N = 3 replicas of `restir:hybrid`, 3
 /// reference batches × 8 spp, δ = 3%, α = 0.01): exits 0 and its JSON validates. The verdicts
-/// at this N are not asserted (the statistical tests live in `experiments::bias`).
+/// at this N are not asserted (the statistical tests live in `lab::bias`).
 #[test]
 fn bias_runs_on_every_builtin_scene_and_validates() {
     let schema = &schemas()[1];
@@ -603,10 +603,10 @@ fn gpu_flags_need_the_vulkan_backend() {
 
 /// The Vulkan backend, or why it is unavailable; `RESHIFT_REQUIRE_VULKAN=1` turns "unavailable"
 /// into a failure.
-fn vulkan_or_reason(test: &str) -> Result<experiments::Backend, String> {
-    match experiments::Backend::vulkan(None, false) {
+fn vulkan_or_reason(test: &str) -> Result<engine::Backend, String> {
+    match engine::Backend::vulkan(None, false) {
         Ok(backend) => Ok(backend),
-        Err(e) if std::env::var(experiments::vulkan::REQUIRE_ENV).as_deref() == Ok("1") => {
+        Err(e) if std::env::var(engine::vulkan::REQUIRE_ENV).as_deref() == Ok("1") => {
             panic!("{test}: RESHIFT_REQUIRE_VULKAN=1 but the Vulkan backend is unavailable: {e}")
         }
         Err(e) => {
@@ -661,7 +661,7 @@ fn render_on_the_vulkan_backend_or_a_one_line_error() {
             }
             let mut strict = argv("pt");
             strict.push("--require-gpu".into());
-            let is_cpu = backend.device().unwrap().kind == experiments::vulkan::DeviceKind::Cpu;
+            let is_cpu = backend.device().unwrap().kind == engine::vulkan::DeviceKind::Cpu;
             if is_cpu {
                 let s: Vec<&str> = strict.iter().map(String::as_str).collect();
                 fails_with(&s, "CPU implementation");

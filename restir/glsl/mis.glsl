@@ -8,7 +8,7 @@
 // restir::mis::MAX_DOMAINS.
 const uint MAX_DOMAINS = 16u;
 
-// experiments::preset::MisKind, in declaration order.
+// engine::preset::MisKind, in declaration order.
 const uint MIS_GBH = 0u;
 const uint MIS_PAIRWISE = 1u;
 const uint MIS_DEFENSIVE_PAIRWISE = 2u;

@@ -1,5 +1,5 @@
 // The resampling driver [001 Alg. 2]: the GLSL twin of restir::resample::resample, specialised to
-// the SSS domain and the shifts of shift.glsl, and of the shared tail of experiments::reuse
+// the SSS domain and the shifts of shift.glsl, and of the shared tail of engine::reuse
 // (Step::run: resample, resolve a deferred index, count shift diagnostics).
 //
 // The domains and reservoirs of one step are shader-private globals (index 0 = the receiver,
@@ -7,7 +7,7 @@
 // one uint, 0 = none: the low byte is the kind, bits 8..15 the domain index (`source`; the
 // domain count for RESAMPLE_TOO_MANY_DOMAINS):
 //   1..4 Candidate { Weight, Target, Confidence, Ucw }, 5 TooManyDomains, 6 BadPdf, 7 BadJacobian
-// (experiments::vulkan::decode_error reads them back).
+// (engine::vulkan::decode_error reads them back).
 // Include after `#define SCENE_BINDING ...`; the including shader enables
 // GL_EXT_shader_explicit_arithmetic_types_int64.
 

@@ -16,10 +16,10 @@
 // Offset of shadow-segment ends from x2 (along its geometric normal) and from x3.
 const float DOMAIN_SHADOW_EPSILON = 1e-4;
 // Stream purpose tags of the shifts (top two bits of StreamKey::purpose; the low 30 bits hold
-// the source pixel): probabilistic inversion's gamma and the uniform hit pick.
+// the partner pixel): probabilistic inversion's gamma and the uniform hit pick.
 const uint DOMAIN_PURPOSE_INVERSION = 2u << 30;
 const uint DOMAIN_PURPOSE_PICK = 3u << 30;
-const uint DOMAIN_SOURCE_PIXEL_MASK = (1u << 30) - 1u;
+const uint DOMAIN_PARTNER_PIXEL_MASK = (1u << 30) - 1u;
 
 // The domain of one pixel: its translucent material, x1, the technique selection and the stream
 // key fields.
@@ -174,10 +174,11 @@ float domain_target(SssDomain domain, SssSample y) {
     return rust_max(bssrdf_target(domain_contribution(domain, y)), 0.0);
 }
 
-// SssDomain::shift_stream: the stream of a shift that receives into `domain` from `source`,
-// keyed (pixel, frame, pass, purpose | source pixel & 0x3FFF_FFFF) under the run seed.
-Stream domain_shift_stream(SssDomain domain, uint purpose, SssDomain source) {
-    uint tagged = purpose | (source.pixel & DOMAIN_SOURCE_PIXEL_MASK);
+// SssDomain::shift_stream: the stream of a shift's random numbers used at `domain` when it is
+// paired with `partner`, keyed (pixel, frame, pass, purpose | partner pixel & 0x3FFF_FFFF) under
+// the run seed.
+Stream domain_shift_stream(SssDomain domain, uint purpose, SssDomain partner) {
+    uint tagged = purpose | (partner.pixel & DOMAIN_PARTNER_PIXEL_MASK);
     return stream_new(StreamKey(domain.pixel, domain.frame, domain.pass, tagged), domain.seed);
 }
 

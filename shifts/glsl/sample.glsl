@@ -1,5 +1,5 @@
 // The stored sample and reservoir of the SSS pipeline: std430 twins of shifts::SssSample
-// (shifts/src/sample.rs, 64 bytes) and experiments::layout::PixelReservoir (80 bytes). Arrays of
+// (shifts/src/sample.rs, 64 bytes) and engine::layout::PixelReservoir (80 bytes). Arrays of
 // float keep the std430 layout identical to the Rust #[repr(C)] structs (a vec3 would align to 16).
 
 #ifndef SHIFTS_SAMPLE_GLSL

@@ -1,6 +1,6 @@
 // Shift mappings on SSS paths: the GLSL twins of restir::shift::{Fail, Shift} and of every
 // shift of the `shifts` crate (shifts/src/*.rs), dispatched on the index of
-// experiments::preset::ShiftKind::ALL (DESIGN §5, §9).
+// engine::preset::ShiftKind::ALL (DESIGN §5, §9).
 //
 // A shift is `uint f(..., out SssSample y, out float jacobian)`: SHIFT_OK with `y = T(x)` and
 // `J = |T'(x)|`, or the Fail code. Include after `#define SCENE_BINDING ...`; the including
@@ -21,7 +21,7 @@ const uint SHIFT_FAIL_OCCLUDED = 3u;
 const uint SHIFT_FAIL_DEGENERATE = 4u;
 const uint SHIFT_FAIL_REJECTED = 5u;
 
-// experiments::preset::ShiftKind::ALL, in order.
+// engine::preset::ShiftKind::ALL, in order.
 const uint SHIFT_IDENTITY = 0u;
 const uint SHIFT_RECONNECTION = 1u;
 const uint SHIFT_DELAYED = 2u;

@@ -19,10 +19,10 @@ use crate::sample::SssSample;
 const SHADOW_EPSILON: f32 = 1e-4;
 
 /// Stream purpose tags of the shifts, in the top two bits of [`StreamKey::purpose`]; the low 30
-/// bits hold the source pixel (see [`SssDomain::shift_stream`]).
+/// bits hold the partner pixel (see [`SssDomain::shift_stream`]).
 pub(crate) const PURPOSE_INVERSION: u32 = 0b10 << 30;
 pub(crate) const PURPOSE_PICK: u32 = 0b11 << 30;
-const SOURCE_PIXEL_MASK: u32 = (1 << 30) - 1;
+const PARTNER_PIXEL_MASK: u32 = (1 << 30) - 1;
 
 /// The direction toward the light vertex seen from x2, and what the light sends along it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -38,12 +38,16 @@ pub struct LightPath {
 /// One domain Ω: the pixel `pixel` (linear index) of frame `frame`, receiving in pass `pass`,
 /// under the run seed `seed`.
 ///
-/// Shifts that need randomness draw it from the receiving domain's stream
-/// `StreamKey { pixel, frame, pass, purpose: TAG | (source pixel & 0x3FFF_FFFF) }.stream(seed)`,
+/// Shifts that need randomness draw it from the stream of the domain where it is used, keyed by
+/// the other domain of the pair:
+/// `StreamKey { pixel, frame, pass, purpose: TAG | (partner pixel & 0x3FFF_FFFF) }.stream(seed)`,
 /// with `TAG = 0b10 << 30` for probabilistic inversion's γ and `0b11 << 30` for the uniform hit
-/// pick of an unknown intersection index (the pipeline's own purposes stay below 2³⁰). A shift
-/// is then deterministic given `(src, dst)`, and independent across receivers, passes and
-/// sources (for images of up to 2³⁰ pixels).
+/// pick of an unknown intersection index (the pipeline's own purposes stay below 2³⁰). The
+/// receiver's stream serves `T_{src→dst}` (inversion at y1, the pick); the exact index policy
+/// also inverts at the source, with the source's stream, which is the γ its back-shift
+/// `T_{dst→src}` draws (`crate::InvertingReconnection`). A shift is then deterministic given
+/// `(src, dst)`, and independent across receivers, passes and sources (for images of up to 2³⁰
+/// pixels).
 #[derive(Clone, Copy)]
 pub struct SssDomain<'s> {
     scene: &'s Scene,
@@ -202,9 +206,10 @@ impl<'s> SssDomain<'s> {
             .occluded(&Ray::segment(Vec3A::from(from), Vec3A::from(to)))
     }
 
-    /// The stream of a shift that receives into this domain from `source` (key in [`SssDomain`]).
-    pub(crate) fn shift_stream(&self, purpose: u32, source: &SssDomain) -> Stream {
-        let purpose = purpose | (source.pixel & SOURCE_PIXEL_MASK);
+    /// The stream of a shift's random numbers used at this domain when it is paired with
+    /// `partner` (key in [`SssDomain`]).
+    pub(crate) fn shift_stream(&self, purpose: u32, partner: &SssDomain) -> Stream {
+        let purpose = purpose | (partner.pixel & PARTNER_PIXEL_MASK);
         StreamKey::new(self.pixel, self.frame, self.pass, purpose).stream(self.seed)
     }
 }

@@ -3,7 +3,7 @@
 //! later delayed-reconnection pass can replay them.
 
 use restir::shift::{Fail, Shift, Shifted};
-use sss::bssrdf::{BssrdfSample, find_index, invert_random_numbers};
+use sss::bssrdf::{BssrdfSample, EntryPoint, Probe, find_index, invert_random_numbers};
 
 use crate::domain::{PURPOSE_INVERSION, SssDomain};
 use crate::reconnection::reconnect;
@@ -12,8 +12,9 @@ use crate::sample::SssSample;
 /// How the intersection index of an inverted sample is found (DESIGN §5).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum IndexPolicy {
-    /// Re-trace the chord during the shift; fail (`NotInvertible`) if x2 is not among its hits
-    /// (matched by triangle and `t`). Unbiased.
+    /// Re-trace the chord during the shift at *both* ends of the pair; fail (`NotInvertible`) if
+    /// x2 is not among the hits of either (matched by triangle and `t`). Unbiased: the shift and
+    /// its back-shift fail on the same events (see [`InvertingReconnection`]).
     Exact,
     /// Leave the index unknown; [`resolve_deferred_index`] sets it for the selected sample after
     /// the pass. Seed 001's fast choice, slightly biased.
@@ -26,14 +27,28 @@ pub enum IndexPolicy {
 /// `u_radius = CDF_{d_c}(r_a)`, `u_angle = atan2 / 2π` wrapped to [0, 1), and `p_disk(x2 | y1)` is
 /// cached.
 ///
-/// `γ` is the first number of the receiver's stream `(dst.pixel, dst.frame, dst.pass,
-/// PURPOSE_INVERSION | src.pixel)` (see [`SssDomain`]), so the shift is deterministic given
-/// `(src, dst)`.
+/// The inversion at a domain `e` paired with `p` uses `γ_e`, the first number of the stream
+/// `(e.pixel, e.frame, e.pass, PURPOSE_INVERSION | p.pixel)` (see [`SssDomain`]); the shift is
+/// deterministic given `(src, dst)`.
 ///
-/// Round trips are equal in path space (x2, x3), `J = 1` in both directions: the random numbers
-/// are an auxiliary variable re-sampled from its conditional distribution given the path
-/// [001 §4.2, App. A], not a coordinate of the path, and the round trip re-draws them for the
-/// source pixel.
+/// **Extended path space** [001 §4.2, App. A]. For the pair `{s, d}` the shift acts on
+/// `P × Γ²`, `(x, γ_s, γ_d) ↦ (x, γ_s, γ_d)`: the identity on the path (x2, x3) and on both
+/// γ's, so `J = 1`. The random numbers a sample stores at `e` are `R_e(x, γ_e)`, and the point
+/// belongs to the extended domain of `e` only if they regenerate x2 there, i.e. the re-traced
+/// chord finds x2. `T_{s→d}` needs this at `d` to write its sample, and its back-shift
+/// `T_{d→s}` (evaluated by the MIS weights of every other sample of the pass) needs it at `s`.
+/// With the exact policy both directions therefore test *both* ends, each with its own `γ_e`:
+/// the same two γ-dependent events, so a point fails one way exactly when its image fails the
+/// other, and the MIS weights partition unity for every sample. Testing only the receiving end
+/// (each direction its own) is biased where the two chords disagree
+/// (`shifts/tests/mis_weights.rs`). The deferred policy has no γ-dependent failure.
+///
+/// Round trips are equal in path space (x2, x3) and in both γ's, `J = 1` in both directions; the
+/// stored random numbers are recomputed at each end, so the round trip re-draws them for the
+/// source pixel. Over runs `γ_e` is uniform and independent of the path (the run seed keys it),
+/// so the stored technique follows its posterior given x2, which a later delayed pass's mixture
+/// Jacobian `p_disk(x2|x1)/p_disk(y2|y1)` requires (`shifts/tests/jacobian.rs`); within a run it
+/// is fixed per pair, frame and pass.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct InvertingReconnection {
     pub policy: IndexPolicy,
@@ -48,20 +63,35 @@ impl Shift<SssDomain<'_>> for InvertingReconnection {
     ) -> Result<Shifted<SssSample>, Fail> {
         let y = reconnect(x, dst)?;
         let x2 = dst.entry_point(&y).ok_or(Fail::Rejected)?;
-        let gamma = dst.shift_stream(PURPOSE_INVERSION, src).next_f32();
-        let (probe, p_disk) = invert_random_numbers(dst.x1(), dst.selection(), &x2, gamma)
-            .map_err(|_| Fail::OutOfSupport)?;
-        let index = match self.policy {
-            IndexPolicy::Exact => {
-                let mut hits = Vec::new();
-                let index = find_index(&dst.scene().geometry, dst.x1(), &probe, &x2, &mut hits);
-                Some(index.ok_or(Fail::NotInvertible)?)
-            }
-            IndexPolicy::Deferred => None,
-        };
+        let exact = self.policy == IndexPolicy::Exact;
+        let (probe, p_disk, index) = invert_at(dst, src, &x2, exact)?;
+        if exact {
+            // The back-shift's own inversion: T_{dst→src} fails exactly when this does.
+            invert_at(src, dst, &x2, true)?;
+        }
         let y = y.with_bssrdf(&BssrdfSample::new(&probe, index, &x2, p_disk));
         Ok(Shifted { y, jacobian: 1.0 })
     }
+}
+
+/// Probabilistic inversion of x2 at `end`'s x1 with `γ_end` (keyed by `partner`) [001 Alg. 4]:
+/// the probe, `p_disk(x2 | x1)` and, with `find`, x2's rank among the re-traced chord's hits
+/// (`NotInvertible` when x2 is not among them); `OutOfSupport` when no technique reaches x2.
+fn invert_at(
+    end: &SssDomain,
+    partner: &SssDomain,
+    x2: &EntryPoint,
+    find: bool,
+) -> Result<(Probe, f32, Option<u32>), Fail> {
+    let gamma = end.shift_stream(PURPOSE_INVERSION, partner).next_f32();
+    let (probe, p_disk) = invert_random_numbers(end.x1(), end.selection(), x2, gamma)
+        .map_err(|_| Fail::OutOfSupport)?;
+    if !find {
+        return Ok((probe, p_disk, None));
+    }
+    let mut hits = Vec::new();
+    let index = find_index(&end.scene().geometry, end.x1(), &probe, x2, &mut hits);
+    Ok((probe, p_disk, Some(index.ok_or(Fail::NotInvertible)?)))
 }
 
 /// The deferred policy's second half: for the sample selected after a pass, re-trace its chord at

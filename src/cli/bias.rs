@@ -1,14 +1,12 @@
 //! `reshift bias`: N replicas of one method against independent path-traced reference batches;
 //! per region the Welch test of zero bias (Holm across regions) and the equivalence verdict with
-//! tolerance δ (`experiments::bias`).
+//! tolerance δ (`lab::bias`).
 
 use clap::Args;
-use experiments::bias::{
-    BiasRow, Protocol, Table, bias_rows, luminance, reference_images, summarize,
-};
-use experiments::compare::REFERENCE_SEED;
-use experiments::methods::Method;
-use experiments::regions::Regions;
+use lab::bias::{BiasRow, Protocol, Table, bias_rows, luminance, reference_images, summarize};
+use lab::methods::Method;
+use lab::reference_cache::REFERENCE_SEED;
+use lab::regions::Regions;
 use restir::stats::Verdict;
 use serde_json::{Value, json};
 use sss::scene::GBuffer;

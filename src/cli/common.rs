@@ -1,17 +1,16 @@
-//! What every subcommand shares: the one-line error type, scene and resolution arguments,
-//! output folders, progress bars and the Ctrl-C flag.
+//! What every subcommand shares: the one-line error type, the backend and resolution
+//! arguments, progress bars and the Ctrl-C flag (also as a `lab::progress::Progress`).
 
 use std::fmt;
-use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Duration;
 
 use clap::{Args, ValueEnum};
-use experiments::Backend;
-use experiments::compare::fnv1a;
+use engine::Backend;
 use indicatif::{ProgressBar, ProgressStyle};
 use sss::InputError;
-use sss::scene::Scene;
+
+pub use lab::scenes::{LoadedScene, load_scene, with_resolution};
 
 /// A failed command: printed as one line, `reshift: <message>`, with a non-zero exit status.
 #[derive(Debug)]
@@ -36,10 +35,11 @@ macro_rules! from_error {
 
 from_error!(
     InputError,
-    experiments::PipelineError,
-    experiments::methods::MethodError,
-    experiments::image::WriteError,
-    experiments::vulkan::VulkanError,
+    engine::PipelineError,
+    lab::methods::MethodError,
+    lab::Error,
+    engine::image::WriteError,
+    engine::vulkan::VulkanError,
     restir::resample::ResampleError
 );
 
@@ -98,43 +98,6 @@ impl BackendArgs {
     }
 }
 
-/// A scene as named on the command line, with its cache key.
-pub struct LoadedScene {
-    pub scene: Scene,
-    /// The built-in name, or `file-<stem>-<FNV-1a of the text>` for a scene file.
-    pub key: String,
-}
-
-/// `--scene`: a built-in name, or a path to a scene file (anything with a `/` or ending in
-/// `.toml`). Unknown names list the built-ins.
-pub fn load_scene(spec: &str) -> CliResult<LoadedScene> {
-    if let Some(scene) = Scene::builtin(spec) {
-        return Ok(LoadedScene {
-            scene,
-            key: spec.to_string(),
-        });
-    }
-    let path = Path::new(spec);
-    if spec.ends_with(".toml") || spec.contains('/') || path.exists() {
-        let text = std::fs::read(path)
-            .map_err(|e| InputError::new(path, "(file)", format!("{spec:?}"), e.to_string()))?;
-        let scene = Scene::load(path)?;
-        let key = format!("file-{}-{:016x}", scene.name, fnv1a(&text));
-        return Ok(LoadedScene { scene, key });
-    }
-    let names: Vec<&str> = Scene::BUILTIN.iter().map(|(n, _)| *n).collect();
-    Err(InputError::new(
-        "(command line)",
-        "--scene",
-        format!("{spec:?}"),
-        format!(
-            "unknown scene; built-in: {} (or a path to a .toml file)",
-            names.join(", ")
-        ),
-    )
-    .into())
-}
-
 /// Parses `WxH` (both ≥ 1 and at most 16384).
 pub fn parse_resolution(text: &str) -> CliResult<(u32, u32)> {
     let bad = |reason: &str| {
@@ -158,32 +121,6 @@ pub fn parse_resolution(text: &str) -> CliResult<(u32, u32)> {
         (Some(w), Some(h)) => Ok((w, h)),
         _ => Err(bad("width and height must be integers in 1..=16384")),
     }
-}
-
-/// The scene with the camera at `resolution` (`None`: the scene file's own).
-pub fn with_resolution(scene: Scene, resolution: Option<(u32, u32)>) -> Scene {
-    match resolution {
-        Some((w, h)) => Scene {
-            camera: scene.camera.with_resolution(w, h),
-            ..scene
-        },
-        None => scene,
-    }
-}
-
-/// Creates `dir` (and parents) and checks that a file can be written in it.
-pub fn output_dir(dir: &Path) -> CliResult<PathBuf> {
-    let fail = |e: std::io::Error| CliError(format!("output folder {}: {e}", dir.display()));
-    std::fs::create_dir_all(dir).map_err(fail)?;
-    let probe = dir.join(".reshift-write-test");
-    std::fs::write(&probe, b"").map_err(fail)?;
-    std::fs::remove_file(&probe).map_err(fail)?;
-    Ok(dir.to_path_buf())
-}
-
-/// Writes `text` to `path`, naming the file in the error.
-pub fn write_file(path: &Path, text: &str) -> CliResult<()> {
-    std::fs::write(path, text).map_err(|e| CliError(format!("{}: {e}", path.display())))
 }
 
 /// Set by the first Ctrl-C: loops finish their current unit of work and write partial output.
@@ -223,25 +160,41 @@ pub fn progress(len: u64, what: &str) -> ProgressBar {
     bar
 }
 
-/// A file-name-safe form of a method name (`restir:hybrid` → `restir-hybrid`).
-pub fn file_stem(name: &str) -> String {
-    name.chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' || c == '.' {
-                c
-            } else {
-                '-'
-            }
-        })
-        .collect()
+/// Progress bars on stderr and the Ctrl-C flag, for the lab's long jobs: one bar per phase.
+#[derive(Default)]
+pub struct Bars(Option<ProgressBar>);
+
+impl lab::progress::Progress for Bars {
+    fn begin(&mut self, what: &str, total: u64, done: u64) {
+        let bar = progress(total, what);
+        bar.set_position(done);
+        self.0 = Some(bar);
+    }
+
+    fn item(&mut self, name: &str) {
+        if let Some(bar) = &self.0 {
+            bar.set_message(name.to_string());
+        }
+    }
+
+    fn step(&mut self) {
+        if let Some(bar) = &self.0 {
+            bar.inc(1);
+        }
+    }
+
+    fn end(&mut self) {
+        if let Some(bar) = self.0.take() {
+            bar.finish_and_clear();
+        }
+    }
+
+    fn stop_requested(&self) -> bool {
+        interrupted()
+    }
 }
 
 /// `serde_json` number or `null` for a non-finite value.
 pub fn json_number(v: f64) -> serde_json::Value {
     serde_json::Number::from_f64(v).map_or(serde_json::Value::Null, serde_json::Value::Number)
-}
-
-/// [`json_number`] of an optional value.
-pub fn json_opt(v: Option<f64>) -> serde_json::Value {
-    v.map_or(serde_json::Value::Null, json_number)
 }

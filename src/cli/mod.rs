@@ -4,12 +4,11 @@ pub mod bias;
 pub mod common;
 pub mod compare;
 pub mod experiment;
-pub mod figures;
 pub mod reference;
 pub mod render;
 
 use clap::Args;
-use experiments::methods::REGISTRY;
+use lab::methods::REGISTRY;
 use serde_json::json;
 use sss::scene::Scene;
 

@@ -3,22 +3,18 @@
 //! (`sss::integrator::reference` sums exactly).
 
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
 
 use clap::Args;
-use experiments::Image;
-use experiments::compare::{REFERENCE_SEED, reference_pixels};
+use lab::reference_cache::{REFERENCE_SEED, accumulate, mean_image};
+use lab::report::output_dir;
 use serde_json::json;
 use sss::integrator::pt::PtSettings;
 use sss::integrator::{Reference, ReferenceConfig, Shard};
-use sss::scene::{FRAMES, GBuffer, Scene};
+use sss::scene::FRAMES;
 
 use super::common::{
-    CliError, CliResult, interrupted, load_scene, parse_resolution, progress, with_resolution,
+    Bars, CliError, CliResult, interrupted, load_scene, parse_resolution, with_resolution,
 };
-
-/// Checkpoints are written at least this often while a reference renders.
-const CHECKPOINT_EVERY: Duration = Duration::from_secs(30);
 
 #[derive(Args, Clone, Debug)]
 pub struct ReferenceArgs {
@@ -70,51 +66,12 @@ pub struct MergeArgs {
     pub json: bool,
 }
 
-/// Renders the remaining batches of `reference` (at most `max_batches`) one at a time with a
-/// progress bar, saving a checkpoint to `path` every [`CHECKPOINT_EVERY`], on Ctrl-C (after
-/// the current batch) and at the end.
-pub fn accumulate(
-    reference: &mut Reference,
-    scene: &Scene,
-    path: &Path,
-    what: &str,
-    max_batches: Option<u32>,
-) -> CliResult<()> {
-    let gbuffer = GBuffer::render(scene, reference.config.frame);
-    let bar = progress((reference.end - reference.start) as u64, what);
-    bar.set_position(reference.batches_done() as u64);
-    let mut saved = Instant::now();
-    let stop = reference
-        .next
-        .saturating_add(max_batches.unwrap_or(u32::MAX))
-        .min(reference.end);
-    let save = |r: &Reference| {
-        r.save(path)
-            .map_err(|e| CliError(format!("{}: {e}", path.display())))
-    };
-    while reference.next < stop && !interrupted() {
-        reference.run(scene, &gbuffer, 1);
-        bar.inc(1);
-        if saved.elapsed() > CHECKPOINT_EVERY {
-            save(reference)?;
-            saved = Instant::now();
-        }
-    }
-    bar.finish_and_clear();
-    save(reference)
-}
-
 /// `<path>.exr`: the per-pixel mean.
 fn write_mean(reference: &Reference, path: &Path) -> CliResult<PathBuf> {
     let mut name = path.as_os_str().to_owned();
     name.push(".exr");
     let exr = PathBuf::from(name);
-    Image {
-        width: reference.width,
-        height: reference.height,
-        pixels: reference_pixels(reference),
-    }
-    .write_exr(&exr)?;
+    mean_image(reference).write_exr(&exr)?;
     Ok(exr)
 }
 
@@ -215,7 +172,7 @@ pub fn command(args: &ReferenceArgs) -> CliResult<()> {
         fresh
     };
     if let Some(parent) = args.out.parent().filter(|p| !p.as_os_str().is_empty()) {
-        super::common::output_dir(parent)?;
+        output_dir(parent)?;
     }
     accumulate(
         &mut reference,
@@ -223,6 +180,7 @@ pub fn command(args: &ReferenceArgs) -> CliResult<()> {
         &args.out,
         "reference batches",
         args.max_batches,
+        &mut Bars::default(),
     )?;
     let exr = if reference.is_complete() {
         Some(write_mean(&reference, &args.out)?)
@@ -247,7 +205,7 @@ pub fn merge(args: &MergeArgs) -> CliResult<()> {
         .collect::<Result<Vec<_>, _>>()?;
     let merged = Reference::merge(parts)?;
     if let Some(parent) = args.out.parent().filter(|p| !p.as_os_str().is_empty()) {
-        super::common::output_dir(parent)?;
+        output_dir(parent)?;
     }
     merged
         .save(&args.out)

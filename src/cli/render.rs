@@ -4,12 +4,12 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use experiments::methods::Method;
+use lab::methods::Method;
+use lab::report::{file_stem, output_dir};
 use serde_json::json;
 
 use super::common::{
-    BackendArgs, CliResult, file_stem, json_number, load_scene, output_dir, parse_resolution,
-    with_resolution,
+    BackendArgs, CliResult, json_number, load_scene, parse_resolution, with_resolution,
 };
 
 #[derive(Args, Clone, Debug)]

@@ -15,7 +15,7 @@
 // host computed them (never re-derived here). Hit lists are bvh.glsl's `bvh_hits` /
 // `bvh_hit_count`, sorted by (t, prim) as Geometry::all_hits_on_object; the count goes on past
 // BVH_MAX_HITS, which an including shader may raise with a #define before the include (the
-// built-in scenes reach 8 hits per probe, experiments/tests/vulkan_bssrdf.rs).
+// built-in scenes reach 8 hits per probe, engine/tests/vulkan_bssrdf.rs).
 //
 // Every arithmetic local is `precise` (no fused multiply-add) and glam's operation order is kept
 // (frame.glsl's glam_* helpers for Vec3).
@@ -163,7 +163,8 @@ vec2 bssrdf_selection_u_interval(TechniqueSelection s, uint t) {
 // ---------------------------------------------------------------- probe.rs
 
 // The exit point x1: frame of the camera-facing geometric normal (t, b, n), shading normal on the
-// same side, unit view direction, object and the per-channel profile `d` and `r_max`.
+// same side, unit view direction, object, the per-channel profile `d` and `r_max`, and the
+// material's Fresnel transmittance.
 struct ExitPoint {
     vec3 position;
     Frame frame;
@@ -172,12 +173,14 @@ struct ExitPoint {
     uint object;
     vec3 d;
     vec3 r_max;
+    FresnelTransmission fresnel;
 };
 
-// ExitPoint::new: `geometric_normal` must already face the camera; the shading normal is flipped
-// to its side. The profiles are the material's host-computed `d` and `r_max`.
-ExitPoint bssrdf_exit_point_new(vec3 position, vec3 geometric_normal, vec3 shading_normal,
-        vec3 view, uint object, GpuMaterial material) {
+// ExitPoint::with_profiles: x1 with explicit per-channel profiles `d` and their `r_max` (the
+// host computes r_max; the CPU derives it from d) and Fresnel transmittance.
+ExitPoint bssrdf_exit_point_with_profiles(vec3 position, vec3 geometric_normal,
+        vec3 shading_normal, vec3 view, uint object, vec3 d, vec3 r_max,
+        FresnelTransmission fresnel) {
     ExitPoint x1;
     x1.position = position;
     x1.shading_normal = glam_dot(shading_normal, geometric_normal) < 0.0 ? -shading_normal
@@ -185,9 +188,18 @@ ExitPoint bssrdf_exit_point_new(vec3 position, vec3 geometric_normal, vec3 shadi
     x1.frame = frame_from_normal(geometric_normal);
     x1.view = view;
     x1.object = object;
-    x1.d = material_d(material);
-    x1.r_max = material_r_max(material);
+    x1.d = d;
+    x1.r_max = r_max;
+    x1.fresnel = fresnel;
     return x1;
+}
+
+// ExitPoint::new: `geometric_normal` must already face the camera; the shading normal is flipped
+// to its side. The profiles are the material's host-computed `d` and `r_max`.
+ExitPoint bssrdf_exit_point_new(vec3 position, vec3 geometric_normal, vec3 shading_normal,
+        vec3 view, uint object, GpuMaterial material) {
+    return bssrdf_exit_point_with_profiles(position, geometric_normal, shading_normal, view,
+        object, material_d(material), material_r_max(material), material_fresnel(material));
 }
 
 // ExitPoint::disk_basis: normal (t, b, n), tangent (b, n, t), bitangent (n, t, b).
@@ -438,8 +450,17 @@ float bssrdf_p_disk(ExitPoint x1, TechniqueSelection selection, vec3 x2, vec3 n2
 
 // ---------------------------------------------------------------- eval.rs
 
+// bssrdf_of_profile: S = R(|x1 - x2|)/pi F_t(n1.wo) F_t(n2.wi) for a profile value per channel
+// (any sign; the caller truncates), with x1's Fresnel transmittance [001 Eq. 2].
+vec3 bssrdf_bssrdf_of_profile(vec3 profile, ExitPoint x1, EntryPoint x2, vec3 wi) {
+    precise float fresnel = fresnel_transmission_eval(x1.fresnel, glam_dot(x1.shading_normal, x1.view))
+        * fresnel_transmission_eval(x1.fresnel, glam_dot(x2.shading_normal, wi));
+    precise vec3 s = profile * (BSSRDF_FRAC_1_PI * fresnel);
+    return s;
+}
+
 // bssrdf: S = (A/pi) R_d(|x1 - x2|) F_t(n1.wo) F_t(n2.wi) per channel [001 Eq. 2-3], truncated at
-// the widest r_max of x1's cached profiles.
+// the widest r_max of x1's cached profiles; F_t is x1's cached FresnelTransmission.
 vec3 bssrdf_bssrdf(GpuMaterial material, ExitPoint x1, EntryPoint x2, vec3 wi) {
     float r = glam_length(x2.position - x1.position);
     if (r > bssrdf_max_element(x1.r_max)) {
@@ -447,13 +468,10 @@ vec3 bssrdf_bssrdf(GpuMaterial material, ExitPoint x1, EntryPoint x2, vec3 wi) {
     }
     vec3 profile = vec3(burley_pdf_disk(x1.d.x, r), burley_pdf_disk(x1.d.y, r),
         burley_pdf_disk(x1.d.z, r));
-    precise float fresnel = material_fresnel_transmission(glam_dot(x1.shading_normal, x1.view))
-        * material_fresnel_transmission(glam_dot(x2.shading_normal, wi));
-    precise vec3 s = material_albedo(material) * profile * (BSSRDF_FRAC_1_PI * fresnel);
-    return s;
+    return bssrdf_bssrdf_of_profile(material_albedo(material) * profile, x1, x2, wi);
 }
 
-// contribution: f = S max(0, n2.wi) L_e, unshadowed.
+// contribution: f = S max(0, n2.wi) L_e, unshadowed (eval.rs's `lit` inlined).
 vec3 bssrdf_contribution(GpuMaterial material, ExitPoint x1, EntryPoint x2, vec3 wi,
         vec3 radiance) {
     float cos_i = glam_dot(x2.shading_normal, wi);
@@ -561,16 +579,14 @@ uint bssrdf_invert(ExitPoint x1, TechniqueSelection selection, EntryPoint x2, fl
 // ---------------------------------------------------------------- dipole.rs
 
 // bssrdf_dipole: S = R_d(|x1 - x2|)/pi F_t(n1.wo) F_t(n2.wi) with the dipole profile, truncated at
-// r_max_all.
+// r_max_all, and x1's Fresnel transmittance (bssrdf_of_profile).
 vec3 bssrdf_bssrdf_dipole(GpuDipoleProfiles dipoles, ExitPoint x1, EntryPoint x2, vec3 wi) {
     float r = glam_length(x2.position - x1.position);
-    precise float fresnel = material_fresnel_transmission(glam_dot(x1.shading_normal, x1.view))
-        * material_fresnel_transmission(glam_dot(x2.shading_normal, wi));
-    precise vec3 s = dipole_profiles_profile_rgb(dipoles, r) * (BSSRDF_FRAC_1_PI * fresnel);
-    return s;
+    return bssrdf_bssrdf_of_profile(dipole_profiles_profile_rgb(dipoles, r), x1, x2, wi);
 }
 
-// contribution_dipole: f = S max(0, n2.wi) L_e with the dipole profile, unshadowed.
+// contribution_dipole: f = S max(0, n2.wi) L_e with the dipole profile, unshadowed (eval.rs's
+// `lit` inlined, as in bssrdf_contribution).
 vec3 bssrdf_contribution_dipole(GpuDipoleProfiles dipoles, ExitPoint x1, EntryPoint x2, vec3 wi,
         vec3 radiance) {
     float cos_i = glam_dot(x2.shading_normal, wi);

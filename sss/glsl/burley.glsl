@@ -7,7 +7,7 @@
 // from log/exp, i.e. absolute error near 0). The twin therefore builds expm1, log1p, asinh and
 // sinh from +, *, / and sqrt (series below), and calls the native exp/log only where their
 // relative bound holds. It still differs from the CPU in the last bits; the parity test
-// (experiments/tests/vulkan_parity.rs) states the tolerance and how it follows from these bounds.
+// (engine/tests/vulkan_parity.rs) states the tolerance and how it follows from these bounds.
 
 #ifndef SSS_BURLEY_GLSL
 #define SSS_BURLEY_GLSL

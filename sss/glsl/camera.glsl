@@ -7,7 +7,7 @@
 
 #include "frame.glsl"
 
-// std430, 68 bytes (Rust twin: experiments::vulkan::GpuCamera).
+// std430, 68 bytes (Rust twin: engine::vulkan::GpuCamera).
 struct GpuCamera {
     float eye[3];
     float forward[3];

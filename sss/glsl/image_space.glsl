@@ -13,7 +13,8 @@
 // (declared below, defined anywhere in the kernel). Rust's `lookup` closure is
 // image_space_lookup_pixel, the only lookup the device needs.
 //
-// Host data: a GatherProfile per material (its GpuDipoleProfiles, ρ_c and the renormalised P(c),
+// Host data: a GatherProfile per material (its GpuDipoleProfiles, its FresnelTransmission — the
+// material's ior and 1 − F_dr(ior), as GpuMaterial carries them —, ρ_c and the renormalised P(c),
 // all computed on the host as GatherProfile::new does) and the ImageSpaceSettings.
 // Device transcendentals (not bit-exact with libm): exp/expm1/log1p of the dipole, sqrt is exact,
 // cos/sin of the disk angle.
@@ -46,9 +47,11 @@ struct ImageSpaceSettings {
     float channel[3];
 };
 
-// std430, 100 bytes: GatherProfile (dipoles, reflectance ρ_c, renormalised P(c)).
+// std430, 108 bytes: GatherProfile (dipoles, the material's F_t, reflectance ρ_c, renormalised
+// P(c)).
 struct GatherProfile {
     GpuDipoleProfiles dipoles;
+    FresnelTransmission fresnel;
     float reflectance[3];
     float channel[3];
 };
@@ -211,8 +214,9 @@ vec3 image_space_gather_pixel(Receiver receiver, GatherProfile profile,
 }
 
 // irradiance_at: E(x) [002 Eq. 5], the mean of `samples` light samples
-// L_e F_t(n_s.wi) (n_s.wi) / p_light, shadow-tested.
-vec3 image_space_irradiance_at(GPixel x, uint samples, inout Stream rng) {
+// L_e F_t(n_s.wi) (n_s.wi) / p_light with the material's F_t = `fresnel`, shadow-tested.
+vec3 image_space_irradiance_at(GPixel x, FresnelTransmission fresnel, uint samples,
+        inout Stream rng) {
     vec3 position = pt_vec3(x.position);
     vec3 shading_normal = pt_vec3(x.shading_normal);
     precise vec3 sum = vec3(0.0);
@@ -231,7 +235,7 @@ vec3 image_space_irradiance_at(GPixel x, uint samples, inout Stream rng) {
         if (pt_occluded(position, pt_vec3(x.geometric_normal), light.wi, light.distance)) {
             continue;
         }
-        precise float scale = material_fresnel_transmission(cos_i) * cos_i / light.pdf;
+        precise float scale = fresnel_transmission_eval(fresnel, cos_i) * cos_i / light.pdf;
         sum = sum + light.radiance * scale;
     }
     if (samples > 0u) {
@@ -241,10 +245,10 @@ vec3 image_space_irradiance_at(GPixel x, uint samples, inout Stream rng) {
     return vec3(0.0);
 }
 
-// exit_radiance: F_t(n_o.wo)/pi B [002 Eq. 3].
-vec3 image_space_exit_radiance(GPixel x, vec3 b) {
-    precise float scale = PT_FRAC_1_PI
-        * material_fresnel_transmission(glam_dot(pt_vec3(x.shading_normal), pt_vec3(x.view)));
+// exit_radiance: F_t(n_o.wo)/pi B [002 Eq. 3] with the material's F_t = `fresnel`.
+vec3 image_space_exit_radiance(GPixel x, FresnelTransmission fresnel, vec3 b) {
+    precise float scale = PT_FRAC_1_PI * fresnel_transmission_eval(fresnel,
+        glam_dot(pt_vec3(x.shading_normal), pt_vec3(x.view)));
     precise vec3 l = b * scale;
     return l;
 }

@@ -20,7 +20,7 @@ const float LIGHT_PI = 3.14159265358979323846;
 // DIRECTIONAL_DISTANCE.
 const float LIGHT_DIRECTIONAL_DISTANCE = 1.0e4;
 
-// std430, 64 bytes (Rust twin: experiments::vulkan::GpuLight). By kind:
+// std430, 64 bytes (Rust twin: engine::vulkan::GpuLight). By kind:
 // quad: p0 corner, p1 edge_u, p2 edge_v; triangle: p0..p2 vertices; sphere: p0 centre, radius;
 // point: p0 position; directional: p0 direction. `emission` is the radiance, intensity or
 // irradiance. `cdf` and `pmf` are Lights' selection CDF and probability of this light.

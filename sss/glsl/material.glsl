@@ -1,5 +1,5 @@
 // Twin of sss::material::Material (sss/src/material/). Derived values (d = scale·ℓ/s(A), r_max
-// per channel, κ_dist) are computed on the host in f32 exactly as Translucent::d, r_max and
+// per channel, κ_dist, the Fresnel normalisation) are computed on the host in f32 exactly as Translucent::d, r_max and
 // r_max_all compute them and uploaded, so the GPU never re-derives them with its own
 // transcendentals. Per-sample profile values (exp) stay on the GPU: burley_pdf_disk.
 
@@ -8,11 +8,12 @@
 
 #include "burley.glsl"
 #include "frame.glsl"
+#include "fresnel.glsl"
 
 const uint MATERIAL_LAMBERT = 0u;
 const uint MATERIAL_TRANSLUCENT = 1u;
 
-// std430, 56 bytes (Rust twin: experiments::vulkan::GpuMaterial). For a Lambert material only
+// std430, 60 bytes (Rust twin: engine::vulkan::GpuMaterial). For a Lambert material only
 // kind and albedo are set; the rest is 0.
 struct GpuMaterial {
     uint kind;
@@ -29,6 +30,8 @@ struct GpuMaterial {
     float g;
     // Hybrid shift criterion κ_dist = 2 · max d [001 §5.1].
     float kappa_dist;
+    // Translucent::fresnel().normalization = 1 − F_dr(ior) (f64 closed form on the host).
+    float fresnel_normalization;
 };
 
 bool material_is_translucent(GpuMaterial m) {
@@ -65,14 +68,9 @@ vec3 material_profile_rgb(GpuMaterial m, float r) {
     return p;
 }
 
-// fresnel_transmission: F_t(μ) = 1 − ½(1 − μ)⁵, μ clamped to [0, 1]. (1 − μ)⁵ is evaluated as
-// Rust's powi(5) is: m · (m²)².
-float material_fresnel_transmission(float mu) {
-    precise float m = 1.0 - rust_clamp(mu, 0.0, 1.0);
-    precise float m2 = m * m;
-    precise float m4 = m2 * m2;
-    precise float f = 1.0 - 0.5 * (m * m4);
-    return f;
+// Translucent::fresnel: the normalised Fresnel transmittance of the material's ior.
+FresnelTransmission material_fresnel(GpuMaterial m) {
+    return FresnelTransmission(m.ior, m.fresnel_normalization);
 }
 
 #endif

@@ -19,7 +19,7 @@
 const uint PT_PURPOSE_PT = 0x50540001u;
 // SHADOW_EPSILON: shadow-ray origin offset along the normal and shortening at the light.
 const float PT_SHADOW_EPSILON = 1e-4;
-// HitPolicy in declaration order (experiments::vulkan::PtParams::hits).
+// HitPolicy in declaration order (engine::vulkan::PtParams::hits).
 const uint PT_HITS_UNIFORM_ONE = 0u;
 const uint PT_HITS_ALL = 1u;
 // ProfileKind in declaration order (PtSettings::profile).

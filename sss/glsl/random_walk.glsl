@@ -1,5 +1,6 @@
 // Volumetric random walk in a homogeneous medium: the GLSL twin of sss/src/random_walk/
-// (phase.rs, interface.rs, boundary.rs MeshBoundary, walk.rs, estimate.rs; read them side by
+// (phase.rs, interface.rs — its fresnel_dielectric in fresnel.glsl —, boundary.rs MeshBoundary,
+// walk.rs, estimate.rs; read them side by
 // side: same stream draws in the same order, same operation order, `precise` locals).
 //
 // The including shader enables GL_EXT_shader_explicit_arithmetic_types_int64, includes rng.glsl
@@ -24,6 +25,7 @@
 #define SSS_RANDOM_WALK_GLSL
 
 #include "frame.glsl"
+#include "fresnel.glsl"
 
 const float RANDOM_WALK_TAU = 6.28318530717958647692;
 const float RANDOM_WALK_FRAC_1_PI = 0.318309886183790671538;
@@ -41,12 +43,17 @@ const uint RANDOM_WALK_INDEX_MATCHED = 0u;
 const uint RANDOM_WALK_DIELECTRIC = 1u;
 const uint RANDOM_WALK_DIFFUSE = 2u;
 
+// walk::Crossing: the path leaves with a specular or a diffuse exit direction, or is reflected.
+const uint RANDOM_WALK_LEAVES_SPECULAR = 0u;
+const uint RANDOM_WALK_LEAVES_DIFFUSE = 1u;
+const uint RANDOM_WALK_REFLECTED = 2u;
+
 // WalkEnd (walk.rs).
 const uint RANDOM_WALK_EXITED = 0u;
 const uint RANDOM_WALK_TERMINATED = 1u;
 const uint RANDOM_WALK_TRUNCATED = 2u;
 
-// The medium of one material (std430, 48 bytes; Rust twin experiments::vulkan::GpuMedium):
+// The medium of one material (std430, 48 bytes; Rust twin engine::vulkan::GpuMedium):
 // Medium::sigma_s() and Medium::sigma_t() as the host computes them, HG g, the interface and
 // its eta.
 struct RandomWalkMedium {
@@ -169,20 +176,6 @@ float henyey_greenstein_pdf(float g, vec3 dir_in, vec3 dir_out) {
 
 // ---- interface.rs ----
 
-// fresnel_dielectric: unpolarised reflectance, cos_i on the incident side, eta = eta_t / eta_i.
-float random_walk_fresnel_dielectric(float cos_i_in, float eta) {
-    precise float cos_i = rust_clamp(cos_i_in, 0.0, 1.0);
-    precise float sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
-    if (sin2_t >= 1.0) {
-        return 1.0;
-    }
-    precise float cos_t = sqrt(1.0 - sin2_t);
-    precise float r_parallel = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    precise float r_perpendicular = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    precise float f = 0.5 * (r_parallel * r_parallel + r_perpendicular * r_perpendicular);
-    return f;
-}
-
 // refract: false under total internal reflection; n faces the incident side.
 bool random_walk_refract(vec3 dir, vec3 n, float eta, out vec3 result) {
     result = vec3(0.0);
@@ -257,6 +250,31 @@ uint random_walk_mesh_intersect(uint object, bool inward_winding, vec3 origin, v
 
 // ---- walk.rs ----
 
+// cross: the boundary event of a path along `dir` meeting the boundary with outward `normal`.
+// Index-matched and diffuse interfaces always leave; a dielectric (inside -> outside, relative
+// index 1/eta) reflects with the Fresnel probability, drawing one number only when refraction is
+// possible. Returns the Crossing; `direction` is the specular exit (the incoming direction for
+// index-matched) or the reflected direction.
+uint random_walk_cross(uint interface_kind, float eta, vec3 dir, vec3 normal, inout Stream stream,
+                       out vec3 direction) {
+    direction = dir;
+    if (interface_kind == RANDOM_WALK_INDEX_MATCHED) {
+        return RANDOM_WALK_LEAVES_SPECULAR;
+    }
+    if (interface_kind == RANDOM_WALK_DIFFUSE) {
+        return RANDOM_WALK_LEAVES_DIFFUSE;
+    }
+    precise float inv_eta = 1.0 / eta;
+    float fresnel = fresnel_dielectric(glam_dot(dir, normal), inv_eta);
+    vec3 out_dir;
+    if (random_walk_refract(dir, -normal, inv_eta, out_dir) && stream_next_f32(stream) >= fresnel) {
+        direction = out_dir;
+        return RANDOM_WALK_LEAVES_SPECULAR;
+    }
+    direction = random_walk_reflect(dir, normal);
+    return RANDOM_WALK_REFLECTED;
+}
+
 // roulette: survival with q = min(1, max_c beta_c); false = killed.
 bool random_walk_roulette(vec3 beta, float u, out vec3 survivor) {
     survivor = vec3(0.0);
@@ -319,24 +337,16 @@ uint random_walk_walk(uint object, bool inward_winding, RandomWalkMedium medium,
             r = r * ratio;
             random_walk_rescale(beta, r);
             pos += t_hit * dir;
-            bool leaves = medium.interface_kind != RANDOM_WALK_DIELECTRIC;
-            vec3 out_dir = dir;
-            if (!leaves) {
-                // Inside -> outside: relative index 1/eta; reflect with the Fresnel
-                // probability. As on the CPU, the number is drawn only when refraction is
-                // possible.
-                precise float inv_eta = 1.0 / medium.eta;
-                float fresnel = random_walk_fresnel_dielectric(glam_dot(dir, normal), inv_eta);
-                leaves = random_walk_refract(dir, -normal, inv_eta, out_dir)
-                    && stream_next_f32(stream) >= fresnel;
-            }
-            if (leaves) {
-                exit = RandomWalkExit(pos, normal, medium.interface_kind == RANDOM_WALK_DIFFUSE,
-                                      out_dir, beta, scatter_count, reflection_count);
+            vec3 out_dir;
+            uint crossing =
+                random_walk_cross(medium.interface_kind, medium.eta, dir, normal, stream, out_dir);
+            if (crossing != RANDOM_WALK_REFLECTED) {
+                exit = RandomWalkExit(pos, normal, crossing == RANDOM_WALK_LEAVES_DIFFUSE, out_dir,
+                                      beta, scatter_count, reflection_count);
                 end = RANDOM_WALK_EXITED;
                 break;
             }
-            dir = random_walk_reflect(dir, normal);
+            dir = out_dir;
             reflection_count += 1u;
         } else {
             // Collision: f_c = sigma_s,c e^{-sigma_t,c t}, p_c = sigma_t,c e^{-sigma_t,c t}
@@ -381,11 +391,13 @@ uint random_walk_walk(uint object, bool inward_winding, RandomWalkMedium medium,
 
 // ---- estimate.rs ----
 
-// incident_through: radiance arriving from outside through the exit point (NEE + one escape
-// direction, balance heuristic, at a diffuse exit; the lighting's radiance along a specular one).
-vec3 random_walk_incident_through(RandomWalkExit exit, inout Stream stream) {
-    if (!exit.diffuse) {
-        return exit_lighting_radiance(exit.point, exit.direction);
+// incident: radiance arriving from outside through the boundary point (outward `normal`) as
+// transmitted into a path leaving there: NEE + one escape direction under the balance heuristic
+// at a diffuse exit, the lighting's radiance along a specular one (`direction`).
+vec3 random_walk_incident(vec3 point, vec3 normal, bool diffuse, vec3 direction,
+                          inout Stream stream) {
+    if (!diffuse) {
+        return exit_lighting_radiance(point, direction);
     }
     precise vec3 total = vec3(0.0);
     // Next-event estimation: f = 1/pi, weight f cos / p_light, balance heuristic.
@@ -393,8 +405,8 @@ vec3 random_walk_incident_through(RandomWalkExit exit, inout Stream stream) {
     u.x = stream_next_f32(stream);
     u.y = stream_next_f32(stream);
     ExitLightSample light;
-    if (exit_lighting_sample(exit.point, exit.normal, u, light)) {
-        precise float p_escape = random_walk_cosine_pdf(exit.normal, light.wi);
+    if (exit_lighting_sample(point, normal, u, light)) {
+        precise float p_escape = random_walk_cosine_pdf(normal, light.wi);
         if (p_escape > 0.0) {
             precise float mis = light.is_delta ? 1.0 : light.pdf / (light.pdf + p_escape);
             total += (mis * p_escape) * light.radiance_over_pdf;
@@ -403,13 +415,44 @@ vec3 random_walk_incident_through(RandomWalkExit exit, inout Stream stream) {
     // Escape direction, cosine-sampled: f cos / p = 1.
     u.x = stream_next_f32(stream);
     u.y = stream_next_f32(stream);
-    vec3 out_dir = random_walk_sample_cosine(exit.normal, u);
-    precise float p_escape = random_walk_cosine_pdf(exit.normal, out_dir);
+    vec3 out_dir = random_walk_sample_cosine(normal, u);
+    precise float p_escape = random_walk_cosine_pdf(normal, out_dir);
     if (p_escape > 0.0) {
-        precise float p_light = exit_lighting_pdf(exit.point, exit.normal, out_dir);
-        total += (p_escape / (p_escape + p_light)) * exit_lighting_radiance(exit.point, out_dir);
+        precise float p_light = exit_lighting_pdf(point, normal, out_dir);
+        total += (p_escape / (p_escape + p_light)) * exit_lighting_radiance(point, out_dir);
     }
     return total;
+}
+
+// enter: the inward direction and weight of a path entering at a boundary point (outward n1)
+// against wo; false when wo is below the surface or cannot refract. Draws two numbers for the
+// diffuse interface, none otherwise.
+bool random_walk_enter(uint interface_kind, float eta, vec3 n1, vec3 wo, inout Stream stream,
+                       out vec3 dir, out float weight) {
+    dir = vec3(0.0);
+    weight = 1.0;
+    float cos_o = glam_dot(wo, n1);
+    if (cos_o <= 0.0) {
+        return false;
+    }
+    if (interface_kind == RANDOM_WALK_INDEX_MATCHED) {
+        dir = -wo;
+        return true;
+    }
+    if (interface_kind == RANDOM_WALK_DIELECTRIC) {
+        // Refraction of the camera ray into the medium, weighted by the transmittance 1 - F.
+        if (!random_walk_refract(-wo, n1, eta, dir)) {
+            return false;
+        }
+        weight = 1.0 - fresnel_dielectric(cos_o, eta);
+        return true;
+    }
+    // Lambertian transmission: cosine-sampled inward direction, f cos / pdf = 1.
+    vec2 u;
+    u.x = stream_next_f32(stream);
+    u.y = stream_next_f32(stream);
+    dir = random_walk_sample_cosine(-n1, u);
+    return true;
 }
 
 // estimate_exitant_with: one sample of the subsurface radiance leaving x1 (outward normal n1)
@@ -420,30 +463,15 @@ uint random_walk_estimate_exitant(uint object, bool inward_winding, RandomWalkMe
                                   out vec3 radiance, out RandomWalkExit exit) {
     radiance = vec3(0.0);
     exit = RandomWalkExit(vec3(0.0), vec3(0.0), false, vec3(0.0), vec3(0.0), 0u, 0u);
-    float cos_o = glam_dot(wo, n1);
-    if (cos_o <= 0.0) {
-        return RANDOM_WALK_TERMINATED;
-    }
     vec3 dir;
-    precise float entry_weight = 1.0;
-    if (medium.interface_kind == RANDOM_WALK_INDEX_MATCHED) {
-        dir = -wo;
-    } else if (medium.interface_kind == RANDOM_WALK_DIELECTRIC) {
-        // Refraction of the camera ray into the medium, weighted by the transmittance 1 - F.
-        if (!random_walk_refract(-wo, n1, medium.eta, dir)) {
-            return RANDOM_WALK_TERMINATED;
-        }
-        entry_weight = 1.0 - random_walk_fresnel_dielectric(cos_o, medium.eta);
-    } else {
-        // Lambertian transmission: cosine-sampled inward direction, f cos / pdf = 1.
-        vec2 u;
-        u.x = stream_next_f32(stream);
-        u.y = stream_next_f32(stream);
-        dir = random_walk_sample_cosine(-n1, u);
+    float entry_weight;
+    if (!random_walk_enter(medium.interface_kind, medium.eta, n1, wo, stream, dir, entry_weight)) {
+        return RANDOM_WALK_TERMINATED;
     }
     uint end = random_walk_walk(object, inward_winding, medium, x1, dir, roulette, stream, exit);
     if (end == RANDOM_WALK_EXITED) {
-        precise vec3 l = (entry_weight * exit.weight) * random_walk_incident_through(exit, stream);
+        precise vec3 l = (entry_weight * exit.weight)
+            * random_walk_incident(exit.point, exit.normal, exit.diffuse, exit.direction, stream);
         radiance = l;
     }
     return end;

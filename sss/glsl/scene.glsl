@@ -1,4 +1,4 @@
-// The scene on the device (experiments::vulkan::GpuScene): bindings SCENE_BINDING + 0 .. + 8 of
+// The scene on the device (engine::vulkan::GpuScene): bindings SCENE_BINDING + 0 .. + 8 of
 // the Vulkan backend contract, the per-pixel GPixel and the per-frame FrameParams, and twins of
 // sss::geometry::Geometry's triangle accessors (sss/src/geometry/bvh.rs).
 //
@@ -26,7 +26,7 @@ struct GpuTriangle {
     uint object;
 };
 
-// std430, 176 bytes (Rust twin: experiments::vulkan::FrameParams).
+// std430, 176 bytes (Rust twin: engine::vulkan::FrameParams).
 struct FrameParams {
     uint width;
     uint height;
@@ -43,7 +43,7 @@ struct FrameParams {
     uint has_previous;
 };
 
-// std430, 80 bytes (Rust twin: experiments::vulkan::GpuPixel): sss::scene::GPixel, valid = 0
+// std430, 80 bytes (Rust twin: engine::vulkan::GpuPixel): sss::scene::GPixel, valid = 0
 // where the CPU has None.
 struct GPixel {
     float position[3];

@@ -13,7 +13,7 @@ use glam::{DVec3, Vec3, Vec3A};
 use sss::bssrdf::TechniqueSelection;
 use sss::geometry::Ray;
 use sss::integrator::{HitPolicy, PtSettings, Reference, ReferenceConfig, Shard};
-use sss::material::{Material, fresnel_transmission};
+use sss::material::Material;
 use sss::scene::{GBuffer, GPixel, Scene, luminance};
 
 /// `A ∫_{x ≥ 0} R̄_d(‖x2 − x1‖) dA` for x1 at signed distance `s` from the shadow edge, R̄ = 0
@@ -133,8 +133,8 @@ fn reference_matches_the_half_plane_integral_across_the_shadow_edge() {
     reference.run(&scene, &gbuffer, u32::MAX);
     assert_eq!(reference.nonfinite, 0);
 
-    let fresnel =
-        (fresnel_transmission(view.y) * fresnel_transmission(1.0)) as f64 / std::f64::consts::PI;
+    let ft = material.fresnel();
+    let fresnel = (ft.eval(view.y) * ft.eval(1.0)) as f64 / std::f64::consts::PI;
     let r_max = material.r_max_all() as f64;
     let (mean, std_err) = (reference.mean(), reference.std_err());
     let lum = |v: DVec3| luminance(v.as_vec3()) as f64;

@@ -21,13 +21,16 @@ pub struct Fixture {
     pub frames: [GBuffer; 2],
 }
 
-/// The fixture of built-in scene `name` ("bumpy" or "half-shadow"), built once per test binary.
+/// The fixture of built-in scene `name` ("bumpy", "half-shadow" or "far-knot"), built once per
+/// test binary.
 pub fn fixture(name: &str) -> &'static Fixture {
     static BUMPY: OnceLock<Fixture> = OnceLock::new();
     static HALF_SHADOW: OnceLock<Fixture> = OnceLock::new();
+    static FAR_KNOT: OnceLock<Fixture> = OnceLock::new();
     let cell = match name {
         "bumpy" => &BUMPY,
         "half-shadow" => &HALF_SHADOW,
+        "far-knot" => &FAR_KNOT,
         _ => panic!("no test fixture for scene {name}"),
     };
     cell.get_or_init(|| Fixture::new(name))
@@ -46,6 +49,19 @@ impl Fixture {
     /// The domain of pixel `(px, py)` of `frame` (0 or 1), receiving in `pass`; `None` off the
     /// translucent object.
     pub fn domain(&self, frame: u32, px: i64, py: i64, pass: u32) -> Option<SssDomain<'_>> {
+        self.domain_with_seed(frame, px, py, pass, SEED)
+    }
+
+    /// `domain` under the run seed `seed` (the key of the shifts' own random numbers, such as
+    /// probabilistic inversion's γ).
+    pub fn domain_with_seed(
+        &self,
+        frame: u32,
+        px: i64,
+        py: i64,
+        pass: u32,
+        seed: u64,
+    ) -> Option<SssDomain<'_>> {
         let g = &self.frames[frame as usize];
         if px < 0 || py < 0 || px >= g.width as i64 || py >= g.height as i64 {
             return None;
@@ -57,7 +73,7 @@ impl Fixture {
             py * g.width + px,
             frame,
             pass,
-            SEED,
+            seed,
         )
     }
 

@@ -1,22 +1,19 @@
 //! The BSSRDF and path contribution with the dipole profile in place of Burley's
 //! ([`ProfileKind::Dipole`](crate::profile::ProfileKind)): `S = R_d(‖x1 − x2‖)/π · F_t(n1·ωo) ·
-//! F_t(n2·ωi)` [002 Eq. 2], with the dipole's `R_d` already carrying the albedo (`ρ = A`). The
-//! Fresnel factors and normals are those of [`super::eval`]; a test holds the two to the same
-//! convention.
-
-use std::f32::consts::FRAC_1_PI;
+//! F_t(n2·ωi)` [002 Eq. 2], with the dipole's `R_d` already carrying the albedo (`ρ = A`) and the
+//! material's normalised Fresnel transmittance `F_t` of [`super::eval`] (x1's cached
+//! [`FresnelTransmission`](crate::material::FresnelTransmission)).
 
 use glam::Vec3;
 
+use super::eval::{bssrdf_of_profile, lit};
 use super::probe::{EntryPoint, ExitPoint};
-use crate::material::{DipoleProfiles, fresnel_transmission};
+use crate::material::DipoleProfiles;
 
 /// `S` with the dipole profile, truncated at `r_max_all` ([`DipoleProfiles::profile_rgb`]).
 pub fn bssrdf_dipole(dipoles: &DipoleProfiles, x1: &ExitPoint, x2: &EntryPoint, wi: Vec3) -> Vec3 {
     let r = (x2.position - x1.position).length();
-    let fresnel = fresnel_transmission(x1.shading_normal.dot(x1.view))
-        * fresnel_transmission(x2.shading_normal.dot(wi));
-    dipoles.profile_rgb(r) * (FRAC_1_PI * fresnel)
+    bssrdf_of_profile(dipoles.profile_rgb(r), x1, x2, wi)
 }
 
 /// `f = S · max(0, n2·ωi) · L_e` with the dipole profile, unshadowed.
@@ -27,18 +24,14 @@ pub fn contribution_dipole(
     wi: Vec3,
     radiance: Vec3,
 ) -> Vec3 {
-    let cos_i = x2.shading_normal.dot(wi);
-    if cos_i.is_nan() || cos_i <= 0.0 {
-        return Vec3::ZERO;
-    }
-    bssrdf_dipole(dipoles, x1, x2, wi) * cos_i * radiance
+    lit(x2, wi, radiance, || bssrdf_dipole(dipoles, x1, x2, wi))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::bssrdf::contribution;
-    use crate::material::Translucent;
+    use crate::material::{BoundaryKind, Translucent};
     use crate::profile::ScaleFit;
     use glam::Vec2;
     use restir::rng::StreamKey;
@@ -55,6 +48,7 @@ mod tests {
             ior: 1.3,
             g: 0.0,
             fit: ScaleFit::Searchlight,
+            boundary: BoundaryKind::Diffuse,
         };
         let dipoles = DipoleProfiles::new(&material);
         let mut rng = StreamKey::new(0, 0, 0, 0xD1B0_0001).stream(3);

@@ -8,21 +8,29 @@ use std::f32::consts::FRAC_1_PI;
 use glam::Vec3;
 
 use super::probe::{EntryPoint, ExitPoint};
-use crate::material::{Translucent, fresnel_transmission};
+use crate::material::Translucent;
 use crate::scene::luminance;
 
 /// `S = (A/π) R̄_d(‖x1 − x2‖) F_t(n1·ωo) F_t(n2·ωi)` per channel [001 Eq. 2–3], truncated at
 /// `r_max` of the widest channel (x1's cached profiles, equal to [`Translucent::profile_rgb`]);
-/// `wi` is the unit direction from x2 toward the light.
+/// `F_t` is the material's normalised dielectric transmittance
+/// ([`FresnelTransmission`](crate::material::FresnelTransmission), cached in x1); `wi` is the
+/// unit direction from x2 toward the light.
 pub fn bssrdf(material: &Translucent, x1: &ExitPoint, x2: &EntryPoint, wi: Vec3) -> Vec3 {
     let r = (x2.position - x1.position).length();
     if r > x1.r_max.max_element() {
         return Vec3::ZERO;
     }
     let profile = Vec3::from_array(std::array::from_fn(|c| x1.profiles[c].pdf_disk(r)));
-    let fresnel = fresnel_transmission(x1.shading_normal.dot(x1.view))
-        * fresnel_transmission(x2.shading_normal.dot(wi));
-    material.albedo * profile * (FRAC_1_PI * fresnel)
+    bssrdf_of_profile(material.albedo * profile, x1, x2, wi)
+}
+
+/// `S = R(‖x1 − x2‖)/π · F_t(n1·ωo) F_t(n2·ωi)` for a radial profile value `profile` per channel
+/// (any sign; the caller truncates), with x1's Fresnel transmittance [001 Eq. 2].
+pub fn bssrdf_of_profile(profile: Vec3, x1: &ExitPoint, x2: &EntryPoint, wi: Vec3) -> Vec3 {
+    let fresnel = x1.fresnel.eval(x1.shading_normal.dot(x1.view))
+        * x1.fresnel.eval(x2.shading_normal.dot(wi));
+    profile * (FRAC_1_PI * fresnel)
 }
 
 /// `f = S · max(0, n2·ωi) · L_e` for a light sampled in solid angle at x2, unshadowed.
@@ -33,11 +41,22 @@ pub fn contribution(
     wi: Vec3,
     radiance: Vec3,
 ) -> Vec3 {
+    lit(x2, wi, radiance, || bssrdf(material, x1, x2, wi))
+}
+
+/// `f = S · max(0, n2·ωi) · L_e` for the BSSRDF value `bssrdf()`, evaluated only when light
+/// arrives from above x2's shading normal.
+pub(super) fn lit(
+    x2: &EntryPoint,
+    wi: Vec3,
+    radiance: Vec3,
+    bssrdf: impl FnOnce() -> Vec3,
+) -> Vec3 {
     let cos_i = x2.shading_normal.dot(wi);
     if cos_i.is_nan() || cos_i <= 0.0 {
         return Vec3::ZERO;
     }
-    bssrdf(material, x1, x2, wi) * cos_i * radiance
+    bssrdf() * cos_i * radiance
 }
 
 /// `p̂ = luminance(f)` (unshadowed).
@@ -48,11 +67,12 @@ pub fn target(f: Vec3) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::material::{BoundaryKind, FresnelTransmission};
     use crate::profile::ScaleFit;
     use glam::Vec2;
 
     /// `S` from x1's cached profiles equals `(A R̄)(r)/π · F_t · F_t` from the material (with its
-    /// truncation), and `f` vanishes for light from below x2.
+    /// truncation, `F_t` of its `ior`), and `f` vanishes for light from below x2.
     #[test]
     fn bssrdf_matches_the_material_profile() {
         let material = Translucent {
@@ -62,6 +82,7 @@ mod tests {
             ior: 1.3,
             g: 0.0,
             fit: ScaleFit::Searchlight,
+            boundary: BoundaryKind::Diffuse,
         };
         let view = Vec3::new(0.0, 0.6, 0.8);
         let x1 = ExitPoint::new(Vec3::ZERO, Vec3::Y, Vec3::Y, view, 0, &material);
@@ -76,10 +97,9 @@ mod tests {
                 geometric_normal: Vec3::Y,
                 shading_normal: Vec3::Y,
             };
-            let want = material.profile_rgb(r)
-                * FRAC_1_PI
-                * fresnel_transmission(0.6)
-                * fresnel_transmission(0.8);
+            let ft = material.fresnel();
+            assert_eq!(ft, FresnelTransmission::new(1.3));
+            let want = material.profile_rgb(r) * FRAC_1_PI * ft.eval(0.6) * ft.eval(0.8);
             let got = bssrdf(&material, &x1, &x2, wi);
             assert!(
                 (got - want).abs().max_element() <= 1e-6 * want.max_element(),

@@ -16,7 +16,7 @@ mod sample;
 mod technique;
 
 pub use dipole::{bssrdf_dipole, contribution_dipole};
-pub use eval::{bssrdf, contribution, target};
+pub use eval::{bssrdf, bssrdf_of_profile, contribution, target};
 pub use invert::{InvertFail, find_index, invert, invert_random_numbers, invert_technique};
 pub use pdf::{p_disk, p_disk_with, technique_terms, technique_terms_with};
 pub use probe::{EntryPoint, ExitPoint, chord, probe_ray, probe_ray_with, trace_probe};

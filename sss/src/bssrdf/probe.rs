@@ -4,14 +4,15 @@ use glam::{Vec2, Vec3, Vec3A};
 
 use super::technique::{Axis, RadiusSampling, Technique};
 use crate::geometry::{Frame, Geometry, Hit, Ray};
-use crate::material::Translucent;
+use crate::material::{FresnelTransmission, Translucent};
 use crate::profile::Burley;
 
 /// The exit point x1 on a translucent object, with what sampling and evaluation need.
 ///
 /// Normals: `frame` is built from the geometric normal flipped toward the camera; it defines the
 /// three projection axes and so enters `p_disk`. The shading normal (flipped to the same side)
-/// enters only the Fresnel term `F_t(n1·ωo)`.
+/// enters only the Fresnel term `F_t(n1·ωo)`. The profiles (and `F_t`) are cached here for all
+/// evaluations at this x1; x2 lies on the same object, so they serve `F_t(n2·ωi)` too.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ExitPoint {
     pub position: Vec3,
@@ -23,6 +24,8 @@ pub struct ExitPoint {
     /// Per-channel profiles `d_c` and their truncation radii `r_max,c`.
     pub profiles: [Burley; 3],
     pub r_max: Vec3,
+    /// The material's normalised Fresnel transmittance `F_t`.
+    pub fresnel: FresnelTransmission,
 }
 
 impl ExitPoint {
@@ -35,6 +38,28 @@ impl ExitPoint {
         object: u32,
         material: &Translucent,
     ) -> ExitPoint {
+        ExitPoint::with_profiles(
+            position,
+            geometric_normal,
+            shading_normal,
+            view,
+            object,
+            std::array::from_fn(|c| material.channel(c)),
+            material.fresnel(),
+        )
+    }
+
+    /// [`ExitPoint::new`] with explicit profiles (their `r_max` derived) instead of the
+    /// material's, e.g. the full profile that samples seed 000's `R − R1`.
+    pub fn with_profiles(
+        position: Vec3,
+        geometric_normal: Vec3,
+        shading_normal: Vec3,
+        view: Vec3,
+        object: u32,
+        profiles: [Burley; 3],
+        fresnel: FresnelTransmission,
+    ) -> ExitPoint {
         let shading_normal = if shading_normal.dot(geometric_normal) < 0.0 {
             -shading_normal
         } else {
@@ -46,8 +71,9 @@ impl ExitPoint {
             shading_normal,
             view,
             object,
-            profiles: std::array::from_fn(|c| material.channel(c)),
-            r_max: material.r_max(),
+            profiles,
+            r_max: Vec3::from_array(profiles.map(|p| p.r_max())),
+            fresnel,
         }
     }
 

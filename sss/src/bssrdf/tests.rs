@@ -7,7 +7,7 @@ use restir::stats::{Welford, chi_square_gof, normal_quantile};
 
 use super::*;
 use crate::geometry::{Geometry, Hit, TriangleMesh, shapes};
-use crate::material::Translucent;
+use crate::material::{BoundaryKind, Translucent};
 use crate::profile::ScaleFit;
 
 /// `purpose` of the streams of these tests.
@@ -22,6 +22,7 @@ fn material() -> Translucent {
         ior: 1.3,
         g: 0.0,
         fit: ScaleFit::Searchlight,
+        boundary: BoundaryKind::Diffuse,
     }
 }
 

@@ -9,6 +9,10 @@
 //!    [002 Eq. 4] on the tangent plane of x_o ([`gather_pixel`]) and shows
 //!    `L = F_t(n_o·ωo)/π · B` [002 Eq. 3].
 //!
+//! `F_t` is the material's normalised Fresnel transmittance of the BSSRDF
+//! ([`FresnelTransmission`], per material `ior`), so that `L` factors the dipole BSSRDF of the
+//! path tracer ([`bssrdf_dipole`](crate::bssrdf::bssrdf_dipole)) exactly.
+//!
 //! The gather draws points `p′` on the tangent plane (geometric normal of x_o) from two sets,
 //! `N_i` importance samples whose radius follows the dipole of a channel picked with `P(c)`
 //! (pole by `ρ`, exact Newton inversion [002 §4, Eq. 6–7]) and `N_u` samples uniform on the disk of
@@ -48,7 +52,7 @@ use restir::rng::{Stream, StreamKey};
 use super::pt::{self, Image, PtSettings, Shading, occluded};
 use crate::InputError;
 use crate::geometry::{Frame, Hit};
-use crate::material::{DipoleProfiles, Material, fresnel_transmission};
+use crate::material::{DipoleProfiles, FresnelTransmission, Material, Translucent};
 use crate::scene::{GBuffer, GPixel, Scene};
 
 /// `purpose` of the irradiance streams (ASCII "ISIR").
@@ -155,6 +159,8 @@ pub struct ImageSpaceFrame {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GatherProfile {
     pub dipoles: DipoleProfiles,
+    /// The material's `F_t` (of its `ior`), for `E` and the exit radiance.
+    pub fresnel: FresnelTransmission,
     /// `ρ_c` [002 Eq. 7] per channel.
     pub reflectance: [f32; 3],
     /// `P(c)` renormalised over the channels with `ρ_c > 0`; all 0 if none has.
@@ -162,7 +168,9 @@ pub struct GatherProfile {
 }
 
 impl GatherProfile {
-    pub fn new(dipoles: DipoleProfiles, channel: [f32; 3]) -> GatherProfile {
+    /// The gather profile of `material` with importance-channel probabilities `channel`.
+    pub fn new(material: &Translucent, channel: [f32; 3]) -> GatherProfile {
+        let dipoles = DipoleProfiles::new(material);
         let reflectance = dipoles.channels.map(|d| d.total_reflectance());
         let weights: [f32; 3] = std::array::from_fn(|c| {
             if reflectance[c] > 0.0 {
@@ -174,6 +182,7 @@ impl GatherProfile {
         let sum: f32 = weights.iter().sum();
         GatherProfile {
             dipoles,
+            fresnel: material.fresnel(),
             reflectance,
             channel: if sum > 0.0 {
                 weights.map(|w| w / sum)
@@ -358,9 +367,15 @@ pub fn lookup_pixel(
 }
 
 /// `E(x)` at a visible surface point [002 Eq. 5]: the mean of `samples` light samples
-/// `L_e F_t(n_s·ωi) (n_s·ωi) / p_light`, shadow-tested (Fresnel and cosine on the shading normal,
-/// as for x2 in the BSSRDF).
-pub fn irradiance_at(scene: &Scene, x: &GPixel, samples: u32, rng: &mut Stream) -> Vec3 {
+/// `L_e F_t(n_s·ωi) (n_s·ωi) / p_light`, shadow-tested (`F_t = fresnel`, the material's, and the
+/// cosine on the shading normal, as for x2 in the BSSRDF).
+pub fn irradiance_at(
+    scene: &Scene,
+    x: &GPixel,
+    fresnel: &FresnelTransmission,
+    samples: u32,
+    rng: &mut Stream,
+) -> Vec3 {
     let mut sum = Vec3::ZERO;
     for _ in 0..samples {
         let Some(light) = scene
@@ -382,7 +397,7 @@ pub fn irradiance_at(scene: &Scene, x: &GPixel, samples: u32, rng: &mut Stream) 
         ) {
             continue;
         }
-        sum += light.radiance * (fresnel_transmission(cos) * cos / light.pdf);
+        sum += light.radiance * (fresnel.eval(cos) * cos / light.pdf);
     }
     if samples > 0 {
         sum / samples as f32
@@ -405,12 +420,13 @@ pub fn irradiance(
         .enumerate()
         .for_each(|(pixel, (e, g))| {
             let Some(g) = g else { return };
-            if !matches!(scene.material_of_object(g.object), Material::Translucent(_)) {
+            let Material::Translucent(material) = scene.material_of_object(g.object) else {
                 return;
-            }
+            };
             let mut rng =
                 StreamKey::new(pixel as u32, gbuffer.frame, pass, PURPOSE_IRRADIANCE).stream(seed);
-            *e = irradiance_at(scene, g, settings.irradiance_samples, &mut rng);
+            let fresnel = material.fresnel();
+            *e = irradiance_at(scene, g, &fresnel, settings.irradiance_samples, &mut rng);
         });
     out
 }
@@ -421,17 +437,16 @@ pub fn gather_profiles(scene: &Scene, settings: &ImageSpaceSettings) -> Vec<Opti
         .materials
         .iter()
         .map(|m| match m {
-            Material::Translucent(t) => {
-                Some(GatherProfile::new(DipoleProfiles::new(t), settings.channel))
-            }
+            Material::Translucent(t) => Some(GatherProfile::new(t, settings.channel)),
             Material::Lambert(_) => None,
         })
         .collect()
 }
 
-/// Exit radiance of a translucent pixel from its `B`: `F_t(n_o·ωo)/π · B` [002 Eq. 3].
-pub fn exit_radiance(x: &GPixel, b: Vec3) -> Vec3 {
-    b * (FRAC_1_PI * fresnel_transmission(x.shading_normal.dot(x.view)))
+/// Exit radiance of a translucent pixel from its `B`: `F_t(n_o·ωo)/π · B` [002 Eq. 3] with the
+/// material's `F_t = fresnel`.
+pub fn exit_radiance(x: &GPixel, fresnel: &FresnelTransmission, b: Vec3) -> Vec3 {
+    b * (FRAC_1_PI * fresnel.eval(x.shading_normal.dot(x.view)))
 }
 
 /// One pass's value of every pixel (translucent: gather; Lambert: the path tracer's sample `pass`)
@@ -476,7 +491,7 @@ fn pass_values(
                             &mut rng,
                             &mut counts,
                         );
-                        exit_radiance(g, b)
+                        exit_radiance(g, &profile.fresnel, b)
                     }
                     None => {
                         let mut rng = pt::sample_stream(pixel, gbuffer.frame, pass, seed);
@@ -538,7 +553,7 @@ pub fn render(
 mod tests {
     use super::*;
     use crate::bssrdf::{EntryPoint, ExitPoint, contribution_dipole};
-    use crate::material::Translucent;
+    use crate::material::BoundaryKind;
     use crate::profile::ScaleFit;
     use glam::Vec2;
     use restir::stats::{Summary, Verdict, equivalence};
@@ -555,6 +570,7 @@ mod tests {
             ior: 1.3,
             g: 0.0,
             fit: ScaleFit::Searchlight,
+            boundary: BoundaryKind::Diffuse,
         }
     }
 
@@ -712,7 +728,7 @@ mod tests {
                 uniform_samples: uniform,
                 ..ImageSpaceSettings::default()
             };
-            let profile = GatherProfile::new(dipoles, settings.channel);
+            let profile = GatherProfile::new(&material, settings.channel);
             for (k, &(a, closed)) in receivers.iter().enumerate() {
                 let receiver = Receiver {
                     position: Vec3::new(a as f32, 0.0, 0.0),
@@ -814,9 +830,10 @@ mod tests {
         let wi = Vec3::new(0.5, 0.8, 0.3).normalize();
         let radiance = Vec3::new(2.0, 1.0, 0.5);
         let cos = n2.dot(wi);
-        let irradiance = radiance * (fresnel_transmission(cos) * cos);
+        let fresnel = material.fresnel();
+        let irradiance = radiance * (fresnel.eval(cos) * cos);
         let r = x2.position.length();
-        let got = exit_radiance(&g1, dipoles.profile_rgb(r) * irradiance);
+        let got = exit_radiance(&g1, &fresnel, dipoles.profile_rgb(r) * irradiance);
         let want = contribution_dipole(&dipoles, &x1, &x2, wi, radiance);
         assert!(
             (got - want).abs().max_element() <= 1e-6 * want.max_element(),
@@ -843,9 +860,9 @@ mod tests {
             panic!("slab material")
         };
         let dipoles = DipoleProfiles::new(&material);
-        let profile = GatherProfile::new(dipoles, settings.channel);
+        let profile = GatherProfile::new(&material, settings.channel);
         let r_support = dipoles.r_max_all;
-        let e0 = fresnel_transmission(0.8) * 0.8;
+        let e0 = material.fresnel().eval(0.8) * 0.8;
         let edge = 0.01875f64;
         let half_width = 4.0 * (15f32).to_radians().tan();
         let inside: Vec<usize> = (0..gbuffer.pixels.len())
@@ -974,7 +991,7 @@ mod tests {
             panic!("slab material")
         };
         let dipoles = DipoleProfiles::new(&material);
-        let e0 = (fresnel_transmission(0.8) * 0.8) as f64;
+        let e0 = (material.fresnel().eval(0.8) * 0.8) as f64;
         let lit: Vec<usize> = (0..gbuffer.pixels.len())
             .filter(|&p| {
                 let x = gbuffer.pixels[p].unwrap().position;
@@ -987,7 +1004,7 @@ mod tests {
             lit.iter()
                 .map(|&p| {
                     let g = gbuffer.pixels[p].unwrap();
-                    fresnel_transmission(g.shading_normal.dot(g.view)) as f64
+                    material.fresnel().eval(g.shading_normal.dot(g.view)) as f64
                         * std::f64::consts::FRAC_1_PI
                         * e0
                         * material.albedo[c] as f64
@@ -1068,8 +1085,8 @@ mod tests {
             panic!("slab material")
         };
         let dipoles = DipoleProfiles::new(&material);
-        let profile = GatherProfile::new(dipoles, settings.channel);
-        let e0 = (fresnel_transmission(0.8) * 0.8) as f64;
+        let profile = GatherProfile::new(&material, settings.channel);
+        let e0 = (material.fresnel().eval(0.8) * 0.8) as f64;
         let eye = scene.camera.eye(0);
         // Receivers whose disk (R′ ≈ 2 px) stays on screen.
         let receivers: Vec<usize> = (0..gbuffer.pixels.len())

@@ -149,32 +149,34 @@ pub fn estimate(
             material,
             x1,
             dipoles,
-        } => {
-            let profile = match settings.profile {
-                ProfileKind::Burley => Profile::Burley(material),
-                ProfileKind::Dipole => {
-                    Profile::Dipole(dipoles.unwrap_or_else(|| DipoleProfiles::new(material)))
-                }
-            };
-            estimate_translucent(scene, &profile, x1, settings, rng, hits)
-        }
+        } => match settings.profile {
+            ProfileKind::Burley => estimate_bssrdf(scene, x1, settings, rng, hits, |x2, wi, le| {
+                contribution(material, x1, x2, wi, le)
+            }),
+            ProfileKind::Dipole => {
+                let dipoles = dipoles.unwrap_or_else(|| DipoleProfiles::new(material));
+                estimate_bssrdf(scene, x1, settings, rng, hits, |x2, wi, le| {
+                    contribution_dipole(&dipoles, x1, x2, wi, le)
+                })
+            }
+        },
         Shading::Lambert { material, x1 } => estimate_lambert(scene, material, x1, rng),
     }
 }
 
-/// The profile `f` evaluates, with what it needs.
-enum Profile<'a> {
-    Burley(&'a Translucent),
-    Dipole(DipoleProfiles),
-}
-
-fn estimate_translucent(
+/// One BSSRDF-IS estimate at x1 of `∫ f(x2, ωi) dA dωi` for the path contribution
+/// `contribution(x2, ωi, L_e)` of a BSSRDF on x1's cached profiles (they sample x2 and give
+/// `p_disk`, with radii from `settings.radius`): the material's [`contribution`], its dipole's
+/// ([`contribution_dipole`]), or seed 000's multiple-scattering-only profile
+/// ([`single_scatter`](super::single_scatter)). Unbiased for any `f` — of either sign — that
+/// vanishes where `p_disk` does; NEE at x2, shadow-tested, per the hit policy (module doc).
+pub fn estimate_bssrdf(
     scene: &Scene,
-    profile: &Profile,
     x1: &ExitPoint,
     settings: &PtSettings,
     rng: &mut Stream,
     hits: &mut Vec<Hit>,
+    contribution: impl Fn(&EntryPoint, Vec3, Vec3) -> Vec3,
 ) -> Vec3 {
     let probe = Probe::sample(
         &settings.selection,
@@ -198,12 +200,7 @@ fn estimate_translucent(
         ) else {
             return Vec3::ZERO;
         };
-        let f = match profile {
-            Profile::Burley(material) => contribution(material, x1, &x2, light.wi, light.radiance),
-            Profile::Dipole(dipoles) => {
-                contribution_dipole(dipoles, x1, &x2, light.wi, light.radiance)
-            }
-        };
+        let f = contribution(&x2, light.wi, light.radiance);
         if !(p > 0.0 && light.pdf > 0.0) || f == Vec3::ZERO {
             return Vec3::ZERO;
         }
@@ -279,7 +276,30 @@ pub fn render(
     first_sample: u32,
     spp: u32,
 ) -> Image {
+    render_pixels(
+        gbuffer,
+        first_sample..first_sample + spp,
+        |_, x1| Shading::prepare(scene, x1, settings.profile),
+        |shading, pixel, sample, hits| {
+            let mut rng = sample_stream(pixel, gbuffer.frame, sample, seed);
+            estimate(scene, shading, settings, &mut rng, hits)
+        },
+    )
+}
+
+/// The mean over `samples` of `sample(state, pixel, sample, hits)` for every pixel of `gbuffer`
+/// with a primary hit, `state = prepare(pixel, x1)` once per pixel (rayon over rows; a sample
+/// that is a function of its arguments gives the same bits for any thread count). Non-finite
+/// samples count as 0 in the mean and are counted in [`Image::nonfinite`]; pixels without a hit
+/// are 0.
+pub fn render_pixels<S>(
+    gbuffer: &GBuffer,
+    samples: std::ops::Range<u32>,
+    prepare: impl Fn(u32, &GPixel) -> S + Sync,
+    sample: impl Fn(&S, u32, u32, &mut Vec<Hit>) -> Vec3 + Sync,
+) -> Image {
     let width = gbuffer.width as usize;
+    let spp = samples.len();
     let mut pixels = vec![DVec3::ZERO; gbuffer.pixels.len()];
     let nonfinite: u64 = pixels
         .par_chunks_mut(width.max(1))
@@ -290,12 +310,11 @@ pub fn render(
             let mut nonfinite = 0;
             for (px, (out, x1)) in out.iter_mut().zip(row).enumerate() {
                 let Some(x1) = x1 else { continue };
-                let shading = Shading::prepare(scene, x1, settings.profile);
                 let pixel = (py * width + px) as u32;
+                let state = prepare(pixel, x1);
                 let mut sum = DVec3::ZERO;
-                for sample in first_sample..first_sample + spp {
-                    let mut rng = sample_stream(pixel, gbuffer.frame, sample, seed);
-                    let value = estimate(scene, &shading, settings, &mut rng, &mut hits);
+                for index in samples.clone() {
+                    let value = sample(&state, pixel, index, &mut hits);
                     if value.is_finite() {
                         sum += value.as_dvec3();
                     } else {

@@ -64,7 +64,7 @@ impl DipoleProfiles {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::material::measured;
+    use crate::material::{BoundaryKind, measured};
     use crate::profile::ScaleFit;
 
     fn jade() -> Translucent {
@@ -75,6 +75,7 @@ mod tests {
             ior: 1.3,
             g: 0.0,
             fit: ScaleFit::Searchlight,
+            boundary: BoundaryKind::Diffuse,
         }
     }
 

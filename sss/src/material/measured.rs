@@ -10,7 +10,7 @@
 
 use glam::Vec3;
 
-use super::Translucent;
+use super::{BoundaryKind, Translucent};
 use crate::profile::ScaleFit;
 use crate::profile::dipole::{reduced_albedo_from_reflectance, total_diffuse_reflectance};
 
@@ -84,6 +84,7 @@ pub fn measured(name: &str) -> Option<Translucent> {
         ior: MEASURED_IOR,
         g: 0.0,
         fit: ScaleFit::Searchlight,
+        boundary: BoundaryKind::Diffuse,
     })
 }
 

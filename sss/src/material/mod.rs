@@ -3,14 +3,16 @@
 
 pub mod color;
 pub mod dipole;
+pub mod fresnel;
 pub mod measured;
 pub mod translucent;
 
 use glam::Vec3;
 
 pub use dipole::DipoleProfiles;
+pub use fresnel::FresnelTransmission;
 pub use measured::{MEASURED_NAMES, measured};
-pub use translucent::{Translucent, fresnel_transmission};
+pub use translucent::{BoundaryKind, Translucent};
 
 /// An opaque Lambertian surface (backgrounds, floors).
 #[derive(Clone, Copy, Debug, PartialEq)]

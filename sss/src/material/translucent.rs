@@ -5,8 +5,26 @@ use std::path::Path;
 
 use glam::Vec3;
 
+use super::fresnel::FresnelTransmission;
 use crate::InputError;
 use crate::profile::{Burley, ScaleFit, scale_factor};
+
+/// The interface that path-traced volumetric transport meets at the object's surface (the
+/// random walk, the single-scatter estimator's zero- and single-scattering paths); scene field
+/// `boundary`. The diffusion BSSRDF is not affected: its Fresnel terms always use `ior`
+/// ([`FresnelTransmission`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum BoundaryKind {
+    /// Fresnel-free Lambertian transmission both ways, no internal reflection; `ior` unused
+    /// (the convention of diffusion-profile renderers [000 slide 57]). The default.
+    #[default]
+    Diffuse,
+    /// A smooth dielectric of index `ior`: Fresnel reflection or refraction at entry and at every
+    /// internal boundary hit, total internal reflection.
+    Dielectric,
+    /// No interface: every crossing keeps its direction (as `ior = 1` with a smooth surface).
+    IndexMatched,
+}
 
 /// A translucent material with the Burley normalized-diffusion BSSRDF (DESIGN §9).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -23,6 +41,8 @@ pub struct Translucent {
     pub g: f32,
     /// Which Christensen–Burley fit relates `ℓ` to `d`.
     pub fit: ScaleFit,
+    /// The interface of path-traced volumetric transport (random walk, single scattering).
+    pub boundary: BoundaryKind,
 }
 
 impl Translucent {
@@ -56,6 +76,11 @@ impl Translucent {
         Vec3::from_array(std::array::from_fn(|c| {
             self.albedo[c] * self.channel(c).pdf_disk(r)
         }))
+    }
+
+    /// The BSSRDF's normalised Fresnel transmittance `F_t` for `ior` ([`FresnelTransmission`]).
+    pub fn fresnel(&self) -> FresnelTransmission {
+        FresnelTransmission::new(self.ior)
     }
 
     /// Checks the parameters; `field` is the material's dotted path in `file`, the error names
@@ -106,12 +131,6 @@ impl Translucent {
     }
 }
 
-/// Fresnel transmittance approximation `F_t(μ) = 1 − ½(1 − μ)⁵` (DESIGN §9), `μ` clamped to [0, 1].
-pub fn fresnel_transmission(mu: f32) -> f32 {
-    let m = 1.0 - mu.clamp(0.0, 1.0);
-    1.0 - 0.5 * m.powi(5)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -125,6 +144,7 @@ mod tests {
             ior: 1.4,
             g: 0.0,
             fit: ScaleFit::Dmfp,
+            boundary: BoundaryKind::Diffuse,
         }
     }
 
@@ -168,15 +188,6 @@ mod tests {
             );
         }
         assert_eq!(m.profile_rgb(m.r_max_all() * 1.001), Vec3::ZERO);
-    }
-
-    #[test]
-    fn fresnel_transmission_values() {
-        assert_eq!(fresnel_transmission(1.0), 1.0);
-        assert_eq!(fresnel_transmission(0.0), 0.5);
-        assert_eq!(fresnel_transmission(-3.0), 0.5);
-        assert_eq!(fresnel_transmission(7.0), 1.0);
-        assert!((fresnel_transmission(0.5) - (1.0 - 0.5 / 32.0)).abs() < 1e-7);
     }
 
     #[test]

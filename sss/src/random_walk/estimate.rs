@@ -23,7 +23,7 @@ use super::interface::{cosine_pdf, fresnel_dielectric, refract, sample_cosine};
 use super::lighting::ExitLighting;
 use super::medium::{Interface, Medium};
 use super::phase::PhaseFunction;
-use super::walk::{Exit, ExitDirection, WalkEnd, WalkSettings, walk};
+use super::walk::{ExitDirection, WalkEnd, WalkSettings, walk};
 
 /// One sample of [`estimate_exitant`], with how its walk ended (to count truncations);
 /// `Terminated` also when `wo` is below the surface (no walk is started).
@@ -70,8 +70,30 @@ pub fn estimate_exitant_with<B: Boundary + ?Sized, P: PhaseFunction, L: ExitLigh
     settings: &WalkSettings,
     stream: &mut Stream,
 ) -> ExitantSample {
+    let Some((dir, entry_weight)) = enter(medium.interface(), n1, wo, stream) else {
+        return ExitantSample {
+            radiance: Vec3::ZERO,
+            end: WalkEnd::Terminated,
+        };
+    };
+    let end = walk(boundary, medium, x1, dir, settings, stream);
+    let radiance = match end {
+        WalkEnd::Exited(exit) => {
+            entry_weight
+                * exit.weight
+                * incident(exit.point, exit.normal, exit.direction, lighting, stream)
+        }
+        WalkEnd::Terminated | WalkEnd::Truncated => Vec3::ZERO,
+    };
+    ExitantSample { radiance, end }
+}
+
+/// The inward direction and weight of a path entering the medium at a boundary point (unit
+/// outward normal `n1`) against the outgoing direction `wo`; `None` when `wo` is below the
+/// surface or cannot refract. Draws two numbers for the diffuse interface, none otherwise.
+pub fn enter(interface: Interface, n1: Vec3, wo: Vec3, stream: &mut Stream) -> Option<(Vec3, f32)> {
     let cos_o = wo.dot(n1);
-    let entry = match medium.interface() {
+    match interface {
         _ if cos_o <= 0.0 => None,
         Interface::IndexMatched => Some((-wo, 1.0)),
         // Refraction of the camera ray into the medium, weighted by the transmittance 1 − F.
@@ -83,28 +105,19 @@ pub fn estimate_exitant_with<B: Boundary + ?Sized, P: PhaseFunction, L: ExitLigh
             sample_cosine(-n1, [stream.next_f32(), stream.next_f32()]),
             1.0,
         )),
-    };
-    let Some((dir, entry_weight)) = entry else {
-        return ExitantSample {
-            radiance: Vec3::ZERO,
-            end: WalkEnd::Terminated,
-        };
-    };
-    let end = walk(boundary, medium, x1, dir, settings, stream);
-    let radiance = match end {
-        WalkEnd::Exited(exit) => {
-            entry_weight * exit.weight * incident_through(&exit, lighting, stream)
-        }
-        WalkEnd::Terminated | WalkEnd::Truncated => Vec3::ZERO,
-    };
-    ExitantSample { radiance, end }
+    }
 }
 
-/// Radiance arriving from outside through the exit point, as transmitted into the walk's
-/// direction (see the module doc).
-fn incident_through<L: ExitLighting>(exit: &Exit, lighting: &L, stream: &mut Stream) -> Vec3 {
-    let (point, normal) = (exit.point, exit.normal);
-    match exit.direction {
+/// Radiance arriving from outside through the boundary point `point` (unit outward `normal`)
+/// as transmitted into a path that leaves there in `direction` (see the module doc).
+pub fn incident<L: ExitLighting>(
+    point: Vec3,
+    normal: Vec3,
+    direction: ExitDirection,
+    lighting: &L,
+    stream: &mut Stream,
+) -> Vec3 {
+    match direction {
         ExitDirection::Specular(out) => lighting.radiance(point, out),
         ExitDirection::Diffuse => {
             let mut total = Vec3::ZERO;
@@ -140,60 +153,9 @@ mod tests {
 
     use super::*;
     use crate::random_walk::boundary::Sphere;
-    use crate::random_walk::lighting::LightSample;
-    use crate::random_walk::phase::ISOTROPIC;
+    use crate::random_walk::lighting::test_support::Furnace;
     use restir::rng::StreamKey;
     use restir::stats::{Summary, Verdict, equivalence};
-
-    /// Uniform environment of radiance `radiance`, sampled uniformly over the sphere, with
-    /// `pdf_scale ≠ 1` misreporting the density (negative control). With `delta`, each sample is
-    /// instead a directional light from a cosine-distributed direction about the normal, with
-    /// irradiance `π·radiance / cos θ`: the NEE term alone is then exactly `radiance`.
-    struct Furnace {
-        radiance: Vec3,
-        delta: bool,
-        pdf_scale: f32,
-    }
-
-    impl ExitLighting for Furnace {
-        fn sample(&self, _: Vec3, normal: Vec3, u: [f32; 2]) -> Option<LightSample> {
-            if self.delta {
-                let wi = sample_cosine(normal, u);
-                let radiance_over_pdf = self.radiance / cosine_pdf(normal, wi);
-                return Some(LightSample {
-                    wi,
-                    radiance_over_pdf,
-                    pdf: 0.0,
-                    is_delta: true,
-                });
-            }
-            let z = 1.0 - 2.0 * u[0];
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            let (s, c) = (std::f32::consts::TAU * u[1]).sin_cos();
-            let pdf = self.pdf_scale * ISOTROPIC;
-            let wi = Vec3::new(r * c, r * s, z);
-            Some(LightSample {
-                wi,
-                radiance_over_pdf: self.radiance / pdf,
-                pdf,
-                is_delta: false,
-            })
-        }
-        fn pdf(&self, _: Vec3, _: Vec3, _: Vec3) -> f32 {
-            if self.delta {
-                0.0
-            } else {
-                self.pdf_scale * ISOTROPIC
-            }
-        }
-        fn radiance(&self, _: Vec3, _: Vec3) -> Vec3 {
-            if self.delta {
-                Vec3::ZERO
-            } else {
-                self.radiance
-            }
-        }
-    }
 
     const L: Vec3 = Vec3::new(1.0, 0.5, 0.25);
 

@@ -1,24 +1,12 @@
-//! Surface events at the medium's boundary: Fresnel reflectance of a smooth dielectric,
+//! Surface events at the medium's boundary: Fresnel reflectance of a smooth dielectric
+//! ([`fresnel_dielectric`], shared with the BSSRDF in [`crate::material::fresnel`]),
 //! refraction, and cosine-distributed (Lambertian) transmission directions.
 
 use std::f32::consts::{FRAC_1_PI, TAU};
 
 use glam::Vec3;
 
-/// Unpolarised Fresnel reflectance of a smooth dielectric for light arriving with
-/// `cos_i = cos θ_i ≥ 0` on the incident side, `eta = η_transmitted / η_incident`.
-/// Returns 1 under total internal reflection.
-pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
-    let cos_i = cos_i.clamp(0.0, 1.0);
-    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
-    if sin2_t >= 1.0 {
-        return 1.0;
-    }
-    let cos_t = (1.0 - sin2_t).sqrt();
-    let r_parallel = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    let r_perpendicular = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    0.5 * (r_parallel * r_parallel + r_perpendicular * r_perpendicular)
-}
+pub use crate::material::fresnel::fresnel_dielectric;
 
 /// Snell refraction of the propagation direction `dir` through a surface with unit normal `n`
 /// facing the incident side (`dir · n < 0`), `eta = η_transmitted / η_incident`. `None` under

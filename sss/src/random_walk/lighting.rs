@@ -27,3 +27,63 @@ pub trait ExitLighting {
     /// contribute 0 here, since no direction chosen independently of them can hit them.
     fn radiance(&self, point: Vec3, wi: Vec3) -> Vec3;
 }
+
+/// Test lightings shared by the walk's and the single-scattering estimator's tests.
+#[cfg(test)]
+pub(crate) mod test_support {
+    use glam::Vec3;
+
+    use super::{ExitLighting, LightSample};
+    use crate::random_walk::interface::{cosine_pdf, sample_cosine};
+    use crate::random_walk::phase::ISOTROPIC;
+
+    /// Uniform environment of radiance `radiance`, sampled uniformly over the sphere, with
+    /// `pdf_scale ≠ 1` misreporting the density (negative control). With `delta`, each sample is
+    /// instead a directional light from a cosine-distributed direction about the normal, with
+    /// irradiance `π·radiance / cos θ`: the NEE term alone is then exactly `radiance`.
+    pub struct Furnace {
+        pub radiance: Vec3,
+        pub delta: bool,
+        pub pdf_scale: f32,
+    }
+
+    impl ExitLighting for Furnace {
+        fn sample(&self, _: Vec3, normal: Vec3, u: [f32; 2]) -> Option<LightSample> {
+            if self.delta {
+                let wi = sample_cosine(normal, u);
+                let radiance_over_pdf = self.radiance / cosine_pdf(normal, wi);
+                return Some(LightSample {
+                    wi,
+                    radiance_over_pdf,
+                    pdf: 0.0,
+                    is_delta: true,
+                });
+            }
+            let z = 1.0 - 2.0 * u[0];
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let (s, c) = (std::f32::consts::TAU * u[1]).sin_cos();
+            let pdf = self.pdf_scale * ISOTROPIC;
+            let wi = Vec3::new(r * c, r * s, z);
+            Some(LightSample {
+                wi,
+                radiance_over_pdf: self.radiance / pdf,
+                pdf,
+                is_delta: false,
+            })
+        }
+        fn pdf(&self, _: Vec3, _: Vec3, _: Vec3) -> f32 {
+            if self.delta {
+                0.0
+            } else {
+                self.pdf_scale * ISOTROPIC
+            }
+        }
+        fn radiance(&self, _: Vec3, _: Vec3) -> Vec3 {
+            if self.delta {
+                Vec3::ZERO
+            } else {
+                self.radiance
+            }
+        }
+    }
+}

@@ -7,9 +7,10 @@ use glam::Vec3;
 
 use super::phase::{HenyeyGreenstein, PhaseFunction};
 use crate::InputError;
-use crate::material::Translucent;
 use crate::material::color::volume_coefficients;
+use crate::material::{BoundaryKind, Material, Translucent};
 use crate::profile::ScaleFit;
+use crate::scene::Scene;
 
 /// What happens where the walk meets the object's surface.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -23,6 +24,17 @@ pub enum Interface {
     /// sides (entry and exit directions cosine-distributed about the normal). No internal
     /// reflection, no `η`: the convention of diffusion-profile renderers [000 slide 57].
     Diffuse,
+}
+
+impl Interface {
+    /// The interface a translucent material asks for: its `boundary`, a dielectric with its `ior`.
+    pub fn of(material: &Translucent) -> Interface {
+        match material.boundary {
+            BoundaryKind::Diffuse => Interface::Diffuse,
+            BoundaryKind::Dielectric => Interface::Dielectric { eta: material.ior },
+            BoundaryKind::IndexMatched => Interface::IndexMatched,
+        }
+    }
 }
 
 /// A homogeneous medium: scattering and absorption coefficients per RGB channel (1/length), a
@@ -93,13 +105,12 @@ impl Medium {
 
     /// The medium of a translucent material by seed 000's colour mapping [000 "Parameters"]:
     /// colour `C` = the material's albedo, scatter distance `scale · mfp`, so
-    /// `σt = 1/(scale · mfp)`, `σs = α(C, g) σt`, `σa = σt − σs`. Only the fits whose length is the
-    /// volume mean free path qualify (`searchlight`, `diffuse-transmission`); `dmfp` is an error,
-    /// since a diffuse mean free path is not `1/σt`. `interface` is the caller's choice (e.g.
-    /// `Interface::Dielectric { eta: material.ior }` for a smooth surface).
+    /// `σt = 1/(scale · mfp)`, `σs = α(C, g) σt`, `σa = σt − σs`; the interface is the material's
+    /// `boundary` ([`Interface::of`]). Only the fits whose length is the volume mean free path
+    /// qualify (`searchlight`, `diffuse_transmission`); `dmfp` is an error, since a diffuse mean
+    /// free path is not `1/σt`.
     pub fn from_translucent(
         material: &Translucent,
-        interface: Interface,
         file: &Path,
         field: &str,
     ) -> Result<Medium, InputError> {
@@ -108,8 +119,9 @@ impl Medium {
             return Err(InputError::new(
                 file,
                 format!("{field}.fit"),
-                "dmfp",
-                "the random walk needs the volume mean free path: use fit searchlight or diffuse-transmission",
+                "\"dmfp\"",
+                "volumetric transport needs the volume mean free path: \
+                 write fit = \"searchlight\" or fit = \"diffuse_transmission\"",
             ));
         }
         let (sigma_t, sigma_s) =
@@ -118,10 +130,26 @@ impl Medium {
             sigma_s,
             sigma_t - sigma_s,
             material.g,
-            interface,
+            Interface::of(material),
             file,
             field,
         )
+    }
+
+    /// The media of `scene`'s materials in order: [`Medium::from_translucent`] for translucent
+    /// ones, `None` for Lambert ones. Errors name the scene file and `materials[i]`.
+    pub fn of_scene(scene: &Scene) -> Result<Vec<Option<Medium>>, InputError> {
+        scene
+            .materials
+            .iter()
+            .enumerate()
+            .map(|(i, m)| match m {
+                Material::Translucent(t) => {
+                    Medium::from_translucent(t, &scene.file, &format!("materials[{i}]")).map(Some)
+                }
+                Material::Lambert(_) => Ok(None),
+            })
+            .collect()
     }
 }
 
@@ -208,10 +236,11 @@ mod tests {
             ior: 1.4,
             g: 0.3,
             fit: ScaleFit::Searchlight,
+            boundary: BoundaryKind::Dielectric,
         };
         let file = Path::new("scene.toml");
-        let m = Medium::from_translucent(&material, Interface::Dielectric { eta: 1.4 }, file, "m")
-            .unwrap();
+        let m = Medium::from_translucent(&material, file, "m").unwrap();
+        assert_eq!(m.interface(), Interface::Dielectric { eta: 1.4 });
         assert!(
             (m.sigma_t() - Vec3::new(1.0, 0.5, 0.25))
                 .abs()
@@ -224,15 +253,58 @@ mod tests {
         }
         // A brighter colour needs a higher single-scattering albedo.
         assert!(m.albedo().x < m.albedo().y && m.albedo().y < m.albedo().z);
-        let dmfp = Translucent {
-            fit: ScaleFit::Dmfp,
-            ..material
-        };
-        let err = Medium::from_translucent(&dmfp, Interface::Diffuse, file, "m").unwrap_err();
-        assert_eq!(err.field, "m.fit");
+        for (boundary, interface) in [
+            (BoundaryKind::Diffuse, Interface::Diffuse),
+            (BoundaryKind::IndexMatched, Interface::IndexMatched),
+        ] {
+            let m = Translucent {
+                boundary,
+                ..material
+            };
+            assert_eq!(
+                Medium::from_translucent(&m, file, "m").unwrap().interface(),
+                interface
+            );
+        }
         let bad = Translucent { g: 1.5, ..material };
-        let err = Medium::from_translucent(&bad, Interface::Diffuse, file, "m").unwrap_err();
+        let err = Medium::from_translucent(&bad, file, "m").unwrap_err();
         assert_eq!(err.field, "m.g");
+    }
+
+    /// A `dmfp` material is an error that names the scene file, the field and the value, and its
+    /// hint names values the scene parser accepts: the hinted line, put in the file, loads.
+    #[test]
+    fn dmfp_error_names_the_file_and_a_parseable_fix() {
+        const SCENE: &str = include_str!("../../../scenes/slab.toml");
+        let searchlight = "fit = \"searchlight\"";
+        assert_eq!(
+            SCENE.matches(searchlight).count(),
+            1,
+            "test bug: slab.toml changed"
+        );
+        let dmfp = SCENE.replace(searchlight, "fit = \"dmfp\"");
+        let file = Path::new("scenes/slab.toml");
+        let scene = Scene::from_toml_str(&dmfp, file).unwrap();
+        let err = Medium::of_scene(&scene).unwrap_err();
+        assert_eq!(err.file, file);
+        assert_eq!(err.field, "materials[0].fit");
+        let message = err.to_string();
+        assert!(message.starts_with("scenes/slab.toml: "), "{message}");
+        assert!(message.contains("dmfp"), "{message}");
+        let hints: Vec<&str> = message
+            .split("write ")
+            .nth(1)
+            .expect("a hint")
+            .split(" or ")
+            .collect();
+        assert_eq!(hints.len(), 2, "{message}");
+        for hint in hints {
+            let fixed = dmfp.replace("fit = \"dmfp\"", hint);
+            let scene = Scene::from_toml_str(&fixed, file)
+                .unwrap_or_else(|e| panic!("hint `{hint}` does not parse: {e}"));
+            let media = Medium::of_scene(&scene).unwrap();
+            assert!(media.iter().any(Option::is_some), "{hint}");
+        }
     }
 
     #[test]

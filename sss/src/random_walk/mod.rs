@@ -12,7 +12,9 @@
 //! - [`mod@walk`]: the kernel (free flights with hero-channel spectral MIS, collisions, boundary
 //!   events, Russian roulette, a reported bounce cap).
 //! - [`lighting`] and [`estimate`]: the pixel-level estimator [`estimate_exitant`] with
-//!   next-event estimation at the exit.
+//!   next-event estimation at the exit; its entry ([`enter`]), boundary crossing ([`cross`]) and
+//!   exit lighting ([`incident`]) also serve seed 000's single-scattering estimator
+//!   ([`crate::integrator::single_scatter`]).
 //!
 //! **Analytic check.** For an index-matched semi-infinite medium with isotropic scattering and
 //! albedo `α`, lit by a collimated beam at incidence cosine `μ0`, the fraction of the beam's flux
@@ -33,11 +35,14 @@ pub mod phase;
 pub mod walk;
 
 pub use boundary::{Boundary, BoundaryHit, HalfSpace, MeshBoundary, Sphere};
-pub use estimate::{ExitantSample, estimate_exitant, estimate_exitant_with};
+pub use estimate::{ExitantSample, enter, estimate_exitant, estimate_exitant_with, incident};
 pub use lighting::{ExitLighting, LightSample};
 pub use medium::{Interface, Medium};
 pub use phase::{HenyeyGreenstein, PhaseFunction, PhaseSample};
-pub use walk::{DEFAULT_MAX_BOUNCES, Exit, ExitDirection, WalkEnd, WalkSettings, walk};
+pub use walk::{
+    Crossing, DEFAULT_MAX_BOUNCES, Exit, ExitDirection, WalkEnd, WalkSettings, cross, roulette,
+    walk,
+};
 
 #[cfg(test)]
-mod validation;
+pub(crate) mod validation;

@@ -80,6 +80,36 @@ pub enum WalkEnd {
     Truncated,
 }
 
+/// Where a path inside the medium meets the boundary.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Crossing {
+    /// It leaves the medium.
+    Leaves(ExitDirection),
+    /// It is reflected back inside along this direction (Fresnel or total internal reflection).
+    Reflected(Vec3),
+}
+
+/// The boundary event of a path travelling along `dir` that meets the boundary where its unit
+/// outward normal is `normal`: index-matched and diffuse interfaces always let it leave; a
+/// dielectric (inside → outside: relative index `1/η`) reflects it with the Fresnel probability,
+/// drawing one number from `stream` only when refraction is possible (total internal reflection
+/// draws none). The probability choice leaves the weight unchanged (`F/F`, `(1 − F)/(1 − F)`).
+pub fn cross(interface: Interface, dir: Vec3, normal: Vec3, stream: &mut Stream) -> Crossing {
+    match interface {
+        Interface::IndexMatched => Crossing::Leaves(ExitDirection::Specular(dir)),
+        Interface::Diffuse => Crossing::Leaves(ExitDirection::Diffuse),
+        Interface::Dielectric { eta } => {
+            let fresnel = fresnel_dielectric(dir.dot(normal), 1.0 / eta);
+            match refract(dir, -normal, 1.0 / eta) {
+                Some(out) if stream.next_f32() >= fresnel => {
+                    Crossing::Leaves(ExitDirection::Specular(out))
+                }
+                _ => Crossing::Reflected(reflect(dir, normal)),
+            }
+        }
+    }
+}
+
 /// Survival under throughput-based Russian roulette: with `q = min(1, max_c β_c)`, the walk
 /// survives iff `u < q`, and survivors carry `β / q` (so `E[β'] = β`). `None` = killed.
 pub fn roulette(beta: Vec3, u: f32) -> Option<Vec3> {
@@ -140,22 +170,11 @@ pub fn walk<B: Boundary + ?Sized, P: PhaseFunction>(
                     reflection_count,
                 })
             };
-            match medium.interface() {
-                Interface::IndexMatched => return exit(ExitDirection::Specular(dir)),
-                Interface::Diffuse => return exit(ExitDirection::Diffuse),
-                Interface::Dielectric { eta } => {
-                    // Inside → outside: relative index 1/η; reflect with the Fresnel probability.
-                    let fresnel = fresnel_dielectric(dir.dot(hit.normal), 1.0 / eta);
-                    let refracted = refract(dir, -hit.normal, 1.0 / eta);
-                    match refracted {
-                        Some(out) if stream.next_f32() >= fresnel => {
-                            return exit(ExitDirection::Specular(out));
-                        }
-                        _ => {
-                            dir = reflect(dir, hit.normal);
-                            reflection_count += 1;
-                        }
-                    }
+            match cross(medium.interface(), dir, hit.normal, stream) {
+                Crossing::Leaves(direction) => return exit(direction),
+                Crossing::Reflected(reflected) => {
+                    dir = reflected;
+                    reflection_count += 1;
                 }
             }
         } else {

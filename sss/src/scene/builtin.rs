@@ -43,6 +43,10 @@ pub const BUILTIN: &[(&str, &str)] = &[
         "half-shadow",
         "translucent plane, directional light, shadow exactly over x < 0 (analytic BSSRDF check)",
     ),
+    (
+        "far-knot",
+        "fine thin torus knot 1000 units from the origin: re-traced probe chords miss x2 (deferred-index stress)",
+    ),
 ];
 
 /// The TOML text of built-in scene `name`.
@@ -58,6 +62,7 @@ pub fn source(name: &str) -> Option<&'static str> {
         "mfp-4" => include_str!("../../../scenes/mfp-4.toml"),
         "slab" => include_str!("../../../scenes/slab.toml"),
         "half-shadow" => include_str!("../../../scenes/half-shadow.toml"),
+        "far-knot" => include_str!("../../../scenes/far-knot.toml"),
         _ => return None,
     })
 }

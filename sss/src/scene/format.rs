@@ -48,6 +48,7 @@ pub enum MaterialDesc {
         ior: Option<f32>,
         g: Option<f32>,
         fit: Option<FitDesc>,
+        boundary: Option<BoundaryDesc>,
     },
     Lambert {
         name: String,
@@ -70,6 +71,17 @@ pub enum FitDesc {
     Searchlight,
     DiffuseTransmission,
     Dmfp,
+}
+
+/// `boundary`: the interface of path-traced volumetric transport (`BoundaryKind`);
+/// `index-matched` is accepted for `index_matched`.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BoundaryDesc {
+    Diffuse,
+    Dielectric,
+    #[serde(alias = "index-matched")]
+    IndexMatched,
 }
 
 /// `[[objects]]`: a procedural `shape` or a `mesh` file, placed by `transform`.

@@ -63,7 +63,7 @@ impl GBuffer {
     /// The pixel of this (earlier) frame that shows the primary hit `x` of a later frame:
     /// `floor(camera.project(self.frame, x))`, accepted if it shows the same object at a similar
     /// distance and normal (the constants above); `None` otherwise (a disocclusion). The rule of
-    /// temporal reuse (experiments' `reuse::temporal`) and of the adaptive sampler's history.
+    /// temporal reuse (engine's `reuse::temporal`) and of the adaptive sampler's history.
     pub fn reproject(&self, camera: &Camera, x: &GPixel) -> Option<u32> {
         let c = camera.project(self.frame, x.position)?;
         let (qx, qy) = (c.x as u32, c.y as u32);

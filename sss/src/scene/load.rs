@@ -7,15 +7,15 @@ use std::path::Path;
 use glam::{Affine3A, Quat, Vec3};
 
 use super::format::{
-    CameraDesc, FitDesc, LightDesc, ManyLightsDesc, MaterialDesc, ObjectDesc, ScaleDesc, SceneFile,
-    ShapeDesc, TransformDesc,
+    BoundaryDesc, CameraDesc, FitDesc, LightDesc, ManyLightsDesc, MaterialDesc, ObjectDesc,
+    ScaleDesc, SceneFile, ShapeDesc, TransformDesc,
 };
 use super::light::{Light, Lights};
 use super::many_lights::ManyLights;
 use super::{Camera, Object, Scene};
 use crate::InputError;
 use crate::geometry::{Geometry, TriangleMesh, load_mesh, shapes};
-use crate::material::{Lambert, MEASURED_NAMES, Material, Translucent, measured};
+use crate::material::{BoundaryKind, Lambert, MEASURED_NAMES, Material, Translucent, measured};
 use crate::profile::ScaleFit;
 
 /// Largest triangle count of one procedural shape (guards against typos in tessellation fields).
@@ -59,6 +59,7 @@ pub fn scene_from_toml(text: &str, origin: &Path) -> Result<Scene, InputError> {
         .map_or_else(|| "scene".to_string(), |s| s.to_string_lossy().into_owned());
     Ok(Scene {
         name,
+        file: origin.to_path_buf(),
         camera,
         materials,
         objects,
@@ -282,6 +283,7 @@ impl Ctx<'_> {
                 ior,
                 g,
                 fit,
+                boundary,
                 ..
             } => {
                 let base = match preset {
@@ -307,6 +309,7 @@ impl Ctx<'_> {
                             ior: 1.3,
                             g: 0.0,
                             fit: ScaleFit::Searchlight,
+                            boundary: BoundaryKind::Diffuse,
                         }
                     }
                 };
@@ -320,6 +323,11 @@ impl Ctx<'_> {
                         FitDesc::Searchlight => ScaleFit::Searchlight,
                         FitDesc::DiffuseTransmission => ScaleFit::DiffuseTransmission,
                         FitDesc::Dmfp => ScaleFit::Dmfp,
+                    }),
+                    boundary: boundary.map_or(base.boundary, |b| match b {
+                        BoundaryDesc::Diffuse => BoundaryKind::Diffuse,
+                        BoundaryDesc::Dielectric => BoundaryKind::Dielectric,
+                        BoundaryDesc::IndexMatched => BoundaryKind::IndexMatched,
                     }),
                 };
                 m.validate(self.file, field)?;
@@ -745,8 +753,35 @@ intensity = [1.0, 1.0, 1.0]
             panic!("translucent")
         };
         assert_eq!(
-            (m.scale, m.ior, m.g, m.fit),
-            (1.0, 1.3, 0.0, ScaleFit::Searchlight)
+            (m.scale, m.ior, m.g, m.fit, m.boundary),
+            (1.0, 1.3, 0.0, ScaleFit::Searchlight, BoundaryKind::Diffuse)
+        );
+        assert_eq!(scene.file, Path::new(ORIGIN));
+    }
+
+    /// `boundary` takes each interface (and `index-matched` for `index_matched`); anything else
+    /// is an error naming the material and the value (serde reports an unknown variant of the
+    /// tagged material at the material's path).
+    #[test]
+    fn boundary_names_the_interface() {
+        let cases = [
+            ("diffuse", BoundaryKind::Diffuse),
+            ("dielectric", BoundaryKind::Dielectric),
+            ("index_matched", BoundaryKind::IndexMatched),
+            ("index-matched", BoundaryKind::IndexMatched),
+        ];
+        for (value, kind) in cases {
+            let text = edit("mfp = [", &format!("boundary = \"{value}\"\nmfp = ["));
+            let scene = load(&text).unwrap();
+            let Material::Translucent(m) = scene.material_of_object(0) else {
+                panic!("translucent")
+            };
+            assert_eq!(m.boundary, kind, "{value}");
+        }
+        assert_rejected(
+            &edit("mfp = [", "boundary = \"smooth\"\nmfp = ["),
+            "materials[0]",
+            "boundary = \"smooth\"",
         );
     }
 

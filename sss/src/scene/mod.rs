@@ -10,7 +10,7 @@ mod light;
 mod load;
 mod many_lights;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 pub use camera::{Camera, FRAMES};
 pub use gbuffer::{GBuffer, GPixel, REPROJECTION_DEPTH_TOLERANCE, REPROJECTION_NORMAL_COSINE};
@@ -34,6 +34,9 @@ pub struct Object {
 pub struct Scene {
     /// The file stem of the scene file.
     pub name: String,
+    /// The scene file as given to [`Scene::load`] (`scenes/<name>.toml` for built-in scenes):
+    /// errors found after loading name it.
+    pub file: PathBuf,
     pub camera: Camera,
     pub materials: Vec<Material>,
     pub objects: Vec<Object>,

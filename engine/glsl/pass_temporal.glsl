@@ -1,0 +1,97 @@
+#version 460
+// Temporal reuse [001 §5.1]: the GLSL twin of engine::reuse::temporal, one invocation per
+// pixel. Reprojects x1 into the previous frame, accepts the previous pixel if it shows the same
+// object at a similar depth and normal, caps its confidence and combines the two reservoirs
+// (restir/glsl/resample.glsl). Without a previous frame or an accepted pixel the canonical
+// reservoir passes unchanged. Bindings (Vulkan backend contract): 0-8 scene, 9 GPixel,
+// 10 PixelReservoir in, 11 previous GPixel, 12 previous PixelReservoir, 13 PixelReservoir out,
+// 14 uvec4 diag (shifted, failed, improved, error code of resample.glsl).
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+// Hits kept per probe, as in pass_candidates: a sample's intersection index is below 16.
+#define BVH_MAX_HITS 16
+#define SCENE_BINDING 0
+#include "scene.glsl"
+#include "resample.glsl"
+#include "loop_budget.glsl"
+
+layout(local_size_x = 64) in;
+
+layout(std430, binding = 9) readonly buffer Pixels { GPixel gpixels[]; };
+layout(std430, binding = 10) readonly buffer ReservoirsIn { PixelReservoir reservoirs_in[]; };
+layout(std430, binding = 11) readonly buffer PreviousPixels { GPixel previous_gpixels[]; };
+layout(std430, binding = 12) readonly buffer PreviousReservoirs {
+    PixelReservoir previous_reservoirs[];
+};
+layout(std430, binding = 13) writeonly buffer ReservoirsOut { PixelReservoir reservoirs_out[]; };
+layout(std430, binding = 14) writeonly buffer Diag { uvec4 diag[]; };
+
+#include "pass_params.glsl"
+
+// engine::purpose::SELECT.
+const uint PURPOSE_SELECT = 0x102u;
+// TEMPORAL_DEPTH_TOLERANCE, TEMPORAL_NORMAL_COSINE of engine::reuse.
+const float TEMPORAL_DEPTH_TOLERANCE = 0.1;
+const float TEMPORAL_NORMAL_COSINE = 0.9;
+
+// reproject: the previous frame's pixel that shows x1, if it passes the reprojection checks.
+bool reproject(GPixel g, out uint q) {
+    q = 0u;
+    vec2 c;
+    if (!camera_project(frame_params.previous_camera, domain_gpixel_vec3(g.position), c)) {
+        return false;
+    }
+    uint qx = uint(c.x);
+    uint qy = uint(c.y);
+    uint width = frame_params.previous_camera.width;
+    if (qx >= width || qy >= frame_params.previous_camera.height) {
+        return false;
+    }
+    q = qy * width + qx;
+    GPixel g_prev = previous_gpixels[q];
+    if (g_prev.valid == 0u) {
+        return false;
+    }
+    precise vec3 to_eye = domain_gpixel_vec3(g.position) - camera_eye(frame_params.previous_camera);
+    float depth = glam_length(to_eye);
+    precise float depth_error = abs(g_prev.depth - depth);
+    precise float depth_bound = TEMPORAL_DEPTH_TOLERANCE * depth;
+    return g_prev.object == g.object && depth_error <= depth_bound
+        && glam_dot(domain_gpixel_vec3(g_prev.geometric_normal), domain_gpixel_vec3(g.geometric_normal))
+            >= TEMPORAL_NORMAL_COSINE;
+}
+
+void main() {
+    uint pixel = gl_GlobalInvocationID.x;
+    if (pixel >= frame_params.width * frame_params.height) {
+        return;
+    }
+    PixelReservoir stored = reservoirs_in[pixel];
+    reservoirs_out[pixel] = stored;
+    diag[pixel] = uvec4(0u);
+    GPixel g = gpixels[pixel];
+    uint64_t seed = scene_seed();
+    if (!domain_new(g, pixel, frame_params.frame, params.pass, seed, resample_domains[0])) {
+        return;
+    }
+    uint q;
+    if (frame_params.has_previous == 0u || frame_params.frame == 0u || !reproject(g, q)) {
+        return;
+    }
+    if (!domain_new(previous_gpixels[q], q, frame_params.frame - 1u, params.pass, seed,
+                    resample_domains[1])) {
+        return;
+    }
+    resample_inputs[0] = stored;
+    resample_inputs[1] = previous_reservoirs[q];
+    resample_inputs[1].confidence = reservoir_cap_confidence(
+        resample_inputs[1].confidence, stored.confidence, params.confidence_cap);
+    PixelReservoir result;
+    uvec3 counts;
+    uint error = resample_step(2u, params.shift, params.mis, PURPOSE_SELECT,
+                               params.collect_diagnostics != 0u, result, counts);
+    reservoirs_out[pixel] = error == 0u ? result : stored;
+    if (!loop_budget_intact(min(frame_params.width, 1u))) {
+        error = LOOP_BUDGET_CUT;
+    }
+    diag[pixel] = uvec4(counts, error);
+}

@@ -1,0 +1,499 @@
+//! The CPU backend (DESIGN §6): per frame, G-buffer → passes → shade. Each pass is a pure
+//! per-pixel kernel that reads the previous buffers and writes a new one (ping-pong between two
+//! reservoir buffers, plus the previous frame's final buffer for temporal reuse), run with rayon
+//! over rows. No shared mutable state, so the output is bit-identical for any thread count.
+
+use std::convert::Infallible;
+use std::time::Instant;
+
+use glam::Vec3;
+use rayon::prelude::*;
+use restir::rng::StreamKey;
+use shifts::{Hybrid, SssDomain};
+use sss::integrator::pt::{self, PtSettings, Shading};
+use sss::scene::{GBuffer, Scene};
+
+use crate::candidates::{self, ProbeCounts};
+use crate::diagnostics::{Counters, HybridChoice};
+use crate::image::Image;
+use crate::layout::PixelReservoir;
+use crate::preset::{PassSpec, Preset};
+use crate::reuse::{self, PassInput, Previous, ShiftCounts};
+use crate::{PassTiming, PipelineError, Run, RunConfig, purpose};
+
+/// Fills `out` (row-major, rows of `width`) with `kernel(pixel)` in parallel over rows; the
+/// first error in pixel order wins, so errors are as deterministic as results.
+fn per_pixel<T: Send, E: Send>(
+    out: &mut [T],
+    width: u32,
+    kernel: impl Fn(u32, &mut T) -> Result<(), E> + Sync,
+) -> Result<(), E> {
+    let width = width.max(1) as usize;
+    let errors: Vec<Option<E>> = out
+        .par_chunks_mut(width)
+        .enumerate()
+        .map(|(row, cells)| {
+            for (x, cell) in cells.iter_mut().enumerate() {
+                if let Err(e) = kernel((row * width + x) as u32, cell) {
+                    return Some(e);
+                }
+            }
+            None
+        })
+        .collect();
+    errors.into_iter().flatten().next().map_or(Ok(()), Err)
+}
+
+/// One pixel's output of a pass: the reservoir and its diagnostics.
+#[derive(Clone, Copy, Default)]
+struct Cell {
+    reservoir: PixelReservoir,
+    probes: ProbeCounts,
+    hybrid: HybridChoice,
+    shifts: ShiftCounts,
+}
+
+/// Runs `preset` (already validated) for `config.frames` frames.
+pub(crate) fn run(
+    scene: &Scene,
+    preset: &Preset,
+    config: &RunConfig,
+) -> Result<Run, PipelineError> {
+    let camera = &scene.camera;
+    let (width, height) = (camera.width(), camera.height());
+    let n = width as usize * height as usize;
+    let seed = config.seed;
+    let mut seconds = vec![0.0f64; preset.passes.len() + 2];
+    let reuse_labels = preset
+        .passes
+        .iter()
+        .filter(|p| p.shift().is_some())
+        .map(PassSpec::label);
+    let mut counters = config
+        .collect_diagnostics
+        .then(|| Counters::new(width, height, reuse_labels.collect()));
+    let mut cells = vec![Cell::default(); n];
+    let mut front = vec![PixelReservoir::empty(); n];
+    let mut previous: Option<(GBuffer, Vec<PixelReservoir>)> = None;
+    let mut frames = Vec::with_capacity(config.frames as usize);
+    let mut nan_count = 0;
+
+    for frame in 0..config.frames {
+        let start = Instant::now();
+        let gbuffer = GBuffer::render(scene, frame);
+        seconds[0] += start.elapsed().as_secs_f64();
+        let mut reuse_pass = 0;
+        for (pass_index, pass) in preset.passes.iter().enumerate() {
+            let start = Instant::now();
+            let input = PassInput {
+                scene,
+                gbuffer: &gbuffer,
+                reservoirs: &front,
+                pass: pass_index as u32,
+                seed,
+                collect_diagnostics: config.collect_diagnostics,
+            };
+            let wrap = |pixel| {
+                move |error| PipelineError::Resample {
+                    frame,
+                    pass: pass_index,
+                    pixel,
+                    error,
+                }
+            };
+            match *pass {
+                PassSpec::Candidates {
+                    bssrdf_samples,
+                    shared_light,
+                } => {
+                    per_pixel::<_, PipelineError>(&mut cells, width, |pixel, cell| {
+                        *cell = Cell::default();
+                        let Some((domain, _)) = input.domain(pixel) else {
+                            return Ok(());
+                        };
+                        let mut hits = Vec::new();
+                        let (mut canonical, probes) = candidates::generate(
+                            &domain,
+                            bssrdf_samples,
+                            shared_light,
+                            seed,
+                            &mut hits,
+                        )
+                        .map_err(|error| PipelineError::Candidate {
+                            frame,
+                            pixel,
+                            error,
+                        })?;
+                        candidates::shadow_test(&domain, &mut canonical);
+                        cell.reservoir = PixelReservoir::from(&canonical);
+                        if config.collect_diagnostics {
+                            cell.probes = probes;
+                            cell.hybrid = hybrid_choice(&domain, &cell.reservoir);
+                        }
+                        Ok(())
+                    })?;
+                }
+                PassSpec::Temporal {
+                    shift,
+                    mis,
+                    confidence_cap,
+                } => {
+                    let prev = previous.as_ref().map(|(gbuffer, reservoirs)| Previous {
+                        gbuffer,
+                        reservoirs,
+                    });
+                    per_pixel::<_, PipelineError>(&mut cells, width, |pixel, cell| {
+                        let (reservoir, shifts) = reuse::temporal(
+                            &input,
+                            prev.as_ref(),
+                            pixel,
+                            shift,
+                            mis.scheme(),
+                            confidence_cap,
+                        )
+                        .map_err(wrap(pixel))?;
+                        *cell = Cell {
+                            reservoir,
+                            shifts,
+                            ..Cell::default()
+                        };
+                        Ok(())
+                    })?;
+                }
+                PassSpec::Spatial {
+                    shift,
+                    mis,
+                    neighbours,
+                    confidence_cap,
+                } => {
+                    per_pixel::<_, PipelineError>(&mut cells, width, |pixel, cell| {
+                        let (reservoir, shifts) = reuse::spatial(
+                            &input,
+                            pixel,
+                            shift,
+                            mis.scheme(),
+                            neighbours,
+                            confidence_cap,
+                        )
+                        .map_err(wrap(pixel))?;
+                        *cell = Cell {
+                            reservoir,
+                            shifts,
+                            ..Cell::default()
+                        };
+                        Ok(())
+                    })?;
+                }
+            }
+            for (r, c) in front.iter_mut().zip(&cells) {
+                *r = c.reservoir;
+            }
+            if let Some(counters) = &mut counters {
+                if pass.shift().is_some() {
+                    let shifts: Vec<ShiftCounts> = cells.iter().map(|c| c.shifts).collect();
+                    counters.add_shifts(reuse_pass, &shifts);
+                    reuse_pass += 1;
+                } else {
+                    let probes: Vec<_> = cells.iter().map(|c| (c.probes, c.hybrid)).collect();
+                    counters.add_candidates(&probes);
+                }
+            }
+            seconds[pass_index + 1] += start.elapsed().as_secs_f64();
+        }
+        let start = Instant::now();
+        let shade_pass = preset.passes.len() as u32;
+        let (image, nans) = shade(scene, &gbuffer, &front, shade_pass, seed);
+        nan_count += nans;
+        frames.push(image);
+        seconds[preset.passes.len() + 1] += start.elapsed().as_secs_f64();
+        let reuse_buffer = previous
+            .take()
+            .map(|(_, r)| r)
+            .unwrap_or_else(|| vec![PixelReservoir::empty(); n]);
+        previous = Some((gbuffer, std::mem::replace(&mut front, reuse_buffer)));
+    }
+
+    let labels = std::iter::once("gbuffer".to_string())
+        .chain(preset.passes.iter().map(PassSpec::label))
+        .chain(std::iter::once("shade".to_string()));
+    let timings = labels
+        .zip(seconds)
+        .map(|(label, seconds)| PassTiming { label, seconds })
+        .collect();
+    Ok(Run {
+        frames,
+        timings,
+        diagnostics: counters.map(|c| c.finish()),
+        nan_count,
+        reservoirs: previous.map(|(_, r)| r).unwrap_or_default(),
+    })
+}
+
+/// Which shift the hybrid criterion picks for the canonical sample [001 Fig. 4].
+fn hybrid_choice(domain: &SssDomain, reservoir: &PixelReservoir) -> HybridChoice {
+    let hybrid = Hybrid::for_material(domain.material());
+    match reservoir
+        .get()
+        .y
+        .and_then(|y| hybrid.uses_reconnection(&y, domain))
+    {
+        Some(true) => HybridChoice::Reconnection,
+        Some(false) => HybridChoice::Delayed,
+        None => HybridChoice::None,
+    }
+}
+
+/// The frame's image: `f(Y)·W` on translucent pixels; other primary hits get one sample of the
+/// path tracer's estimator (Lambert direct lighting by NEE), so a ReSTIR image and a
+/// path-traced one estimate the same radiance everywhere. Non-finite values are counted and
+/// written as 0.
+fn shade(
+    scene: &Scene,
+    gbuffer: &GBuffer,
+    reservoirs: &[PixelReservoir],
+    pass: u32,
+    seed: u64,
+) -> (Image, u64) {
+    let mut pixels = vec![Vec3::ZERO; reservoirs.len()];
+    let settings = PtSettings::default();
+    let input = PassInput {
+        scene,
+        gbuffer,
+        reservoirs,
+        pass,
+        seed,
+        collect_diagnostics: false,
+    };
+    let nans = std::sync::atomic::AtomicU64::new(0);
+    let Ok(()) = per_pixel::<_, Infallible>(&mut pixels, gbuffer.width, |pixel, out| {
+        let Some(g) = &gbuffer.pixels[pixel as usize] else {
+            return Ok(());
+        };
+        let value = match input.domain(pixel) {
+            Some((domain, _)) => reuse::shade(&domain, &reservoirs[pixel as usize]),
+            None => {
+                let mut rng =
+                    StreamKey::new(pixel, gbuffer.frame, pass, purpose::OPAQUE).stream(seed);
+                pt::estimate(
+                    scene,
+                    &Shading::new(scene, g),
+                    &settings,
+                    &mut rng,
+                    &mut Vec::new(),
+                )
+            }
+        };
+        if value.is_finite() {
+            *out = value;
+        } else {
+            nans.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        }
+        Ok(())
+    });
+    (
+        Image {
+            width: gbuffer.width,
+            height: gbuffer.height,
+            pixels,
+        },
+        nans.into_inner(),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{run, run_pt};
+
+    fn scene(name: &str, size: u32) -> Scene {
+        let mut scene = Scene::builtin(name).unwrap();
+        scene.camera = scene.camera.with_resolution(size, size);
+        scene
+    }
+
+    fn luminance_mean(image: &Image) -> f64 {
+        let [r, g, b] = image.mean();
+        0.2126 * r + 0.7152 * g + 0.0722 * b
+    }
+
+    fn bits(run: &Run) -> (Vec<u32>, Vec<u8>) {
+        let pixels = run
+            .frames
+            .iter()
+            .flat_map(|f| &f.pixels)
+            .flat_map(|p| p.to_array().map(f32::to_bits));
+        (
+            pixels.collect(),
+            bytemuck::cast_slice(&run.reservoirs).to_vec(),
+        )
+    }
+
+    fn with_threads<R: Send>(n: usize, f: impl FnOnce() -> R + Send) -> R {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .unwrap()
+            .install(f)
+    }
+
+    /// Same seed → bit-identical frames and final reservoirs with 1 and 2 threads, for a preset
+    /// with every pass kind (sequential, deferred index) and the hybrid, diagnostics on.
+    /// Control: another seed changes the output, so the comparison can see a difference.
+    #[test]
+    fn output_is_bit_identical_for_any_thread_count() {
+        let scene = scene("bumpy", 24);
+        let config = RunConfig {
+            seed: 3,
+            frames: 4,
+            collect_diagnostics: true,
+        };
+        for name in ["sequential", "hybrid"] {
+            let preset = Preset::named(name).unwrap();
+            let one = with_threads(1, || run(&scene, &preset, &config).unwrap());
+            let two = with_threads(2, || run(&scene, &preset, &config).unwrap());
+            assert_eq!(bits(&one), bits(&two), "{name}: 1 vs 2 threads");
+            assert_eq!(one.diagnostics, two.diagnostics, "{name}: diagnostics");
+            assert_eq!(one.reservoirs.len(), 24 * 24);
+            let other = RunConfig { seed: 4, ..config };
+            let reseeded = with_threads(2, || run(&scene, &preset, &other).unwrap());
+            assert_ne!(
+                bits(&one).0,
+                bits(&reseeded).0,
+                "{name}: control, another seed"
+            );
+        }
+    }
+
+    /// Every preset runs the 16-frame trajectory at 32×32 on `bumpy` and `half-shadow` with no
+    /// NaN, finite non-negative pixels, and an accumulated mean luminance within a factor 1.5 of
+    /// the path tracer's (16 spp per frame). A plausibility bound, not the unbiasedness test
+    /// (that is `lab/tests/unbiased.rs`).
+    #[test]
+    fn every_preset_renders_plausible_frames() {
+        for name in ["bumpy", "half-shadow"] {
+            let scene = scene(name, 32);
+            let config = RunConfig {
+                seed: 1,
+                ..RunConfig::default()
+            };
+            let pt = luminance_mean(&run_pt(&scene, 16, &config).accumulated().unwrap());
+            for preset in Preset::all() {
+                let r = run(&scene, &preset, &config).unwrap();
+                assert_eq!(r.frames.len(), 16);
+                assert_eq!(r.nan_count, 0, "{name} {}", preset.name);
+                for frame in &r.frames {
+                    assert_eq!((frame.width, frame.height), (32, 32));
+                    assert!(
+                        frame
+                            .pixels
+                            .iter()
+                            .all(|p| p.is_finite() && p.min_element() >= 0.0)
+                    );
+                }
+                let mean = luminance_mean(&r.accumulated().unwrap());
+                println!(
+                    "{name} {}: mean luminance {mean:.5}, path tracer {pt:.5}",
+                    preset.name
+                );
+                assert!(
+                    (pt / 1.5..pt * 1.5).contains(&mean),
+                    "{name} {}: mean {mean} vs path tracer {pt}",
+                    preset.name
+                );
+            }
+        }
+    }
+
+    /// Timings name every pass; a bad configuration is a typed error.
+    #[test]
+    fn timings_and_configuration_errors() {
+        let scene = scene("half-shadow", 8);
+        let preset = Preset::named("sequential").unwrap();
+        let r = run(
+            &scene,
+            &preset,
+            &RunConfig {
+                seed: 0,
+                frames: 2,
+                collect_diagnostics: false,
+            },
+        )
+        .unwrap();
+        let labels: Vec<&str> = r.timings.iter().map(|t| t.label.as_str()).collect();
+        assert_eq!(labels.len(), preset.passes.len() + 2);
+        assert_eq!((labels[0], labels[labels.len() - 1]), ("gbuffer", "shade"));
+        assert!(r.diagnostics.is_none());
+        assert!(r.seconds_per_frame("candidates").unwrap() >= 0.0);
+        let zero = RunConfig {
+            frames: 0,
+            ..RunConfig::default()
+        };
+        assert!(matches!(
+            run(&scene, &preset, &zero),
+            Err(PipelineError::Config(_))
+        ));
+        let bad = Preset {
+            name: "bad".into(),
+            passes: preset.passes[1..].to_vec(),
+        };
+        assert!(matches!(
+            run(&scene, &bad, &RunConfig::default()),
+            Err(PipelineError::Preset(_))
+        ));
+    }
+
+    /// Diagnostics on the flat `half-shadow` plane: a probe along the normal hits the plane once,
+    /// along a tangent never, so hits per probe estimate P(normal axis) = 0.5 (binomial z over
+    /// all N probes, two-sided α = 1e-3). Control: on the curved `bumpy` object the same test
+    /// rejects 0.5. Failure rates are ratios of counts, per-pass images lie in [0, 1], and the
+    /// hybrid map shows both shifts on `bumpy` [001 Fig. 4].
+    #[test]
+    fn diagnostics_count_hits_failures_and_hybrid_choices() {
+        let config = RunConfig {
+            seed: 2,
+            frames: 4,
+            collect_diagnostics: true,
+        };
+        let preset = Preset::named("hybrid").unwrap();
+        let z = |d: &crate::Diagnostics| {
+            let n = d.probes as f64;
+            ((d.mean_hits_per_probe - 0.5) / (0.25 / n).sqrt(), n)
+        };
+        let flat = run(&scene("half-shadow", 24), &preset, &config).unwrap();
+        let d = flat.diagnostics.unwrap();
+        let (z_flat, n) = z(&d);
+        assert!(z_flat.abs() < 3.2905, "α = 1e-3, N ≈ {n}: z = {z_flat}");
+        let curved = run(&scene("bumpy", 24), &preset, &config).unwrap();
+        let d = curved.diagnostics.unwrap();
+        let (z_curved, n_curved) = z(&d);
+        println!(
+            "hits per probe: half-shadow z = {z_flat:.3} (N = {n}), bumpy {:.4} z = {z_curved:.1} (N = {n_curved})",
+            d.mean_hits_per_probe
+        );
+        assert!(
+            z_curved.abs() > 3.2905,
+            "control: α = 1e-3, N ≈ {n}: z = {z_curved}"
+        );
+        assert_eq!(d.failures.len(), 2);
+        for f in &d.failures {
+            assert!(f.shifted > 0 && (0.0..=1.0).contains(&f.rate), "{f:?}");
+            assert!(f.image.pixels.iter().all(|p| (0.0..=1.0).contains(&p.x)));
+        }
+        assert!(
+            d.improved_fraction
+                .pixels
+                .iter()
+                .all(|p| (0.0..=1.0).contains(&p.x))
+        );
+        let blue = d.hybrid_choice.pixels.iter().filter(|p| p.z > 0.5).count();
+        let yellow = d.hybrid_choice.pixels.iter().filter(|p| p.x > 0.5).count();
+        assert!(
+            blue > 0 && yellow > 0,
+            "hybrid map: {blue} reconnection, {yellow} delayed"
+        );
+        let names: std::collections::HashSet<String> =
+            d.images().into_iter().map(|(n, _)| n).collect();
+        assert_eq!(names.len(), 3 + d.failures.len());
+        assert!(names.contains("failures-2-spatial4-hybrid"), "{names:?}");
+    }
+}

@@ -1,0 +1,212 @@
+//! `engine`: the reshift engine (DESIGN §6). This crate holds the ReSTIR SSS frame pipeline
+//! as data ([`Preset`], [`PassSpec`]) and its deterministic CPU backend ([`run`]), the
+//! path-traced baseline behind the same interface ([`run_pt`]), diagnostics and images.
+//!
+//! Per frame: G-buffer → candidates [001 §3.1] → temporal reuse → spatial pass(es) → shade
+//! `f(Y)·W`. Every random number comes from `StreamKey { pixel, frame, pass, purpose }` with the
+//! purposes of [`purpose`]; a run is a function of `(scene, preset, seed, frames)`.
+
+pub mod backend;
+pub mod candidates;
+mod cpu;
+pub mod diagnostics;
+pub mod image;
+pub mod layout;
+pub mod preset;
+pub mod purpose;
+pub mod random_walk_method;
+pub mod reuse;
+pub mod vulkan;
+
+use std::fmt;
+use std::time::Instant;
+
+use glam::DVec3;
+use restir::resample::ResampleError;
+use restir::reservoir::InvalidCandidate;
+use sss::integrator::pt::{self, PtSettings};
+use sss::scene::{FRAMES, GBuffer, Scene};
+
+pub use backend::Backend;
+pub use diagnostics::Diagnostics;
+pub use image::Image;
+pub use layout::PixelReservoir;
+pub use preset::{MisKind, PassSpec, Preset, PresetError, ShiftKind};
+
+/// What a run does besides the preset: the replica seed, the number of frames of the camera
+/// trajectory, and whether diagnostics are collected (they re-apply shifts and cost time).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RunConfig {
+    pub seed: u64,
+    pub frames: u32,
+    pub collect_diagnostics: bool,
+}
+
+impl Default for RunConfig {
+    /// Seed 0, the 16-frame trajectory, no diagnostics.
+    fn default() -> Self {
+        RunConfig {
+            seed: 0,
+            frames: FRAMES,
+            collect_diagnostics: false,
+        }
+    }
+}
+
+/// Wall-clock time of one pass, summed over the frames of a run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PassTiming {
+    /// `gbuffer`, a [`PassSpec::label`], `shade`, or `pt` for the baseline.
+    pub label: String,
+    pub seconds: f64,
+}
+
+/// The result of a run.
+#[derive(Clone, Debug)]
+pub struct Run {
+    /// Per-frame shaded linear RGB, one image per frame of the trajectory.
+    pub frames: Vec<Image>,
+    /// Per-pass seconds, summed over frames, in execution order.
+    pub timings: Vec<PassTiming>,
+    pub diagnostics: Option<Diagnostics>,
+    /// Shaded values that were NaN or infinite (written as 0).
+    pub nan_count: u64,
+    /// The final reservoirs of the last frame (empty for the path tracer).
+    pub reservoirs: Vec<PixelReservoir>,
+}
+
+impl Run {
+    /// The mean of all frames, accumulated in f64.
+    pub fn accumulated(&self) -> Option<Image> {
+        let first = self.frames.first()?;
+        let mut sum = vec![DVec3::ZERO; first.pixels.len()];
+        for frame in &self.frames {
+            for (s, p) in sum.iter_mut().zip(&frame.pixels) {
+                *s += p.as_dvec3();
+            }
+        }
+        let n = self.frames.len() as f64;
+        Some(Image {
+            width: first.width,
+            height: first.height,
+            pixels: sum.into_iter().map(|s| (s / n).as_vec3()).collect(),
+        })
+    }
+
+    /// Seconds per frame of the pass labelled `label`.
+    pub fn seconds_per_frame(&self, label: &str) -> Option<f64> {
+        let frames = self.frames.len().max(1) as f64;
+        self.timings
+            .iter()
+            .find(|t| t.label == label)
+            .map(|t| t.seconds / frames)
+    }
+}
+
+/// Why a run failed.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PipelineError {
+    Preset(PresetError),
+    /// `frames = 0` or another unusable setting.
+    Config(String),
+    /// Candidate generation produced an invalid candidate.
+    Candidate {
+        frame: u32,
+        pixel: u32,
+        error: InvalidCandidate,
+    },
+    /// A reuse pass failed (an invalid Jacobian, weight or confidence).
+    Resample {
+        frame: u32,
+        pass: usize,
+        pixel: u32,
+        error: ResampleError,
+    },
+    /// The Vulkan backend could not run.
+    Vulkan(vulkan::VulkanError),
+}
+
+impl fmt::Display for PipelineError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Preset(e) => e.fmt(f),
+            Self::Config(reason) => write!(f, "run configuration: {reason}"),
+            Self::Candidate {
+                frame,
+                pixel,
+                error,
+            } => {
+                write!(f, "frame {frame}, pixel {pixel}, candidates: {error}")
+            }
+            Self::Resample {
+                frame,
+                pass,
+                pixel,
+                error,
+            } => {
+                write!(f, "frame {frame}, pass {pass}, pixel {pixel}: {error}")
+            }
+            Self::Vulkan(e) => e.fmt(f),
+        }
+    }
+}
+
+impl std::error::Error for PipelineError {}
+
+impl From<PresetError> for PipelineError {
+    fn from(e: PresetError) -> Self {
+        PipelineError::Preset(e)
+    }
+}
+
+impl From<vulkan::VulkanError> for PipelineError {
+    fn from(e: vulkan::VulkanError) -> Self {
+        PipelineError::Vulkan(e)
+    }
+}
+
+/// Renders `config.frames` frames of `scene`'s camera trajectory with `preset` on the CPU.
+/// The resolution is the scene camera's (set it with `Camera::with_resolution`); for the GPU
+/// see [`Backend::run`].
+pub fn run(scene: &Scene, preset: &Preset, config: &RunConfig) -> Result<Run, PipelineError> {
+    Backend::Cpu.run(scene, preset, config)
+}
+
+/// The path-traced baseline (`sss::integrator::pt`, all hits per probe) at `spp` samples per
+/// pixel for the same frames, so methods are interchangeable. Diagnostics are not collected.
+pub fn run_pt(scene: &Scene, spp: u32, config: &RunConfig) -> Run {
+    let settings = PtSettings::default();
+    let (mut gbuffer_seconds, mut pt_seconds, mut nan_count) = (0.0, 0.0, 0);
+    let frames = (0..config.frames)
+        .map(|frame| {
+            let start = Instant::now();
+            let gbuffer = GBuffer::render(scene, frame);
+            gbuffer_seconds += start.elapsed().as_secs_f64();
+            let start = Instant::now();
+            let image = pt::render(scene, &gbuffer, &settings, config.seed, 0, spp);
+            pt_seconds += start.elapsed().as_secs_f64();
+            nan_count += image.nonfinite;
+            Image {
+                width: image.width,
+                height: image.height,
+                pixels: image.pixels.iter().map(|p| p.as_vec3()).collect(),
+            }
+        })
+        .collect();
+    Run {
+        frames,
+        timings: vec![
+            PassTiming {
+                label: "gbuffer".into(),
+                seconds: gbuffer_seconds,
+            },
+            PassTiming {
+                label: "pt".into(),
+                seconds: pt_seconds,
+            },
+        ],
+        diagnostics: None,
+        nan_count,
+        reservoirs: Vec::new(),
+    }
+}

@@ -1,0 +1,309 @@
+//! The `random-walk[:spp]` method: the volumetric random walk of `sss::random_walk` on the
+//! pixels whose primary hit is translucent, the path tracer on the others.
+//!
+//! Model choices (a different transport model than the BSSRDF methods, so `compare` measures
+//! its difference to the BSSRDF reference, not only its noise):
+//! * the medium is the material's by seed 000's colour mapping ([`Medium::from_translucent`]),
+//!   so `fit = "dmfp"` materials are an input error;
+//! * the boundary is the material's `boundary` ([`Interface::of`]); the default, Fresnel-free
+//!   Lambertian transmission, has the exit lobe `1/π` of the diffusion profiles and lets exits
+//!   use next-event estimation (a smooth dielectric exit reaches area lights only by chance);
+//! * the boundary is the hit object's own mesh; x1's outward normal comes from its winding as
+//!   seen by the camera (the camera sees closed objects from outside).
+//!
+//! [`Interface::of`]: sss::random_walk::Interface::of
+//!
+//! [`SceneLighting`] adapts the scene's lights to [`ExitLighting`], with shadow rays.
+
+use std::cell::RefCell;
+
+use glam::{DVec3, Vec3, Vec3A};
+use restir::rng::{Stream, StreamKey};
+use sss::geometry::Ray;
+use sss::integrator::pt::{self, PtSettings};
+use sss::random_walk::{self, ExitLighting, Medium, MeshBoundary, estimate_exitant};
+use sss::scene::{GBuffer, Light, Scene};
+
+use crate::PipelineError;
+use crate::image::Image;
+
+/// `purpose` of the walks' streams (ASCII "RW" + 1).
+pub const PURPOSE_WALK: u32 = 0x5257_0001;
+/// `purpose` of the light-selection numbers of [`SceneLighting`].
+pub const PURPOSE_WALK_LIGHT: u32 = 0x5257_0002;
+
+/// The scene's lights as seen from boundary points where a walk leaves, with visibility.
+/// [`Lights::sample`](sss::scene::Lights::sample) takes three numbers and the walk supplies two:
+/// the light selection draws from its own keyed stream.
+pub struct SceneLighting<'a> {
+    pub scene: &'a Scene,
+    pub selection: RefCell<Stream>,
+}
+
+/// Where the ray `origin + t·dir` (t > 0) meets `light`: `(t, point)` of the nearest hit of its
+/// surface (either side); `None` for delta lights and misses.
+pub fn intersect_light(light: &Light, origin: Vec3, dir: Vec3) -> Option<(f32, Vec3)> {
+    let parallelogram = |corner: Vec3, e1: Vec3, e2: Vec3, triangle: bool| {
+        // Möller–Trumbore on the edges e1, e2; the triangle keeps u + v ≤ 1.
+        let p = dir.cross(e2);
+        let det = e1.dot(p);
+        if det.abs() < 1e-12 {
+            return None;
+        }
+        let s = origin - corner;
+        let u = s.dot(p) / det;
+        let q = s.cross(e1);
+        let v = dir.dot(q) / det;
+        let t = e2.dot(q) / det;
+        let inside = u >= 0.0
+            && v >= 0.0
+            && if triangle {
+                u + v <= 1.0
+            } else {
+                u <= 1.0 && v <= 1.0
+            };
+        (inside && t > 0.0).then(|| (t, origin + t * dir))
+    };
+    match *light {
+        Light::Quad {
+            corner,
+            edge_u,
+            edge_v,
+            ..
+        } => parallelogram(corner, edge_u, edge_v, false),
+        Light::Triangle {
+            vertices: [v0, v1, v2],
+            ..
+        } => parallelogram(v0, v1 - v0, v2 - v0, true),
+        Light::Sphere { center, radius, .. } => {
+            let oc = origin - center;
+            let b = oc.dot(dir);
+            let c = oc.length_squared() - radius * radius;
+            let disc = b * b - c;
+            if disc < 0.0 {
+                return None;
+            }
+            let root = disc.sqrt();
+            [-b - root, -b + root]
+                .into_iter()
+                .find(|&t| t > 0.0)
+                .map(|t| (t, origin + t * dir))
+        }
+        Light::Point { .. } | Light::Directional { .. } => None,
+    }
+}
+
+impl SceneLighting<'_> {
+    /// Whether the segment from `point` along `wi` to distance `distance` is blocked.
+    fn blocked(&self, point: Vec3, normal: Vec3, wi: Vec3, distance: f32) -> bool {
+        pt::occluded(self.scene, point, normal, wi, distance)
+    }
+}
+
+impl ExitLighting for SceneLighting<'_> {
+    fn sample(&self, point: Vec3, normal: Vec3, u: [f32; 2]) -> Option<random_walk::LightSample> {
+        let pick = self.selection.borrow_mut().next_f32();
+        let s = self.scene.lights.sample(point, [pick, u[0], u[1]])?;
+        if s.wi.dot(normal) <= 0.0
+            || s.pdf.is_nan()
+            || s.pdf <= 0.0
+            || self.blocked(point, normal, s.wi, s.distance)
+        {
+            return None;
+        }
+        Some(random_walk::LightSample {
+            wi: s.wi,
+            radiance_over_pdf: s.radiance / s.pdf,
+            pdf: if s.is_delta { 0.0 } else { s.pdf },
+            is_delta: s.is_delta,
+        })
+    }
+
+    /// Σ over the area lights the ray crosses of their selection × solid-angle density.
+    fn pdf(&self, point: Vec3, _normal: Vec3, wi: Vec3) -> f32 {
+        let lights = &self.scene.lights;
+        (0..lights.len() as u32)
+            .filter_map(|l| {
+                let (_, hit) = intersect_light(lights.get(l), point, wi)?;
+                Some(lights.pdf(point, l, hit))
+            })
+            .sum()
+    }
+
+    /// `L_e` of the nearest light along `wi`, if no geometry blocks it.
+    fn radiance(&self, point: Vec3, wi: Vec3) -> Vec3 {
+        let lights = &self.scene.lights;
+        let nearest = (0..lights.len() as u32)
+            .filter_map(|l| intersect_light(lights.get(l), point, wi).map(|(t, p)| (l, t, p)))
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        let Some((light, t, hit)) = nearest else {
+            return Vec3::ZERO;
+        };
+        let ray = Ray::new(Vec3A::from(point), Vec3A::from(wi), 1e-4, t - 1e-4);
+        if self.scene.geometry.occluded(&ray) {
+            return Vec3::ZERO;
+        }
+        lights.radiance(light, hit, point)
+    }
+}
+
+/// Renders frame `gbuffer.frame`: translucent pixels by `spp` random walks each, the others by
+/// the path tracer at `spp`. Returns the image and the number of non-finite estimates (left out).
+pub fn render(
+    scene: &Scene,
+    gbuffer: &GBuffer,
+    seed: u64,
+    spp: u32,
+) -> Result<(Image, u64), PipelineError> {
+    let media =
+        Medium::of_scene(scene).map_err(|e| PipelineError::Config(format!("random-walk: {e}")))?;
+    let base = pt::render(scene, gbuffer, &PtSettings::default(), seed, 0, spp);
+    let mut nonfinite = base.nonfinite;
+    let mut pixels: Vec<DVec3> = base.pixels;
+    for (index, (out, g)) in pixels.iter_mut().zip(&gbuffer.pixels).enumerate() {
+        let Some(g) = g else { continue };
+        let material = scene.objects[g.object as usize].material as usize;
+        let Some(medium) = &media[material] else {
+            continue;
+        };
+        let n = scene.geometry.geometric_normal(g.prim);
+        let inward_winding = n.dot(g.view) < 0.0;
+        let boundary = MeshBoundary {
+            geometry: &scene.geometry,
+            object: g.object,
+            inward_winding,
+        };
+        let n1 = if inward_winding { -n } else { n };
+        let key = |purpose| StreamKey {
+            pixel: index as u32,
+            frame: gbuffer.frame,
+            pass: 0,
+            purpose,
+        };
+        let lighting = SceneLighting {
+            scene,
+            selection: RefCell::new(key(PURPOSE_WALK_LIGHT).stream(seed)),
+        };
+        let mut stream = key(PURPOSE_WALK).stream(seed);
+        let (mut sum, mut finite) = (DVec3::ZERO, 0u32);
+        for _ in 0..spp {
+            let l = estimate_exitant(
+                &boundary,
+                medium,
+                g.position,
+                n1,
+                g.view,
+                &lighting,
+                &mut stream,
+            );
+            if l.is_finite() {
+                sum += l.as_dvec3();
+                finite += 1;
+            } else {
+                nonfinite += 1;
+            }
+        }
+        *out = if finite > 0 {
+            sum / finite as f64
+        } else {
+            DVec3::ZERO
+        };
+    }
+    Ok((
+        Image {
+            width: gbuffer.width,
+            height: gbuffer.height,
+            pixels: pixels.iter().map(|p| p.as_vec3()).collect(),
+        },
+        nonfinite,
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn bumpy(w: u32, h: u32) -> Scene {
+        let scene = Scene::builtin("bumpy").expect("built-in");
+        Scene {
+            camera: scene.camera.with_resolution(w, h),
+            ..scene
+        }
+    }
+
+    /// pbrt pairing: for directions drawn by `sample` from points above the floor, `pdf`
+    /// returns the sampled density (relative 1e-3), and `radiance` along them is the light's
+    /// `L_e` (`radiance_over_pdf · pdf`). Negative control: a direction pointing away from
+    /// every light has density 0 and no radiance.
+    #[test]
+    fn lighting_sample_pdf_and_radiance_agree() {
+        let scene = bumpy(8, 6);
+        let lighting = SceneLighting {
+            scene: &scene,
+            selection: RefCell::new(StreamKey::new(0, 0, 1, 2).stream(3)),
+        };
+        let mut s = StreamKey::new(0, 0, 1, 3).stream(3);
+        let mut checked = 0;
+        for _ in 0..200 {
+            let point = Vec3::new(s.next_f32() - 0.5, 1.5 + s.next_f32(), s.next_f32() - 0.5);
+            let Some(sample) = lighting.sample(point, Vec3::Y, [s.next_f32(), s.next_f32()]) else {
+                continue;
+            };
+            let pdf = lighting.pdf(point, Vec3::Y, sample.wi);
+            assert!(
+                (pdf / sample.pdf - 1.0).abs() < 1e-3,
+                "{pdf} vs {}",
+                sample.pdf
+            );
+            let le = lighting.radiance(point, sample.wi);
+            let expected = sample.radiance_over_pdf * sample.pdf;
+            assert!(
+                (le - expected).length() <= 1e-3 * expected.length(),
+                "{le} vs {expected}"
+            );
+            checked += 1;
+        }
+        assert!(checked > 100, "only {checked} samples reached a light");
+        let away = -scene
+            .lights
+            .sample(Vec3::new(0.0, 2.0, 0.0), [0.5; 3])
+            .unwrap()
+            .wi;
+        assert_eq!(lighting.pdf(Vec3::new(0.0, 2.0, 0.0), Vec3::Y, away), 0.0);
+        assert_eq!(
+            lighting.radiance(Vec3::new(0.0, 2.0, 0.0), away),
+            Vec3::ZERO
+        );
+    }
+
+    #[test]
+    fn light_intersections_hit_their_shapes() {
+        let quad = Light::Quad {
+            corner: Vec3::new(-1.0, 2.0, -1.0),
+            edge_u: Vec3::new(2.0, 0.0, 0.0),
+            edge_v: Vec3::new(0.0, 0.0, 2.0),
+            radiance: Vec3::ONE,
+        };
+        let (t, p) = intersect_light(&quad, Vec3::ZERO, Vec3::Y).unwrap();
+        assert!((t - 2.0).abs() < 1e-6 && (p - Vec3::new(0.0, 2.0, 0.0)).length() < 1e-6);
+        assert!(intersect_light(&quad, Vec3::new(1.5, 0.0, 0.0), Vec3::Y).is_none());
+        let triangle = Light::Triangle {
+            vertices: [
+                Vec3::new(0.0, 1.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.0),
+                Vec3::new(0.0, 1.0, 1.0),
+            ],
+            radiance: Vec3::ONE,
+        };
+        assert!(intersect_light(&triangle, Vec3::new(0.2, 0.0, 0.2), Vec3::Y).is_some());
+        assert!(intersect_light(&triangle, Vec3::new(0.8, 0.0, 0.8), Vec3::Y).is_none());
+        let sphere = Light::Sphere {
+            center: Vec3::new(0.0, 0.0, 5.0),
+            radius: 1.0,
+            radiance: Vec3::ONE,
+        };
+        let (t, _) = intersect_light(&sphere, Vec3::ZERO, Vec3::Z).unwrap();
+        assert!((t - 4.0).abs() < 1e-5);
+        assert!(intersect_light(&sphere, Vec3::ZERO, -Vec3::Z).is_none());
+    }
+}

@@ -1,0 +1,421 @@
+//! The reuse passes as pure per-pixel kernels (DESIGN §6, §9): temporal reuse of the previous
+//! frame's final reservoir at the reprojected pixel (GBH over two reservoirs), and spatial reuse
+//! of k neighbours in a disk (streaming defensive pairwise MIS). Each kernel reads the previous
+//! buffers and returns the pixel's new reservoir; it draws every random number from streams keyed
+//! by the receiving pixel, so the result does not depend on scheduling.
+
+use glam::{Vec2, Vec3};
+use restir::mis::MisScheme;
+use restir::resample::{ResampleError, Source, resample};
+use restir::reservoir::{Reservoir, cap_confidence};
+use restir::rng::StreamKey;
+use restir::shift::{Domain, Shift};
+use shifts::{SssDomain, SssSample, resolve_deferred_index};
+use sss::scene::{GBuffer, GPixel, Scene};
+
+use crate::layout::PixelReservoir;
+use crate::preset::ShiftKind;
+use crate::purpose;
+
+/// Reprojection checks of temporal reuse ([`GBuffer::reproject`]).
+pub use sss::scene::{
+    REPROJECTION_DEPTH_TOLERANCE as TEMPORAL_DEPTH_TOLERANCE,
+    REPROJECTION_NORMAL_COSINE as TEMPORAL_NORMAL_COSINE,
+};
+
+/// Counters of one pixel in one reuse pass (the shift diagnostics, only when collected).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ShiftCounts {
+    /// Neighbour samples the shift was applied to.
+    pub shifted: u32,
+    /// Of these, how many failed.
+    pub failed: u32,
+    /// Of the successful ones, how many have `p̂_r(T(x)) > p̂_r(canonical)` [001 Fig. 5].
+    pub improved: u32,
+}
+
+/// The frame one reuse pass works on.
+pub struct PassInput<'a> {
+    pub scene: &'a Scene,
+    pub gbuffer: &'a GBuffer,
+    /// The reservoirs written by the previous pass of this frame.
+    pub reservoirs: &'a [PixelReservoir],
+    /// Index of the pass in its preset (the `pass` of every stream key).
+    pub pass: u32,
+    pub seed: u64,
+    pub collect_diagnostics: bool,
+}
+
+impl<'a> PassInput<'a> {
+    /// The domain of `pixel` in this pass's frame, `None` off translucent objects.
+    pub fn domain(&self, pixel: u32) -> Option<(SssDomain<'a>, &'a GPixel)> {
+        let g = self.gbuffer.pixels[pixel as usize].as_ref()?;
+        let domain = SssDomain::new(
+            self.scene,
+            g,
+            pixel,
+            self.gbuffer.frame,
+            self.pass,
+            self.seed,
+        )?;
+        Some((domain, g))
+    }
+}
+
+/// The previous frame, for temporal reuse.
+pub struct Previous<'a> {
+    pub gbuffer: &'a GBuffer,
+    /// The previous frame's final reservoirs.
+    pub reservoirs: &'a [PixelReservoir],
+}
+
+/// A reuse step's shared tail: resample, resolve a deferred index, collect diagnostics.
+struct Step<'d, 'a> {
+    input: &'d PassInput<'a>,
+    receiver: SssDomain<'a>,
+    canonical: Reservoir<SssSample>,
+    shift: ShiftKind,
+    mis: &'d dyn MisScheme,
+}
+
+impl<'a> Step<'_, 'a> {
+    fn run(
+        &self,
+        neighbours: &[(SssDomain<'a>, Reservoir<SssSample>)],
+    ) -> Result<(Reservoir<SssSample>, ShiftCounts), ResampleError> {
+        let receiver = &self.receiver;
+        let sources: Vec<Source<'_, SssDomain<'a>>> = neighbours
+            .iter()
+            .map(|(domain, reservoir)| Source { domain, reservoir })
+            .collect();
+        let mut rng = StreamKey::new(
+            receiver.pixel(),
+            receiver.frame(),
+            self.input.pass,
+            purpose::SELECT,
+        )
+        .stream(self.input.seed);
+        self.shift.with_shift(receiver.material(), |shift| {
+            let mut out = resample(
+                Source {
+                    domain: receiver,
+                    reservoir: &self.canonical,
+                },
+                &sources,
+                shift,
+                self.mis,
+                &mut rng,
+            )?;
+            if self.shift.resolves_deferred_index()
+                && let Some(y) = &mut out.y
+            {
+                resolve_deferred_index(receiver, y);
+            }
+            let counts = if self.input.collect_diagnostics {
+                self.count_shifts(shift, neighbours)
+            } else {
+                ShiftCounts::default()
+            };
+            Ok((out, counts))
+        })
+    }
+
+    /// Re-applies the shift to each neighbour sample to count failures and improvements (only
+    /// when diagnostics are collected; the resampling itself is not affected).
+    fn count_shifts(
+        &self,
+        shift: &dyn for<'s> Shift<SssDomain<'s>>,
+        neighbours: &[(SssDomain<'a>, Reservoir<SssSample>)],
+    ) -> ShiftCounts {
+        let canonical_target = self.canonical.y.map_or(0.0, |y| self.receiver.target(&y));
+        let mut counts = ShiftCounts::default();
+        for (domain, reservoir) in neighbours {
+            let Some(x) = &reservoir.y else { continue };
+            counts.shifted += 1;
+            match shift.shift(x, domain, &self.receiver) {
+                Ok(s) => counts.improved += (self.receiver.target(&s.y) > canonical_target) as u32,
+                Err(_) => counts.failed += 1,
+            }
+        }
+        counts
+    }
+}
+
+/// Temporal reuse of `pixel` [001 §5.1]: reproject x1 into the previous frame
+/// (`floor(Camera::project(frame − 1, x1))`), accept the previous pixel if it shows the same
+/// object at a similar depth and normal, cap its confidence at `cap` × the current one, and
+/// combine the two reservoirs with `mis` (GBH in the presets, DESIGN §9 temporal formulas).
+/// Without a previous frame or an accepted pixel the canonical reservoir passes unchanged.
+pub fn temporal(
+    input: &PassInput,
+    previous: Option<&Previous>,
+    pixel: u32,
+    shift: ShiftKind,
+    mis: &dyn MisScheme,
+    cap: f32,
+) -> Result<(PixelReservoir, ShiftCounts), ResampleError> {
+    let stored = input.reservoirs[pixel as usize];
+    let Some((receiver, g)) = input.domain(pixel) else {
+        return Ok((stored, ShiftCounts::default()));
+    };
+    let canonical = stored.get();
+    let history = previous.and_then(|prev| {
+        let q = prev.gbuffer.reproject(&input.scene.camera, g)?;
+        let g_prev = prev.gbuffer.pixels[q as usize].as_ref()?;
+        let frame = prev.gbuffer.frame;
+        let domain = SssDomain::new(input.scene, g_prev, q, frame, input.pass, input.seed)?;
+        let mut reservoir = prev.reservoirs[q as usize].get();
+        reservoir.confidence = cap_confidence(reservoir.confidence, canonical.confidence, cap);
+        Some((domain, reservoir))
+    });
+    let Some(history) = history else {
+        return Ok((stored, ShiftCounts::default()));
+    };
+    let step = Step {
+        input,
+        receiver,
+        canonical,
+        shift,
+        mis,
+    };
+    let (out, counts) = step.run(&[history])?;
+    Ok((PixelReservoir::from(&out), counts))
+}
+
+/// Spatial reuse of `pixel`: `neighbours` pixels drawn uniformly in the disk of radius
+/// `R = Camera::spatial_radius_px(frame, x1, max d)` around the pixel centre (DESIGN §9). A
+/// neighbour outside the image, equal to the pixel, without a primary hit or on another object
+/// is not taken (a rule symmetric in both pixels), so the MIS sees only the `v` neighbours taken.
+/// Each neighbour's confidence is capped at `cap` × the receiver's when given.
+pub fn spatial(
+    input: &PassInput,
+    pixel: u32,
+    shift: ShiftKind,
+    mis: &dyn MisScheme,
+    neighbours: u32,
+    cap: Option<f32>,
+) -> Result<(PixelReservoir, ShiftCounts), ResampleError> {
+    let stored = input.reservoirs[pixel as usize];
+    let Some((receiver, g)) = input.domain(pixel) else {
+        return Ok((stored, ShiftCounts::default()));
+    };
+    let canonical = stored.get();
+    let (width, height) = (input.gbuffer.width, input.gbuffer.height);
+    let frame = input.gbuffer.frame;
+    let radius = input
+        .scene
+        .camera
+        .spatial_radius_px(frame, g.position, max_d(&receiver));
+    let centre = Vec2::new((pixel % width) as f32 + 0.5, (pixel / width) as f32 + 0.5);
+    let mut rng = StreamKey::new(pixel, frame, input.pass, purpose::NEIGHBOURS).stream(input.seed);
+    let mut taken = Vec::with_capacity(neighbours as usize);
+    for _ in 0..neighbours {
+        let offset = sample_disk(radius, rng.next_f32(), rng.next_f32());
+        let q = centre + offset;
+        if !(q.x >= 0.0 && q.y >= 0.0 && q.x < width as f32 && q.y < height as f32) {
+            continue;
+        }
+        let q = q.y as u32 * width + q.x as u32;
+        if q == pixel {
+            continue;
+        }
+        let Some((domain, g_q)) = input.domain(q) else {
+            continue;
+        };
+        if g_q.object != g.object {
+            continue;
+        }
+        let mut reservoir = input.reservoirs[q as usize].get();
+        if let Some(cap) = cap {
+            reservoir.confidence = cap_confidence(reservoir.confidence, canonical.confidence, cap);
+        }
+        taken.push((domain, reservoir));
+    }
+    let step = Step {
+        input,
+        receiver,
+        canonical,
+        shift,
+        mis,
+    };
+    let (out, counts) = step.run(&taken)?;
+    Ok((PixelReservoir::from(&out), counts))
+}
+
+/// `max_c d_c` of the receiver's material.
+fn max_d(domain: &SssDomain) -> f32 {
+    domain.material().d().max_element()
+}
+
+/// A point uniform in the disk of `radius`: `r = R√u₁`, `φ = 2πu₂` (density `1/(πR²)`).
+pub fn sample_disk(radius: f32, u_radius: f32, u_angle: f32) -> Vec2 {
+    let r = radius * u_radius.sqrt();
+    let phi = std::f32::consts::TAU * u_angle;
+    r * Vec2::new(phi.cos(), phi.sin())
+}
+
+/// The shaded value `f(Y) · W` of a final reservoir (no ray: visibility is already in `W`).
+pub fn shade(domain: &SssDomain, reservoir: &PixelReservoir) -> Vec3 {
+    let r = reservoir.get();
+    r.y.map_or(Vec3::ZERO, |y| domain.contribution(&y) * r.ucw)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::candidates;
+    use crate::preset::MisKind;
+    use shifts::IndexPolicy;
+
+    fn scene(name: &str, size: u32) -> Scene {
+        let mut scene = Scene::builtin(name).unwrap();
+        scene.camera = scene.camera.with_resolution(size, size);
+        scene
+    }
+
+    /// Canonical reservoirs of every pixel of `gbuffer` (candidates pass 0, shadow-tested).
+    fn canonical(scene: &Scene, gbuffer: &GBuffer, seed: u64) -> Vec<PixelReservoir> {
+        let input = PassInput {
+            scene,
+            gbuffer,
+            reservoirs: &[],
+            pass: 0,
+            seed,
+            collect_diagnostics: false,
+        };
+        (0..gbuffer.pixels.len() as u32)
+            .map(|pixel| {
+                let Some((domain, _)) = input.domain(pixel) else {
+                    return PixelReservoir::empty();
+                };
+                let (mut r, _) =
+                    candidates::generate(&domain, 1, true, seed, &mut Vec::new()).unwrap();
+                candidates::shadow_test(&domain, &mut r);
+                PixelReservoir::from(&r)
+            })
+            .collect()
+    }
+
+    /// A spatial pass with the deferred policy resolves the index of its selected sample:
+    /// none of the selected shifted samples is left unknown where the chord finds x2 again.
+    /// Control: the same shift's raw output (what the pass would keep without resolving) has
+    /// every index unknown.
+    #[test]
+    fn deferred_index_is_resolved_for_the_selected_sample() {
+        let scene = scene("bumpy", 24);
+        let gbuffer = GBuffer::render(&scene, 0);
+        let reservoirs = canonical(&scene, &gbuffer, 4);
+        let input = PassInput {
+            scene: &scene,
+            gbuffer: &gbuffer,
+            reservoirs: &reservoirs,
+            pass: 1,
+            seed: 4,
+            collect_diagnostics: false,
+        };
+        let shift = ShiftKind::InvertingReconnection(IndexPolicy::Deferred);
+        let (mut moved, mut unknown, mut raw_unknown) = (0, 0, 0);
+        for pixel in 0..reservoirs.len() as u32 {
+            let Some((receiver, _)) = input.domain(pixel) else {
+                continue;
+            };
+            let (out, _) = spatial(
+                &input,
+                pixel,
+                shift,
+                MisKind::DefensivePairwise.scheme(),
+                4,
+                None,
+            )
+            .unwrap();
+            let Some(y) = out.get().y else { continue };
+            if out.sample == reservoirs[pixel as usize].sample {
+                continue;
+            }
+            moved += 1;
+            unknown += y.index().is_none() as u32;
+            let src = reservoirs.iter().position(|r| {
+                r.has_sample != 0
+                    && r.sample.prim() == y.prim()
+                    && r.sample.bary() == y.bary()
+                    && r.sample.x3() == y.x3()
+            });
+            let src = src.unwrap() as u32;
+            let (src_domain, _) = input.domain(src).unwrap();
+            let raw = shift.with_shift(receiver.material(), |s| {
+                s.shift(&reservoirs[src as usize].sample, &src_domain, &receiver)
+                    .unwrap()
+            });
+            raw_unknown += raw.y.index().is_none() as u32;
+        }
+        println!(
+            "deferred: {moved} moved samples, {unknown} unknown after the pass, {raw_unknown} raw"
+        );
+        assert!(moved > 20, "only {moved} pixels took a neighbour's sample");
+        assert_eq!(unknown, 0);
+        assert_eq!(
+            raw_unknown, moved,
+            "control: the shift itself leaves the index unknown"
+        );
+    }
+
+    /// Reprojection finds the previous frame's pixel that shows x1: seen from frame 0, that
+    /// pixel's primary hit and x1 fall in the same pixel (closer than √2 px; a swapped row and
+    /// column or an off-by-one index breaks this), and most translucent pixels are accepted.
+    #[test]
+    fn reprojection_finds_the_same_surface_point() {
+        let scene = scene("bumpy", 32);
+        let (now, before) = (GBuffer::render(&scene, 1), GBuffer::render(&scene, 0));
+        let (mut accepted, mut translucent) = (0, 0);
+        for (pixel, g) in now.pixels.iter().enumerate() {
+            let Some(g) = g else { continue };
+            if SssDomain::new(&scene, g, pixel as u32, 1, 0, 0).is_none() {
+                continue;
+            }
+            translucent += 1;
+            let Some(q) = before.reproject(&scene.camera, g) else {
+                continue;
+            };
+            accepted += 1;
+            let seen = |p: Vec3| scene.camera.project(0, p).unwrap();
+            let hit_q = before.pixels[q as usize].unwrap().position;
+            let miss = (seen(hit_q) - seen(g.position)).length();
+            assert!(
+                miss < std::f32::consts::SQRT_2,
+                "pixel {pixel} → {q}: {miss} px apart"
+            );
+        }
+        assert!(
+            accepted * 10 > translucent * 8,
+            "{accepted} of {translucent} accepted"
+        );
+    }
+
+    /// Uniformity of the neighbour disk: the fraction of N = 20 000 points inside radius R/2
+    /// is 1/4 (binomial z, two-sided α = 1e-3); the control `r = R·u` puts 1/2 there and is
+    /// rejected.
+    #[test]
+    fn neighbour_disk_is_uniform() {
+        let n = 20_000;
+        let mut rng = StreamKey::new(0, 0, 0, purpose::NEIGHBOURS).stream(5);
+        let (mut inner, mut inner_linear) = (0u32, 0u32);
+        for _ in 0..n {
+            let (u, v) = (rng.next_f32(), rng.next_f32());
+            let p = sample_disk(10.0, u, v);
+            assert!(p.length() <= 10.0);
+            inner += (p.length() < 5.0) as u32;
+            inner_linear += (10.0 * u < 5.0) as u32;
+        }
+        let z = |k: u32| (k as f64 / n as f64 - 0.25) / (0.25f64 * 0.75 / n as f64).sqrt();
+        assert!(
+            z(inner).abs() < 3.2905,
+            "α = 1e-3, N = {n}: z = {}",
+            z(inner)
+        );
+        assert!(
+            z(inner_linear).abs() > 3.2905,
+            "control: z = {}",
+            z(inner_linear)
+        );
+    }
+}

@@ -1,0 +1,149 @@
+//! The Vulkan backend (DESIGN §6), loaded at run time with `ash`: device choice ([`Context`]),
+//! device-local storage buffers with staging ([`Buffer`]), compute kernels ([`Kernel`]), timed
+//! dispatches, the scene on the device ([`GpuScene`], [`GpuBvh`]), the frame pipeline with
+//! persistent command buffers and per-pass timestamps ([`Renderer`]), and the embedded SPIR-V
+//! of `engine/glsl/` ([`Shader`]).
+//!
+//! A machine without libvulkan, without a driver, or a build without `glslc` gets a
+//! [`VulkanError`] that says in one line what to install; nothing here panics for that.
+//! The buffer structs below are `#[repr(C)]` + `bytemuck` twins of std430 structs of the GLSL.
+
+mod bvh;
+mod compute;
+mod device;
+mod error;
+mod memory;
+mod pipeline;
+mod pt;
+mod random_walk;
+mod scene;
+mod shaders;
+pub mod testing;
+mod timing;
+
+use bytemuck::{Pod, Zeroable};
+
+pub use bvh::{BVH_MAX_HITS, BvhRayInput, BvhRayOutput, GpuBvh};
+pub use compute::{Dispatch, Kernel, groups_for};
+pub use device::{Context, DEVICE_ENV, DeviceInfo, DeviceKind, choose_device};
+pub use error::VulkanError;
+pub use memory::Buffer;
+pub use pipeline::{CANDIDATES, PassParams, Renderer, SPATIAL, TEMPORAL, decode_error};
+pub use pt::{
+    DeviceImage, FrameInput, MethodParams, PT, PT_MAX_HITS, PtParams, SHADE, render_pt,
+    render_pt_hits, shade,
+};
+pub use random_walk::{
+    GpuMedium, RANDOM_WALK, RandomWalkImage, WalkStats, render_random_walk, scene_media,
+};
+pub use scene::{
+    FrameParams, GBUFFER, GpuCamera, GpuLight, GpuMaterial, GpuPixel, GpuScene, GpuTriangle,
+};
+pub use shaders::Shader;
+
+/// The environment variable that turns "Vulkan unavailable, skipped" into a failure in tests.
+pub const REQUIRE_ENV: &str = "RESHIFT_REQUIRE_VULKAN";
+
+impl Kernel {
+    /// The pipeline of one embedded shader.
+    pub fn for_shader(context: &Context, shader: Shader) -> Result<Kernel, VulkanError> {
+        Kernel::new(context, shader.spirv()?, shader.buffers, shader.push_bytes)
+    }
+}
+
+/// `restir/glsl/rng.glsl`'s `StreamKey` (std430: four `uint`, 16 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct GpuStreamKey {
+    pub pixel: u32,
+    pub frame: u32,
+    pub pass: u32,
+    pub purpose: u32,
+}
+
+impl From<restir::rng::StreamKey> for GpuStreamKey {
+    fn from(k: restir::rng::StreamKey) -> Self {
+        GpuStreamKey {
+            pixel: k.pixel,
+            frame: k.frame,
+            pass: k.pass,
+            purpose: k.purpose,
+        }
+    }
+}
+
+/// Push constants of [`Shader::PARITY_RNG`]: key count, draws per key, run seed split in halves.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct RngParams {
+    pub count: u32,
+    pub draws: u32,
+    pub seed_lo: u32,
+    pub seed_hi: u32,
+}
+
+/// `parity_burley.glsl`'s `BurleyInput` (std430: three `float`, 12 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct BurleyInput {
+    pub d: f32,
+    pub r: f32,
+    pub u: f32,
+}
+
+/// `parity_burley.glsl`'s `BurleyOutput` (std430: five `float`, 20 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct BurleyOutput {
+    pub pdf_radius: f32,
+    pub pdf_disk: f32,
+    pub cdf: f32,
+    /// The textbook `1 − ¼e^{−r/d} − ¾e^{−r/3d}`: the negative control of the parity test.
+    pub cdf_naive: f32,
+    pub sample_radius: f32,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::mem::offset_of;
+
+    /// std430: scalars align to 4, a struct of scalars to 4, arrays of it stride by its size.
+    #[test]
+    fn buffer_structs_match_std430() {
+        assert_eq!(
+            (size_of::<GpuStreamKey>(), align_of::<GpuStreamKey>()),
+            (16, 4)
+        );
+        assert_eq!(offset_of!(GpuStreamKey, purpose), 12);
+        assert_eq!(size_of::<RngParams>() as u32, Shader::PARITY_RNG.push_bytes);
+        assert_eq!(offset_of!(RngParams, seed_hi), 12);
+        assert_eq!(
+            (size_of::<BurleyInput>(), align_of::<BurleyInput>()),
+            (12, 4)
+        );
+        assert_eq!(offset_of!(BurleyInput, u), 8);
+        assert_eq!(
+            (size_of::<BurleyOutput>(), align_of::<BurleyOutput>()),
+            (20, 4)
+        );
+        assert_eq!(offset_of!(BurleyOutput, sample_radius), 16);
+    }
+
+    #[test]
+    fn every_shader_is_embedded_or_explains_why_not() {
+        for shader in [
+            Shader::PARITY_RNG,
+            Shader::PARITY_BURLEY,
+            Shader::PARITY_BVH,
+        ] {
+            match shader.spirv() {
+                // SPIR-V magic number, little endian.
+                Ok(words) => assert_eq!(&words[..4], &[0x03, 0x02, 0x23, 0x07], "{shader:?}"),
+                Err(e) => assert_eq!(e, VulkanError::NoGlslc),
+            }
+        }
+        let line = VulkanError::NoGlslc.to_string();
+        assert!(line.contains("apt-get install glslc") && !line.contains('\n'));
+    }
+}

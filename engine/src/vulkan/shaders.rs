@@ -1,0 +1,61 @@
+//! The compute shaders compiled by `build.rs` (one per `engine/glsl/*.glsl`), embedded as
+//! SPIR-V when `glslc` was found at build time. A shader is named by its file stem; the module
+//! that dispatches it declares its binding interface as a [`Shader`] constant next to the code
+//! that fills the buffers.
+
+use super::error::VulkanError;
+
+/// A compute shader of `engine/glsl/` and its binding interface: storage buffers at
+/// bindings `0..buffers`, `push_bytes` of push constants, `local_size` invocations per group.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Shader {
+    /// The GLSL file stem.
+    pub name: &'static str,
+    pub buffers: u32,
+    pub push_bytes: u32,
+    /// `local_size_x` in the GLSL.
+    pub local_size: u32,
+}
+
+impl Shader {
+    /// `parity_rng.glsl`: keys (`StreamKey`) → `draws` u32 and `draws` f32 per key.
+    /// Push constants: [`RngParams`](super::RngParams).
+    pub const PARITY_RNG: Shader = Shader::new("parity_rng", 3, 16);
+    /// `parity_burley.glsl`: [`BurleyInput`](super::BurleyInput) →
+    /// [`BurleyOutput`](super::BurleyOutput). Push constants: the count (`u32`).
+    pub const PARITY_BURLEY: Shader = Shader::new("parity_burley", 2, 4);
+    /// `parity_bvh.glsl`: [`BvhRayInput`](super::BvhRayInput) →
+    /// [`BvhRayOutput`](super::BvhRayOutput), then the four buffers of a
+    /// [`GpuBvh`](super::GpuBvh). Push constants: ray count and node count (`[u32; 2]`).
+    pub const PARITY_BVH: Shader = Shader::new("parity_bvh", 6, 8);
+
+    /// A shader with 64 invocations per group.
+    pub const fn new(name: &'static str, buffers: u32, push_bytes: u32) -> Shader {
+        Shader {
+            name,
+            buffers,
+            push_bytes,
+            local_size: 64,
+        }
+    }
+
+    /// The SPIR-V, or [`VulkanError::NoGlslc`] when the crate was built without `glslc`.
+    pub fn spirv(self) -> Result<&'static [u8], VulkanError> {
+        embedded(self.name)
+    }
+}
+
+#[cfg(reshift_glslc)]
+mod table {
+    include!(concat!(env!("OUT_DIR"), "/spirv_table.rs"));
+}
+
+#[cfg(reshift_glslc)]
+fn embedded(name: &str) -> Result<&'static [u8], VulkanError> {
+    table::embedded_named(name).ok_or_else(|| VulkanError::UnknownShader(name.to_string()))
+}
+
+#[cfg(not(reshift_glslc))]
+fn embedded(_: &str) -> Result<&'static [u8], VulkanError> {
+    Err(VulkanError::NoGlslc)
+}

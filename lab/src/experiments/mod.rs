@@ -1,0 +1,96 @@
+//! Named reproductions of seed 001's figures (DESIGN §7), each ending in a table of the paper's
+//! qualitative findings and whether the measured numbers reproduce them ([`crate::findings`]).
+//! The comparisons (Fig. 6–9) run [`crate::compare`] at equal time; the diagnostics figures
+//! (Fig. 4, 5, 10) average `engine::diagnostics` per region. docs/experiments.md has the protocol
+//! and measured results.
+
+mod figures;
+mod materials;
+mod mfp_scaling;
+mod setup;
+mod shift_comparison;
+
+pub use setup::{Report, Settings, equal_time_plan};
+
+use crate::error::Error;
+use crate::progress::Progress;
+
+/// An experiment by name ([`Experiment::name`]); [`Experiment::about`] says what it reproduces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Experiment {
+    ShiftComparison,
+    ManyLights,
+    Materials,
+    MfpScaling,
+    HybridMap,
+    ImprovedFraction,
+    TemporalShift,
+}
+
+impl Experiment {
+    pub const ALL: [Experiment; 7] = [
+        Experiment::ShiftComparison,
+        Experiment::ManyLights,
+        Experiment::Materials,
+        Experiment::MfpScaling,
+        Experiment::HybridMap,
+        Experiment::ImprovedFraction,
+        Experiment::TemporalShift,
+    ];
+
+    /// The name on the command line and of the default output folder `out/experiment-<name>`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Experiment::ShiftComparison => "shift-comparison",
+            Experiment::ManyLights => "many-lights",
+            Experiment::Materials => "materials",
+            Experiment::MfpScaling => "mfp-scaling",
+            Experiment::HybridMap => "hybrid-map",
+            Experiment::ImprovedFraction => "improved-fraction",
+            Experiment::TemporalShift => "temporal-shift",
+        }
+    }
+
+    /// The figure of seed 001 it reproduces and how, in one line.
+    pub fn about(self) -> &'static str {
+        match self {
+            Experiment::ShiftComparison => {
+                "Fig. 6: the four shifts vs. path tracing at equal time, one large light (`bumpy`)"
+            }
+            Experiment::ManyLights => {
+                "Fig. 7: the shift comparison with 512 small lights (`many-lights`)"
+            }
+            Experiment::Materials => {
+                "Fig. 8: hybrid and sequential vs. path tracing on the ten measured materials (`materials`)"
+            }
+            Experiment::MfpScaling => {
+                "Fig. 9: the gain of hybrid / sequential over equal-time path tracing vs. the mean free path"
+            }
+            Experiment::HybridMap => {
+                "Fig. 4: where the hybrid criterion picks reconnection, per region"
+            }
+            Experiment::ImprovedFraction => {
+                "Fig. 5: the fraction of improved samples, hybrid vs. sequential"
+            }
+            Experiment::TemporalShift => {
+                "Fig. 10: reconnection vs. delayed reconnection in the sequential scheme's temporal pass"
+            }
+        }
+    }
+
+    /// Runs the experiment, writing its tables, findings and images into its folder.
+    pub fn run(self, settings: &Settings, progress: &mut dyn Progress) -> Result<Report, Error> {
+        let name = self.name();
+        match self {
+            Experiment::ShiftComparison => shift_comparison::run(settings, "bumpy", name, progress),
+            Experiment::ManyLights => {
+                shift_comparison::run(settings, "many-lights", name, progress)
+            }
+            Experiment::Materials => materials::run(settings, progress),
+            Experiment::MfpScaling => mfp_scaling::run(settings, progress),
+            Experiment::HybridMap => figures::hybrid_map(settings),
+            Experiment::ImprovedFraction => figures::improved_fraction(settings),
+            Experiment::TemporalShift => figures::temporal_shift(settings, progress),
+        }
+    }
+}

@@ -1,0 +1,114 @@
+//! What every experiment shares: its [`Settings`], its [`Report`], its output folder and the
+//! equal-time comparison plan it runs.
+
+use std::path::{Path, PathBuf};
+
+use engine::Backend;
+use serde_json::Value;
+
+use crate::compare::{Outcome, Plan, parse_methods};
+use crate::error::Error;
+use crate::methods::Method;
+use crate::reference_cache::ReferenceSource;
+use crate::report::write_text;
+use crate::scenes::{load_scene, with_resolution};
+
+/// Frames of every experiment's camera trajectory.
+pub const FRAMES: u32 = 16;
+
+/// Samples per pixel of one reference batch in experiments.
+const REFERENCE_BATCH_SPP: u32 = 128;
+
+/// How an experiment runs.
+#[derive(Clone, Debug)]
+pub struct Settings {
+    /// Independent replicas per method.
+    pub replicas: u32,
+    /// Image size.
+    pub resolution: (u32, u32),
+    /// Samples per pixel of the references (a multiple ≥ 2× of 128).
+    pub reference_spp: u32,
+    /// Output folder; `None`: `out/experiment-<name>`.
+    pub out: Option<PathBuf>,
+    /// Folder of cached references.
+    pub cache: PathBuf,
+    pub backend: Backend,
+}
+
+/// What an experiment produced.
+pub struct Report {
+    /// Its measurements as Markdown.
+    pub table: String,
+    /// Its findings table ([`crate::findings::markdown`]).
+    pub findings: String,
+    /// The folder with every output.
+    pub out: PathBuf,
+    /// Its measurements as JSON (`reshift-compare/1` for a single comparison).
+    pub json: Value,
+}
+
+impl Settings {
+    /// The output folder of experiment `name`.
+    pub fn out_dir(&self, name: &str) -> PathBuf {
+        self.out
+            .clone()
+            .unwrap_or_else(|| PathBuf::from(format!("out/experiment-{name}")))
+    }
+}
+
+impl Report {
+    /// The report of a single comparison with its findings, which are written to
+    /// `findings.md` beside its other outputs.
+    pub fn of_comparison(outcome: Outcome, findings: String) -> Result<Report, Error> {
+        write_text(&outcome.out.join("findings.md"), &findings)?;
+        Ok(Report {
+            table: outcome.markdown,
+            findings,
+            json: outcome.results.to_json(),
+            out: outcome.out,
+        })
+    }
+
+    /// Writes `table.md` and `findings.md` into `out`.
+    pub fn write(self) -> Result<Report, Error> {
+        write_text(&self.out.join("table.md"), &self.table)?;
+        write_text(&self.out.join("findings.md"), &self.findings)?;
+        Ok(self)
+    }
+}
+
+/// The comparison of `methods` on built-in `scene` into `out`, the path tracer at the
+/// per-frame time of `restir:hybrid` on this scene and backend (the median of 3 runs).
+pub fn equal_time_plan(
+    settings: &Settings,
+    scene: &str,
+    methods: &[&str],
+    out: &Path,
+) -> Result<Plan, Error> {
+    let loaded = load_scene(scene)?;
+    let scene_at = with_resolution(loaded.scene, Some(settings.resolution));
+    let hybrid = Method::parse("restir:hybrid")?;
+    let mut times = (0..3)
+        .map(|seed| {
+            Ok(hybrid
+                .render_on(&settings.backend, &scene_at, FRAMES, 1_000_000 + seed)?
+                .seconds_per_frame)
+        })
+        .collect::<Result<Vec<f64>, Error>>()?;
+    times.sort_by(f64::total_cmp);
+    Ok(Plan {
+        scene: scene_at,
+        scene_key: loaded.key,
+        methods: parse_methods(methods)?,
+        replicas: settings.replicas,
+        frames: FRAMES,
+        equal_time: Some(times[1]),
+        reference: ReferenceSource::Cache {
+            dir: settings.cache.clone(),
+            spp: settings.reference_spp,
+            batch_spp: REFERENCE_BATCH_SPP,
+        },
+        out: out.to_path_buf(),
+        backend: settings.backend.clone(),
+    })
+}

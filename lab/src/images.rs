@@ -1,0 +1,161 @@
+//! Images a comparison writes: the reference, each method's final frame (EXR + PNG through
+//! `engine::Image`) and its absolute and relative error maps as false-colour PNGs on one scale
+//! shared by all methods ([`write_comparison_images`]).
+
+use std::path::Path;
+
+use engine::Image;
+use engine::image::WriteError;
+use sss::integrator::Reference;
+
+use crate::error::Error;
+use crate::metrics::error_maps;
+use crate::reference_cache::mean_image;
+use crate::report::file_stem;
+use crate::report::results::{ErrorMapScale, ImageFiles};
+
+/// Height in pixels of the colour bar under an error map.
+pub const COLOUR_BAR_HEIGHT: u32 = 6;
+
+/// Writes `reference.exr`/`.png` and, per method `(spec, replica-0 final frame)`, its frame and
+/// error maps into `out`; every map is scaled to the 99th percentile of all methods' errors.
+/// Returns the files per method, in order, and the scales.
+pub fn write_comparison_images(
+    out: &Path,
+    methods: &[(&str, &Image)],
+    reference: &Reference,
+) -> Result<(Vec<ImageFiles>, ErrorMapScale), Error> {
+    let mean = reference.mean();
+    let reference_image = mean_image(reference);
+    reference_image.write_exr(out.join("reference.exr"))?;
+    reference_image.write_png(out.join("reference.png"))?;
+    let maps: Vec<(&str, &Image, Vec<f64>, Vec<f64>)> = methods
+        .iter()
+        .filter_map(|&(spec, image)| {
+            let (abs, rel) = error_maps(image, &mean)?;
+            Some((spec, image, abs, rel))
+        })
+        .collect();
+    let all_abs: Vec<f64> = maps.iter().flat_map(|m| m.2.iter().copied()).collect();
+    let all_rel: Vec<f64> = maps.iter().flat_map(|m| m.3.iter().copied()).collect();
+    let scale = ErrorMapScale {
+        absolute: quantile(&all_abs, 0.99),
+        relative: quantile(&all_rel, 0.99),
+    };
+    let mut written = Vec::new();
+    for (spec, image, abs, rel) in &maps {
+        let stem = file_stem(spec);
+        let files = ImageFiles {
+            final_exr: format!("{stem}.exr"),
+            final_png: format!("{stem}.png"),
+            abs_error_png: format!("{stem}-abs-error.png"),
+            rel_error_png: format!("{stem}-rel-error.png"),
+        };
+        image.write_exr(out.join(&files.final_exr))?;
+        image.write_png(out.join(&files.final_png))?;
+        let (w, h) = (image.width, image.height);
+        write_false_colour(abs, w, h, scale.absolute, &out.join(&files.abs_error_png))?;
+        write_false_colour(rel, w, h, scale.relative, &out.join(&files.rel_error_png))?;
+        written.push(files);
+    }
+    Ok((written, scale))
+}
+
+/// Writes `values` (row-major `width × height`) as a false-colour PNG, 0 → dark blue, `max` →
+/// yellow (a viridis-like ramp), with a colour bar spanning 0 … `max` left to right in
+/// [`COLOUR_BAR_HEIGHT`] rows below the image. Non-finite values are drawn magenta.
+pub fn write_false_colour(
+    values: &[f64],
+    width: u32,
+    height: u32,
+    max: f64,
+    path: &Path,
+) -> Result<(), WriteError> {
+    let error = |reason: String| WriteError {
+        path: path.to_path_buf(),
+        reason,
+    };
+    if values.len() != width as usize * height as usize || width == 0 {
+        return Err(error(format!(
+            "{} values for a {width}×{height} image",
+            values.len()
+        )));
+    }
+    let scale = if max > 0.0 && max.is_finite() {
+        max
+    } else {
+        1.0
+    };
+    let mut bytes = Vec::with_capacity(values.len() * 3 + (width * COLOUR_BAR_HEIGHT * 3) as usize);
+    for &v in values {
+        bytes.extend(if v.is_finite() {
+            ramp(v / scale)
+        } else {
+            [255, 0, 255]
+        });
+    }
+    for _ in 0..COLOUR_BAR_HEIGHT {
+        for x in 0..width {
+            bytes.extend(ramp(x as f64 / (width - 1).max(1) as f64));
+        }
+    }
+    image::save_buffer(
+        path,
+        &bytes,
+        width,
+        height + COLOUR_BAR_HEIGHT,
+        image::ColorType::Rgb8,
+    )
+    .map_err(|e| error(e.to_string()))
+}
+
+/// A five-stop approximation of viridis for `t` clamped to [0, 1].
+fn ramp(t: f64) -> [u8; 3] {
+    const STOPS: [[f64; 3]; 5] = [
+        [68.0, 1.0, 84.0],
+        [59.0, 82.0, 139.0],
+        [33.0, 145.0, 140.0],
+        [94.0, 201.0, 98.0],
+        [253.0, 231.0, 37.0],
+    ];
+    let x = t.clamp(0.0, 1.0) * 4.0;
+    let i = (x.floor() as usize).min(3);
+    let f = x - i as f64;
+    std::array::from_fn(|c| (STOPS[i][c] * (1.0 - f) + STOPS[i + 1][c] * f).round() as u8)
+}
+
+/// The `q`-quantile (0..=1) of the finite values, for colour-map scales robust to fireflies;
+/// 0 when there is none.
+pub fn quantile(values: &[f64], q: f64) -> f64 {
+    let mut finite: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
+    if finite.is_empty() {
+        return 0.0;
+    }
+    finite.sort_by(f64::total_cmp);
+    let at = ((finite.len() - 1) as f64 * q.clamp(0.0, 1.0)).round() as usize;
+    finite[at]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ramp_is_ordered_and_clamped() {
+        assert_eq!(ramp(0.0), [68, 1, 84]);
+        assert_eq!(ramp(1.0), [253, 231, 37]);
+        assert_eq!(ramp(-3.0), ramp(0.0));
+        assert_eq!(ramp(7.0), ramp(1.0));
+        // Luminance-like ordering: green grows monotonically along the ramp.
+        let greens: Vec<u8> = (0..=20).map(|i| ramp(i as f64 / 20.0)[1]).collect();
+        assert!(greens.windows(2).all(|w| w[0] <= w[1]), "{greens:?}");
+    }
+
+    #[test]
+    fn quantile_ignores_non_finite_values() {
+        let values = [3.0, f64::NAN, 1.0, 2.0, f64::INFINITY, 4.0];
+        assert_eq!(quantile(&values, 0.0), 1.0);
+        assert_eq!(quantile(&values, 1.0), 4.0);
+        assert_eq!(quantile(&[], 0.5), 0.0);
+    }
+}

@@ -1,0 +1,155 @@
+//! The [`Estimator`] trait a method implements, the [`Method`] handle that shares one, and the
+//! [`Entry`] that registers a family of methods by name.
+
+use std::fmt;
+use std::sync::Arc;
+use std::time::Instant;
+
+use engine::image::Image;
+use engine::{Backend, PipelineError};
+use sss::scene::Scene;
+
+/// One family of methods: `family[:argument]`.
+pub struct Entry {
+    pub family: &'static str,
+    /// How to write it, e.g. `pt[:spp]`.
+    pub usage: &'static str,
+    pub about: &'static str,
+    /// Builds the method from the text after `family:` (`None` without a colon).
+    pub build: fn(Option<&str>) -> Result<Method, String>,
+}
+
+/// What a method implements: one estimator of the final frame of a camera trajectory.
+pub trait Estimator: fmt::Debug + Send + Sync + 'static {
+    /// The canonical name, which [`Method::parse`] reads back (`pt:4`, `restir:hybrid`).
+    fn name(&self) -> String;
+
+    /// Samples per pixel per frame.
+    fn spp(&self) -> u32;
+
+    /// The same estimator at `spp` samples per pixel, or `None` when its per-frame cost is
+    /// fixed (ReSTIR presets).
+    fn with_spp(&self, spp: u32) -> Option<Method>;
+
+    /// Renders replica `seed` of `frames ≥ 1` frames of `scene`'s trajectory on `backend` and
+    /// returns frame `frames − 1` (the resolution is the camera's). A memoryless estimator
+    /// renders only that frame.
+    fn render(
+        &self,
+        backend: &Backend,
+        scene: &Scene,
+        frames: u32,
+        seed: u64,
+    ) -> Result<Frame, PipelineError>;
+}
+
+/// The output of [`Estimator::render`].
+#[derive(Clone, Debug)]
+pub struct Frame {
+    /// Linear RGB of frame `frames − 1`.
+    pub image: Image,
+    /// Frames rendered to produce `image` (1 for memoryless estimators).
+    pub frames_rendered: u32,
+    /// Shaded values that were NaN or infinite (written as 0 or left out of the mean).
+    pub nonfinite: u64,
+}
+
+/// The final frame of one replica of a method, and what it cost.
+#[derive(Clone, Debug)]
+pub struct Rendered {
+    /// Linear RGB of frame `frames − 1`.
+    pub image: Image,
+    /// Wall-clock seconds per rendered frame (G-buffer included; on Vulkan with read-back).
+    pub seconds_per_frame: f64,
+    /// Frames the method rendered to produce `image` (1 for memoryless estimators).
+    pub frames_rendered: u32,
+    /// Shaded values that were NaN or infinite (written as 0 or left out of the mean).
+    pub nonfinite: u64,
+}
+
+/// A rendering method: a shared [`Estimator`]. Two methods are equal when their canonical
+/// names are.
+#[derive(Clone)]
+pub struct Method(Arc<dyn Estimator>);
+
+impl Method {
+    /// The method of `estimator`.
+    pub fn new(estimator: impl Estimator) -> Method {
+        Method(Arc::new(estimator))
+    }
+
+    /// The canonical name (`pt:4`, `restir:hybrid`).
+    pub fn name(&self) -> String {
+        self.0.name()
+    }
+
+    /// Samples per pixel per frame: the path tracers' `spp`, 1 candidate for ReSTIR.
+    pub fn spp(&self) -> u32 {
+        self.0.spp()
+    }
+
+    /// The same method with `spp` samples per pixel; a method with a fixed per-frame cost is
+    /// returned unchanged.
+    pub fn with_spp(&self, spp: u32) -> Method {
+        self.0.with_spp(spp).unwrap_or_else(|| self.clone())
+    }
+
+    /// Renders replica `seed` on the CPU and returns frame `frames − 1` (the resolution is the
+    /// camera's).
+    pub fn render(&self, scene: &Scene, frames: u32, seed: u64) -> Result<Rendered, PipelineError> {
+        self.render_on(&Backend::Cpu, scene, frames, seed)
+    }
+
+    /// [`Method::render`] on `backend`, timed: `seconds_per_frame` is wall-clock time per
+    /// rendered frame, including read-back on Vulkan.
+    pub fn render_on(
+        &self,
+        backend: &Backend,
+        scene: &Scene,
+        frames: u32,
+        seed: u64,
+    ) -> Result<Rendered, PipelineError> {
+        if frames == 0 {
+            return Err(PipelineError::Config("frames = 0; need at least 1".into()));
+        }
+        let start = Instant::now();
+        let frame = self.0.render(backend, scene, frames, seed)?;
+        Ok(Rendered {
+            seconds_per_frame: start.elapsed().as_secs_f64() / frame.frames_rendered as f64,
+            image: frame.image,
+            frames_rendered: frame.frames_rendered,
+            nonfinite: frame.nonfinite,
+        })
+    }
+}
+
+impl PartialEq for Method {
+    fn eq(&self, other: &Method) -> bool {
+        self.name() == other.name()
+    }
+}
+
+impl fmt::Debug for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.pad(&self.name())
+    }
+}
+
+/// `spp` of `family[:spp]`: 1 without an argument, else a positive integer.
+pub fn parse_spp(arg: Option<&str>) -> Result<u32, String> {
+    match arg {
+        None => Ok(1),
+        Some(text) => match text.parse::<u32>() {
+            Ok(n) if n > 0 => Ok(n),
+            _ => Err(format!(
+                "samples per pixel {text:?} is not a positive integer"
+            )),
+        },
+    }
+}

@@ -1,0 +1,107 @@
+//! Rendering methods by name (DESIGN §7): `pt[:spp]`, `restir:<preset>`, `random-walk[:spp]`,
+//! `pt-one-hit[:spp]`.
+//!
+//! A method renders the final frame of a scene's camera trajectory for one replica seed on a
+//! backend. Each family is one file implementing [`Estimator`] with its [`Entry`] (family,
+//! usage, about, build); [`REGISTRY`] lists the entries, one line each. Adding a method is that
+//! file plus its `mod` line and its registry line (docs/adding-a-method.md).
+
+mod estimator;
+pub mod pt;
+pub mod pt_one_hit;
+pub mod random_walk;
+pub mod restir;
+
+use std::fmt;
+
+pub use estimator::{Entry, Estimator, Frame, Method, Rendered, parse_spp};
+
+/// Every method family the CLI knows, in the order `reshift methods` lists them.
+pub const REGISTRY: &[Entry] = &[
+    pt::ENTRY,
+    restir::ENTRY,
+    random_walk::ENTRY,
+    pt_one_hit::ENTRY,
+];
+
+/// A method specification that could not be parsed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MethodError {
+    pub spec: String,
+    pub reason: String,
+}
+
+impl fmt::Display for MethodError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "method {:?}: {}", self.spec, self.reason)
+    }
+}
+
+impl std::error::Error for MethodError {}
+
+impl Method {
+    /// Parses `family[:argument]` against [`REGISTRY`].
+    pub fn parse(spec: &str) -> Result<Method, MethodError> {
+        let (family, arg) = match spec.split_once(':') {
+            Some((f, a)) => (f, Some(a)),
+            None => (spec, None),
+        };
+        let error = |reason: String| MethodError {
+            spec: spec.to_string(),
+            reason,
+        };
+        let entry = REGISTRY
+            .iter()
+            .find(|e| e.family == family)
+            .ok_or_else(|| {
+                let known: Vec<&str> = REGISTRY.iter().map(|e| e.usage).collect();
+                error(format!("unknown method; known: {}", known.join(", ")))
+            })?;
+        (entry.build)(arg).map_err(error)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn registry_parses_every_family_and_rejects_the_rest() {
+        for (spec, name, spp) in [
+            ("pt", "pt:1", 1),
+            ("pt:8", "pt:8", 8),
+            ("random-walk:2", "random-walk:2", 2),
+            ("restir:hybrid", "restir:hybrid", 1),
+        ] {
+            let method = Method::parse(spec).unwrap();
+            assert_eq!((method.name(), method.spp()), (name.to_string(), spp));
+            assert_eq!(Method::parse(&method.name()).unwrap(), method);
+        }
+        for entry in REGISTRY {
+            assert!(entry.usage.starts_with(entry.family), "{}", entry.usage);
+        }
+        for bad in [
+            "",
+            "ptx",
+            "pt:0",
+            "pt:-1",
+            "pt:x",
+            "restir",
+            "restir:nope",
+            "bdpt:4",
+        ] {
+            let e = Method::parse(bad).expect_err(bad);
+            assert_eq!(e.spec, bad);
+        }
+    }
+
+    #[test]
+    fn with_spp_scales_the_path_tracers_only() {
+        let pt = Method::parse("pt").unwrap();
+        assert_eq!(pt.with_spp(5), Method::parse("pt:5").unwrap());
+        let walk = Method::parse("random-walk").unwrap();
+        assert_eq!(walk.with_spp(3).name(), "random-walk:3");
+        let hybrid = Method::parse("restir:hybrid").unwrap();
+        assert_eq!(hybrid.with_spp(5), hybrid);
+    }
+}

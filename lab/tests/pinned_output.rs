@@ -1,0 +1,104 @@
+//! Pinned CPU output: a hash of the bits of every method's images and final reservoirs on two
+//! built-in scenes, recorded once. A refactoring must leave every hash as it is; a change that
+//! is meant to alter an estimator updates the hash it alters, and its commit says why.
+//!
+//! Scenes `bumpy` and `half-shadow` at 24×18, the full 16-frame trajectory, seed 7: every
+//! registered ReSTIR preset (all frames and the last frame's reservoirs), `pt:2` and
+//! `random-walk:2` (the last frame). On a mismatch the test prints every current hash, so the
+//! table below can be updated in one edit.
+
+use engine::{Preset, RunConfig};
+use lab::methods::Method;
+use sss::scene::{FRAMES, Scene};
+
+const SIDE: [u32; 2] = [24, 18];
+const SEED: u64 = 7;
+
+/// `(scene, method, FNV-1a of the output bits)`.
+const PINNED: &[(&str, &str, u64)] = &[
+    ("bumpy", "restir:reconnection", 0x762b786326f44572),
+    ("bumpy", "restir:delayed", 0x04d00fd880e2a95f),
+    ("bumpy", "restir:hybrid", 0x07627e408d10b4fc),
+    ("bumpy", "restir:sequential", 0xcbece0605b3d7c9b),
+    ("bumpy", "restir:sequential-exact", 0xcbece0605b3d7c9b),
+    ("bumpy", "pt:2", 0xfb2fad5cb68b7040),
+    ("bumpy", "random-walk:2", 0xa192fbb86f2b56e0),
+    ("half-shadow", "restir:reconnection", 0x0553ba3e52dd7cd7),
+    ("half-shadow", "restir:delayed", 0x0aa5de8fffe6779c),
+    ("half-shadow", "restir:hybrid", 0x54ebc55d7201c6cd),
+    ("half-shadow", "restir:sequential", 0x59b3bfabe220e090),
+    ("half-shadow", "restir:sequential-exact", 0x59b3bfabe220e090),
+    ("half-shadow", "pt:2", 0xb16ae63d8ee7d985),
+    ("half-shadow", "random-walk:2", 0x9bdf417661ddd47f),
+];
+
+/// 64-bit FNV-1a.
+fn fnv1a(hash: u64, bytes: &[u8]) -> u64 {
+    bytes.iter().fold(hash, |h, &b| {
+        (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+
+fn hash_pixels(mut hash: u64, pixels: &[glam::Vec3]) -> u64 {
+    for p in pixels {
+        for c in p.to_array() {
+            hash = fnv1a(hash, &c.to_bits().to_le_bytes());
+        }
+    }
+    hash
+}
+
+fn scene(name: &str) -> Scene {
+    let scene = Scene::builtin(name).expect("built-in scene");
+    Scene {
+        camera: scene.camera.with_resolution(SIDE[0], SIDE[1]),
+        ..scene
+    }
+}
+
+fn current_hashes() -> Vec<(String, String, u64)> {
+    let mut out = Vec::new();
+    for scene_name in ["bumpy", "half-shadow"] {
+        let scene = scene(scene_name);
+        for preset in Preset::all() {
+            let config = RunConfig {
+                seed: SEED,
+                frames: FRAMES,
+                collect_diagnostics: false,
+            };
+            let run = engine::run(&scene, &preset, &config).expect("preset runs");
+            let mut hash = FNV_OFFSET;
+            for frame in &run.frames {
+                hash = hash_pixels(hash, &frame.pixels);
+            }
+            hash = fnv1a(hash, bytemuck::cast_slice(&run.reservoirs));
+            out.push((scene_name.into(), format!("restir:{}", preset.name), hash));
+        }
+        for spec in ["pt:2", "random-walk:2"] {
+            let method = Method::parse(spec).expect("registered method");
+            let rendered = method.render(&scene, FRAMES, SEED).expect("method renders");
+            let hash = hash_pixels(FNV_OFFSET, &rendered.image.pixels);
+            out.push((scene_name.into(), spec.into(), hash));
+        }
+    }
+    out
+}
+
+#[test]
+fn cpu_output_matches_the_pinned_hashes() {
+    let current = current_hashes();
+    let table: String = current
+        .iter()
+        .map(|(s, m, h)| format!("    ({s:?}, {m:?}, {h:#018x}),\n"))
+        .collect();
+    let pinned: Vec<(String, String, u64)> = PINNED
+        .iter()
+        .map(|(s, m, h)| (s.to_string(), m.to_string(), *h))
+        .collect();
+    assert_eq!(
+        current, pinned,
+        "CPU output differs from the pinned hashes; current table:\n{table}"
+    );
+}

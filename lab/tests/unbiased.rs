@@ -1,0 +1,270 @@
+//! Unbiasedness, measured (issue #4; DESIGN §3 "Statistics", §7 regions): N independent replicas
+//! of each ReSTIR SSS preset against a path-traced reference, per region, with the protocol of
+//! `lab::bias`.
+//!
+//! * Scene: `bumpy` with its 16-frame trajectory, framed on the shadow edge across the top of the
+//!   translucent object ([`scene`]), 32 × 32 pixels.
+//! * Estimate: frame 15 of replicas `0..N` (seed = replica index); per region the mean luminance.
+//! * Reference: the path tracer at frame 15, [`REFERENCE_BATCHES`] batches of
+//!   [`SPP_PER_BATCH`] spp under [`REFERENCE_SEED`] (no replica uses it); s.e. from the batches.
+//! * Test: 99% CI of the relative bias inside ±δ per region (equivalence), Holm across the four
+//!   regions at α = 0.01 for "biased"; δ = [`PROTOCOL`]`.delta`, N = [`REPLICAS`].
+//! * Negative controls (delayed reconnection without its Jacobian, without the y2↔x3 visibility
+//!   test, a hybrid that ignores the criterion on the offset path) must be Biased in at least one
+//!   region under the same protocol.
+//!
+//! * Backends: the four unbiased presets run on the CPU backend and again on the Vulkan backend
+//!   (`vulkan_*`) against the same CPU reference; without Vulkan the `vulkan_*` tests print why
+//!   and pass, unless `RESHIFT_REQUIRE_VULKAN=1`, which makes them fail. The deferred-index
+//!   measurement and the controls run on the CPU only: a preset costs ~150 s on lavapipe (2
+//!   cores) against ~20 s on the CPU backend. The protocol's power is the controls' (CPU) result;
+//!   the controls' GPU twins agree with the CPU's shift for shift (`vulkan_reuse.rs`, 0
+//!   mismatches), so they would be detected on the device as well.
+//!
+//! Run with `--nocapture` to see the tables (bias, CI, half-width, p-value, Holm, verdict).
+
+use std::sync::OnceLock;
+use std::time::Instant;
+
+use engine::vulkan::testing::backend_or_skip;
+use engine::{Backend, Preset, ShiftKind};
+use glam::Vec3;
+use lab::bias::{
+    BiasRow, Protocol, RegionSummary, Table, bias_rows, reference_images, replica_images, summarize,
+};
+use lab::regions::{Region, Regions};
+use restir::stats::Verdict;
+use sss::scene::{Camera, FRAMES, GBuffer, Scene};
+
+/// Image side in pixels.
+const SIDE: u32 = 32;
+/// The frame whose bias is measured: the last of the trajectory.
+const FRAME: u32 = FRAMES - 1;
+/// Replicas per method (the same for presets and controls).
+const REPLICAS: u64 = 192;
+/// δ = 10% on the relative bias of each region mean; α = 0.01 (99% CIs, Holm across regions).
+///
+/// Power: δ must exceed the 99% CI half-width of a correct preset and lie below the bias a
+/// control shows. The shadowed region decides both: its mean is ~3.5% of the lit one and its
+/// per-replica relative spread 0.2–0.3, so at N = 192 its CI half-width is 3.5–5.2% (the other
+/// regions 1.1–2.8%), while visibility leaking through delayed reconnection adds ~+9% there.
+/// δ = 15% was tried first and called that control "unbiased" (its CI lay inside ±15%).
+const PROTOCOL: Protocol = Protocol {
+    delta: 0.10,
+    alpha: 0.01,
+};
+const REFERENCE_BATCHES: u32 = 64;
+const SPP_PER_BATCH: u32 = 32;
+/// Far above every replica seed, so reference and replicas draw from disjoint streams.
+const REFERENCE_SEED: u64 = 1 << 40;
+/// Keys the light samples of the region classification.
+const REGIONS_SEED: u64 = 0x5E61;
+
+/// `bumpy` (scenes/bumpy.toml) with its eye trajectory, the targets raised by 0.25 and the
+/// field of view narrowed from 35° to 14°: the view holds the top of the object, where the
+/// occluder's shadow edge crosses it (lit left, penumbra middle, shadowed right).
+fn scene() -> Scene {
+    let bumpy = Scene::builtin("bumpy").expect("built-in scene");
+    let lift = Vec3::new(0.0, 0.25, 0.0);
+    let camera = Camera::new(
+        [SIDE, SIDE],
+        14.0,
+        [Vec3::new(0.0, 1.1, 3.0), Vec3::new(0.25, 1.15, 2.9)],
+        [
+            Vec3::new(0.0, 0.5, 0.0) + lift,
+            Vec3::new(0.02, 0.5, 0.0) + lift,
+        ],
+        Vec3::Y,
+        bumpy.camera.jittered(),
+    );
+    Scene { camera, ..bumpy }
+}
+
+/// What every test shares, computed once per test run.
+struct Setup {
+    scene: Scene,
+    regions: Regions,
+    reference: Vec<RegionSummary>,
+}
+
+fn setup() -> &'static Setup {
+    static SETUP: OnceLock<Setup> = OnceLock::new();
+    SETUP.get_or_init(|| {
+        let start = Instant::now();
+        let scene = scene();
+        let regions = Regions::classify(&scene, &GBuffer::render(&scene, FRAME), REGIONS_SEED);
+        let reference = reference_images(
+            &scene,
+            FRAME,
+            REFERENCE_BATCHES,
+            SPP_PER_BATCH,
+            REFERENCE_SEED,
+        )
+        .expect("reference settings");
+        assert_eq!(reference.nonfinite, 0, "non-finite reference samples");
+        let reference = summarize(&reference.luminance, &regions);
+        let regions_present: Vec<Region> = reference.iter().map(|r| r.region).collect();
+        assert_eq!(
+            regions_present,
+            Region::ALL,
+            "the framing must show every region"
+        );
+        println!(
+            "reference: path tracer, frame {FRAME}, {REFERENCE_BATCHES} batches × {SPP_PER_BATCH} spp, {:.1} s",
+            start.elapsed().as_secs_f64()
+        );
+        for r in &reference {
+            println!(
+                "  {:<11} {:>4} px  mean {:.5} ± {:.5} ({:.2}%)",
+                r.region,
+                r.pixels,
+                r.summary.mean,
+                r.summary.std_err,
+                100.0 * r.summary.std_err / r.summary.mean
+            );
+        }
+        Setup {
+            scene,
+            regions,
+            reference,
+        }
+    })
+}
+
+/// The bias table of `preset` over [`REPLICAS`] replicas on `backend` (printed).
+fn measure(backend: &Backend, preset: &Preset) -> Vec<BiasRow> {
+    let setup = setup();
+    let start = Instant::now();
+    let images =
+        replica_images(backend, &setup.scene, preset, REPLICAS, FRAMES).expect("preset runs");
+    assert_eq!(
+        images.nonfinite, 0,
+        "{}: non-finite shaded values",
+        preset.name
+    );
+    let rows = bias_rows(
+        &preset.name,
+        &summarize(&images.luminance, &setup.regions),
+        &setup.reference,
+        &PROTOCOL,
+    );
+    println!(
+        "{} on {backend} — N = {REPLICAS}, δ = {}%, α = {} ({:.1} s)\n{}",
+        preset.name,
+        100.0 * PROTOCOL.delta,
+        PROTOCOL.alpha,
+        start.elapsed().as_secs_f64(),
+        Table(&rows)
+    );
+    assert_eq!(rows.len(), Region::ALL.len(), "{}", Table(&rows));
+    rows
+}
+
+/// Every region Unbiased: the 99% CI of the relative bias inside ±δ.
+fn assert_unbiased(backend: &Backend, name: &str) {
+    let preset = Preset::named(name).expect("registered preset");
+    let rows = measure(backend, &preset);
+    let failing: Vec<&BiasRow> = rows
+        .iter()
+        .filter(|r| r.verdict != Verdict::Unbiased)
+        .collect();
+    assert!(
+        failing.is_empty(),
+        "{name} on {backend} not shown unbiased (δ = {}, α = {}, N = {REPLICAS}) in {:?}:\n{}",
+        PROTOCOL.delta,
+        PROTOCOL.alpha,
+        failing.iter().map(|r| r.region).collect::<Vec<_>>(),
+        Table(&rows)
+    );
+}
+
+/// A negative control: Biased in at least one region under the same protocol.
+fn assert_detected(backend: &Backend, shift: ShiftKind) {
+    let preset = Preset::single_shift(shift.name(), shift);
+    let rows = measure(backend, &preset);
+    assert!(
+        rows.iter().any(|r| r.verdict == Verdict::Biased),
+        "negative control {} on {backend} not detected (δ = {}, α = {}, N = {REPLICAS}):\n{}",
+        shift.name(),
+        PROTOCOL.delta,
+        PROTOCOL.alpha,
+        Table(&rows)
+    );
+}
+
+/// The deferred intersection index is seed 001's documented, slightly biased choice: its bias is
+/// measured and printed, not asserted away; the run itself must be sound (no NaN, every region).
+fn measure_sequential_deferred(backend: &Backend) {
+    let rows = measure(
+        backend,
+        &Preset::named("sequential").expect("registered preset"),
+    );
+    let within: Vec<Region> = rows
+        .iter()
+        .filter(|r| r.verdict == Verdict::Unbiased)
+        .map(|r| r.region)
+        .collect();
+    println!(
+        "sequential (deferred index) on {backend}: within δ = {}% in {within:?}",
+        100.0 * PROTOCOL.delta
+    );
+}
+
+/// `$cpu` runs `$check` on the CPU backend, `$vulkan` on the Vulkan backend (or skips).
+macro_rules! on_both_backends {
+    ($cpu:ident, $vulkan:ident, $check:expr) => {
+        #[test]
+        fn $cpu() {
+            let check: fn(&Backend) = $check;
+            check(&Backend::Cpu);
+        }
+
+        #[test]
+        fn $vulkan() {
+            let check: fn(&Backend) = $check;
+            if let Some(backend) = backend_or_skip(stringify!($vulkan)) {
+                check(&backend);
+            }
+        }
+    };
+}
+
+on_both_backends!(
+    reconnection_is_unbiased_per_region,
+    vulkan_reconnection_is_unbiased_per_region,
+    |b| assert_unbiased(b, "reconnection")
+);
+on_both_backends!(
+    delayed_is_unbiased_per_region,
+    vulkan_delayed_is_unbiased_per_region,
+    |b| assert_unbiased(b, "delayed")
+);
+on_both_backends!(
+    hybrid_is_unbiased_per_region,
+    vulkan_hybrid_is_unbiased_per_region,
+    |b| assert_unbiased(b, "hybrid")
+);
+on_both_backends!(
+    sequential_exact_is_unbiased_per_region,
+    vulkan_sequential_exact_is_unbiased_per_region,
+    |b| assert_unbiased(b, "sequential-exact")
+);
+#[test]
+fn sequential_deferred_bias_is_measured() {
+    measure_sequential_deferred(&Backend::Cpu);
+}
+
+#[test]
+fn control_delayed_without_jacobian_is_detected() {
+    assert_detected(&Backend::Cpu, ShiftKind::DelayedWithoutJacobian);
+}
+
+#[test]
+fn control_delayed_without_visibility_is_detected() {
+    assert_detected(&Backend::Cpu, ShiftKind::DelayedWithoutVisibility);
+}
+
+#[test]
+fn control_hybrid_ignoring_criterion_is_detected() {
+    assert_detected(&Backend::Cpu, ShiftKind::HybridIgnoringCriterion);
+}

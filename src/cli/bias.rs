@@ -1,9 +1,11 @@
-//! `reshift bias`: N replicas of one method against independent path-traced reference batches;
+//! `reshift bias`: N replicas of one method against independent path-traced reference batches
+//! (the path tracer with the method's reference settings, `Method::reference`: the dipole
+//! profile for `image-space`);
 //! per region the Welch test of zero bias (Holm across regions) and the equivalence verdict with
 //! tolerance δ (`lab::bias`).
 
 use clap::Args;
-use lab::bias::{BiasRow, Protocol, Table, bias_rows, luminance, reference_images, summarize};
+use lab::bias::{BiasRow, Protocol, Table, bias_rows, luminance, reference_images_with, summarize};
 use lab::methods::Method;
 use lab::reference_cache::REFERENCE_SEED;
 use lab::regions::Regions;
@@ -71,7 +73,10 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
     let scene = with_resolution(loaded.scene, Some(parse_resolution(&args.resolution)?));
     let frame = args.frames - 1;
     let regions = Regions::classify(&scene, &GBuffer::render(&scene, frame), REFERENCE_SEED);
-    let reference = reference_images(
+    let reference_settings = method.reference();
+    let profile = reference_settings.profile.name();
+    let reference = reference_images_with(
+        &reference_settings,
         &scene,
         frame,
         args.reference_batches,
@@ -116,6 +121,7 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
             args,
             &scene.name,
             &rows,
+            profile,
             [nonfinite, reference.nonfinite],
             images.len(),
             stopped,
@@ -126,7 +132,7 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
         );
     } else {
         println!(
-            "# bias of {} on {} ({}, frame {frame}): N = {} replicas vs {} reference batches × {} spp, δ = {}%, α = {}\n",
+            "# bias of {} on {} ({}, frame {frame}): N = {} replicas vs {} reference batches × {} spp ({profile} profile), δ = {}%, α = {}\n",
             method,
             scene.name,
             args.resolution,
@@ -178,6 +184,7 @@ fn bias_json(
     args: &BiasArgs,
     scene: &str,
     rows: &[BiasRow],
+    profile: &str,
     [replica_nonfinite, reference_nonfinite]: [u64; 2],
     replicas: usize,
     interrupted: bool,
@@ -215,6 +222,7 @@ fn bias_json(
         "reference": {
             "batches": args.reference_batches,
             "spp_per_batch": args.reference_batch_spp,
+            "profile": profile,
             "seed": REFERENCE_SEED,
         },
         "nonfinite": { "replicas": replica_nonfinite, "reference": reference_nonfinite },

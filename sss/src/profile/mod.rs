@@ -25,6 +25,16 @@ pub enum ProfileKind {
     Dipole,
 }
 
+impl ProfileKind {
+    /// `burley` or `dipole`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ProfileKind::Burley => "burley",
+            ProfileKind::Dipole => "dipole",
+        }
+    }
+}
+
 /// Shared pieces of the sampling tests: keyed streams and binned expectations.
 #[cfg(test)]
 pub(crate) mod test_support {

@@ -1,46 +1,332 @@
-//! Compiles the Vulkan backend's compute shaders from GLSL to SPIR-V with `glslc` (DESIGN §6).
+//! Renders the Rust ↔ GLSL contract to GLSL headers and compiles the Vulkan backend's compute
+//! shaders to SPIR-V with `glslc` (DESIGN §6, docs/gpu-backend.md).
 //!
-//! Every `engine/glsl/*.glsl` is one compute entry point; the GLSL twins it includes live
+//! Contract: the crates declare what their GLSL twins share with them in `twin::contract!`
+//! files (`restir/src/contract.rs`, `shifts/src/contract.rs`, `src/contract.rs`,
+//! `src/purpose.rs`) and register shifts in `shifts/src/registry.rs`. This script includes the
+//! same files, so the items it renders are the ones the crates compile, and writes
+//! `$OUT_DIR/glsl/contract/`: `restir.glsl`, `shifts.glsl` (with the shift kinds and their
+//! dispatch list), `engine.glsl`, one header per push-constant block, and `shift_twins.glsl`
+//! (the includes of the registered shifts' GLSL twins).
+//!
+//! Shaders: every `glsl/*.glsl` is one compute entry point; the GLSL twins it includes live
 //! beside their Rust modules (`restir/glsl/`, `sss/glsl/`, `shifts/glsl/`) and are found through
-//! `-I`. The SPIR-V goes to `$OUT_DIR/<stem>.spv`, `$OUT_DIR/spirv_table.rs` maps stems to it, and the cfg `reshift_glslc` tells the crate to
+//! `-I`, as are the generated headers. The SPIR-V goes to `$OUT_DIR/<stem>.spv`,
+//! `$OUT_DIR/spirv_table.rs` maps stems to it, and the cfg `reshift_glslc` tells the crate to
 //! embed it. Without `glslc` the build still succeeds (with a warning) and the backend reports
 //! what to install; a shader that fails to compile fails the build.
+//!
+//! Freshness: the script watches the `glslc` it runs, or, when there is none, every directory it
+//! looked in (`$PATH`, or the parent of an absolute `$GLSLC`), so installing `glslc` after a
+//! build without it rebuilds the backend with shaders (`tests/newcomer_order.rs`).
 
 use std::env;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// Include directories of the GLSL twins and of the kernels' shared headers, relative to this
-/// crate.
-const INCLUDE_DIRS: [&str; 4] = [
-    "../restir/glsl",
-    "../sss/glsl",
-    "../shifts/glsl",
-    "glsl/include",
+#[allow(dead_code)]
+mod restir_contract {
+    include!("../restir/src/contract.rs");
+}
+
+#[allow(dead_code)]
+mod shifts_contract {
+    include!("../shifts/src/contract.rs");
+}
+
+#[allow(dead_code)]
+mod engine_contract {
+    include!("src/contract.rs");
+}
+
+#[allow(dead_code)]
+mod purpose {
+    include!("src/purpose.rs");
+}
+
+#[allow(dead_code)]
+mod kernels {
+    include!("src/plan/kernels.rs");
+}
+
+/// The registry's `resolves_deferred_index` flag as a GLSL boolean.
+macro_rules! registry_flag {
+    () => {
+        "false"
+    };
+    (resolves_deferred_index) => {
+        "true"
+    };
+}
+
+/// The build-side reading of `shifts/src/registry.rs` (the crate's reading is
+/// `shifts/src/kind.rs`): per line, the kind constant `SHIFT_<KIND>` (its position), the entry
+/// `X(SHIFT_<KIND>, glsl_twin, resolves_deferred_index)` of `SHIFT_KINDS(X)`, and the twin's
+/// file; the CPU expression is not compiled here.
+macro_rules! shift_registry {
+    ($(
+        $(#[doc = $doc:literal])*
+        $kind:ident = $name:literal, $file:ident :: $twin:ident, $cpu:expr $(, $flag:ident)? ;
+    )*) => {
+        /// The shift kinds and the GLSL files of their twins, in registry order.
+        fn shift_registry() -> (twin::Item, Vec<&'static str>) {
+            let variants = vec![$(twin::Variant {
+                name: stringify!($kind),
+                code: 0,
+                args: vec![stringify!($twin).to_string(), registry_flag!($($flag)?).to_string()],
+                docs: vec![$(twin::doc_text(&format!("doc = {}", stringify!($doc))).unwrap_or_default()),*],
+            }),*];
+            let variants = variants
+                .into_iter()
+                .enumerate()
+                .map(|(code, v)| twin::Variant { code: code as u32, ..v })
+                .collect();
+            let kinds = twin::Item::Kinds {
+                rust: "shifts::ShiftKind",
+                prefix: "SHIFT",
+                zero: None,
+                variants,
+                docs: vec![
+                    "The registered shifts (shifts/src/registry.rs): X(SHIFT_<KIND>, twin, \
+                     resolves_deferred_index)."
+                        .into(),
+                ],
+            };
+            (kinds, vec![$(stringify!($file)),*])
+        }
+    };
+}
+
+include!("../shifts/src/registry.rs");
+
+/// The contract files this script includes, relative to this crate.
+const CONTRACTS: [&str; 6] = [
+    "../restir/src/contract.rs",
+    "../shifts/src/contract.rs",
+    "../shifts/src/registry.rs",
+    "src/contract.rs",
+    "src/purpose.rs",
+    "src/plan/kernels.rs",
 ];
+
+/// Include directories of the GLSL twins, relative to this crate (the generated headers are
+/// found through `$OUT_DIR/glsl`).
+const INCLUDE_DIRS: [&str; 3] = ["../restir/glsl", "../sss/glsl", "../shifts/glsl"];
+
+/// Writes the contract headers into `dir/contract/`; returns every item rendered.
+fn write_contract(dir: &Path) -> Vec<twin::Item> {
+    let contract = dir.join("contract");
+    std::fs::create_dir_all(&contract).expect("OUT_DIR is writable");
+    let write = |name: &str, text: String| {
+        std::fs::write(contract.join(name), text).expect("OUT_DIR is writable");
+    };
+    write(
+        "restir.glsl",
+        twin::header(
+            "CONTRACT_RESTIR_GLSL",
+            "restir/src/contract.rs",
+            &restir_contract::glsl_items(),
+        ),
+    );
+    let (kinds, files) = shift_registry();
+    let mut shifts = shifts_contract::glsl_items();
+    shifts.push(kinds);
+    write(
+        "shifts.glsl",
+        twin::header(
+            "CONTRACT_SHIFTS_GLSL",
+            "shifts/src/contract.rs and shifts/src/registry.rs",
+            &shifts,
+        ),
+    );
+    let mut twins = String::from(
+        "// Generated by engine/build.rs from shifts/src/registry.rs: the GLSL twins of the\n\
+         // registered shifts, included by shifts/glsl/shift.glsl.\n",
+    );
+    let mut seen = Vec::new();
+    for file in files {
+        if !seen.contains(&file) {
+            twins.push_str(&format!("#include \"{file}.glsl\"\n"));
+            seen.push(file);
+        }
+    }
+    write("shift_twins.glsl", twins);
+    let mut engine = engine_contract::glsl_items();
+    engine.extend(purpose::glsl_items());
+    let source = "engine/src/contract.rs and engine/src/purpose.rs";
+    for item in &engine {
+        if let Some((name, text)) = twin::push_constant_header(source, item) {
+            write(&name, text);
+        }
+    }
+    write(
+        "engine.glsl",
+        twin::header("CONTRACT_ENGINE_GLSL", source, &engine),
+    );
+    for kernel in kernels::PassKernel::ALL {
+        write(
+            &format!("{}_bindings.glsl", kernel.name()),
+            bindings(kernel),
+        );
+    }
+    let mut items = restir_contract::glsl_items();
+    items.extend(shifts);
+    items.extend(engine);
+    items
+}
+
+/// The storage-buffer declarations of a pass kernel after the scene's, from
+/// `src/plan/kernels.rs`.
+fn bindings(kernel: kernels::PassKernel) -> String {
+    let mut text = format!(
+        "// Generated by engine/build.rs from engine/src/plan/kernels.rs: the storage buffers of\n\
+         // {} after the scene's, in binding order.\n",
+        kernel.name()
+    );
+    for (i, buffer) in kernel.buffers().iter().enumerate() {
+        let binding = kernels::SCENE_BINDINGS as usize + i;
+        let access = match buffer.access {
+            kernels::Access::Read => "readonly",
+            kernels::Access::Write => "writeonly",
+        };
+        text += &format!(
+            "layout(std430, binding = {binding}) {access} buffer Binding{binding} {{ {} {}[]; }};\n",
+            buffer.element, buffer.name
+        );
+    }
+    text
+}
+
+/// Fails the build unless `glslc` lays out every contract struct as Rust does: compiles probe
+/// shaders (without `-O`, so names stay) that declare an array of each struct and each
+/// push-constant block, and compares every member offset and each struct's array stride with
+/// the Rust `offset_of!` and `size_of` the items carry.
+fn check_layouts(glslc: &std::ffi::OsStr, include: &Path, out_dir: &Path, items: &[twin::Item]) {
+    let mut probes = vec![(
+        "layout_probe".to_string(),
+        String::from(
+            "#version 460\n#include \"contract/restir.glsl\"\n#include \"contract/shifts.glsl\"\n\
+             #include \"contract/engine.glsl\"\nlayout(local_size_x = 1) in;\n",
+        ),
+    )];
+    for (binding, item) in items.iter().enumerate() {
+        if let Some((file, _)) = twin::push_constant_header("", item) {
+            let text = format!(
+                "#version 460\n#include \"contract/{file}\"\nlayout(local_size_x = 1) in;\n\
+                 void main() {{}}\n"
+            );
+            probes.push((
+                format!("layout_probe_{}", file.trim_end_matches(".glsl")),
+                text,
+            ));
+        } else if let twin::Item::Struct { glsl, .. } = item {
+            probes[0].1 += &format!(
+                "layout(std430, binding = {binding}) readonly buffer Probe{binding} \
+                 {{ {glsl} probe{binding}[]; }};\n"
+            );
+        }
+    }
+    probes[0].1 += "void main() {}\n";
+    let mut found = std::collections::HashMap::new();
+    for (name, text) in probes {
+        let source = out_dir.join(format!("{name}.comp"));
+        let spirv = out_dir.join(format!("{name}.spv"));
+        std::fs::write(&source, text).expect("OUT_DIR is writable");
+        let result = Command::new(glslc)
+            .args(["--target-env=vulkan1.2", "-Werror"])
+            .arg(format!("-I{}", include.display()))
+            .arg(&source)
+            .arg("-o")
+            .arg(&spirv)
+            .output()
+            .expect("glslc ran once already");
+        assert!(
+            result.status.success(),
+            "glslc failed on the layout probe {}:\n{}",
+            source.display(),
+            String::from_utf8_lossy(&result.stderr)
+        );
+        let bytes = std::fs::read(&spirv).expect("glslc wrote the probe");
+        found.extend(twin::spirv::layouts(&bytes).expect("glslc writes SPIR-V"));
+    }
+    for item in items {
+        let twin::Item::Struct {
+            rust,
+            glsl,
+            fields,
+            size,
+            push_constant,
+            ..
+        } = item
+        else {
+            continue;
+        };
+        let layout = found
+            .get(*glsl)
+            .unwrap_or_else(|| panic!("the layout probe has no struct {glsl} (Rust {rust})"));
+        let rust_offsets: Vec<u32> = fields.iter().map(|f| f.offset as u32).collect();
+        assert_eq!(
+            layout.offsets, rust_offsets,
+            "glslc's member offsets of {glsl} differ from Rust's {rust}"
+        );
+        if push_constant.is_none() {
+            assert_eq!(
+                layout.array_stride,
+                Some(*size as u32),
+                "glslc's array stride of {glsl} differs from size_of::<{rust}>()"
+            );
+        }
+    }
+}
+
+/// Reruns this script when the `glslc` it would run changes, appears or disappears: watches the
+/// resolved executable when `found`, otherwise every existing directory it would be looked up in.
+fn watch_glslc(glslc: &Path, found: bool) {
+    println!("cargo::rerun-if-env-changed=PATH");
+    let candidates: Vec<PathBuf> = if glslc.components().count() > 1 {
+        vec![glslc.to_path_buf()]
+    } else {
+        env::split_paths(&env::var_os("PATH").unwrap_or_default())
+            .map(|dir| dir.join(glslc))
+            .collect()
+    };
+    let resolved = candidates.iter().find(|path| path.is_file());
+    match resolved {
+        Some(path) if found => println!("cargo::rerun-if-changed={}", path.display()),
+        _ => {
+            for dir in candidates.iter().filter_map(|path| path.parent()) {
+                if dir.is_dir() {
+                    println!("cargo::rerun-if-changed={}", dir.display());
+                }
+            }
+        }
+    }
+}
 
 fn main() {
     println!("cargo::rustc-check-cfg=cfg(reshift_glslc)");
     println!("cargo::rerun-if-env-changed=GLSLC");
     println!("cargo::rerun-if-changed=glsl");
-    for dir in INCLUDE_DIRS {
-        if Path::new(dir).is_dir() {
-            println!("cargo::rerun-if-changed={dir}");
-        }
+    for path in CONTRACTS.iter().chain(&INCLUDE_DIRS) {
+        println!("cargo::rerun-if-changed={path}");
     }
+    let out_dir = PathBuf::from(env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
+    let generated = out_dir.join("glsl");
+    let items = write_contract(&generated);
     let glslc = env::var_os("GLSLC").unwrap_or_else(|| "glslc".into());
     let found = Command::new(&glslc)
         .arg("--version")
         .output()
         .is_ok_and(|o| o.status.success());
+    watch_glslc(Path::new(&glslc), found);
     if !found {
         println!(
             "cargo::warning=glslc was not found; the Vulkan backend is disabled \
-             (install it with `apt-get install glslc` and rebuild)"
+             (install it with `apt-get install glslc`; the next build picks it up)"
         );
         return;
     }
-    let out_dir = PathBuf::from(env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
+    check_layouts(&glslc, &generated, &out_dir, &items);
     let mut sources: Vec<PathBuf> = std::fs::read_dir("glsl")
         .expect("engine/glsl exists")
         .map(|entry| entry.expect("readable engine/glsl").path())
@@ -64,6 +350,7 @@ fn main() {
         for dir in INCLUDE_DIRS {
             command.arg(format!("-I{dir}"));
         }
+        command.arg(format!("-I{}", generated.display()));
         let result = command
             .arg(source)
             .arg("-o")

@@ -12,30 +12,22 @@
 
 layout(local_size_x = 64) in;
 
-// engine::vulkan::PtParams: the contract's MethodParams, first padding word = HitPolicy,
-// second = the sample this dispatch adds (one dispatch per sample, see below).
-layout(push_constant) uniform PtParams {
-    uint spp;
-    uint hits;
-    uint sample_index;
-    uint pad[5];
-} params;
+// PtParams (engine/src/contract.rs): spp, the HitPolicy code, the sample this dispatch adds
+// (one dispatch per sample, see below).
+#include "contract/pt_params.glsl"
 
 #define SCENE_BINDING 0
-// Hits kept per probe (engine::vulkan::PT_MAX_HITS). Probes of the path tracer see at most 8
-// on the built-in scenes (bumpy, 32×32, 64 spp); 16 leaves room, beyond is flagged.
-#define BVH_MAX_HITS 16
+// Hits kept per probe (KEPT_HITS of the contract). Probes of the path tracer see at most 8 on
+// the built-in scenes (bumpy, 32×32, 64 spp); 16 leaves room, beyond is flagged.
+#include "contract/engine.glsl"
+#define BVH_MAX_HITS KEPT_HITS
 #include "scene.glsl"
 #include "pt.glsl"
 #include "loop_budget.glsl"
 
-// The running sum of a pixel between dispatches: one dispatch per sample keeps every dispatch's
-// loops far inside lavapipe's loop budget (loop_budget.glsl) whatever spp is.
-struct PtState {
-    double sum[3];
-    uint left_out;
-    uint cut;
-};
+// PtState (contract/engine.glsl) is the running sum of a pixel between dispatches: one dispatch
+// per sample keeps every dispatch's loops far inside lavapipe's loop budget (loop_budget.glsl)
+// whatever spp is.
 
 layout(std430, binding = 9) readonly buffer GBufferIn { GPixel gbuffer[]; };
 layout(std430, binding = 10) writeonly buffer ImageOut { vec4 image[]; };

@@ -28,11 +28,8 @@
 
 layout(local_size_x = 64) in;
 
-layout(push_constant) uniform MethodParams {
-    uint spp;
-    // pad[0]: the sample this dispatch runs.
-    uint pad[7];
-} params;
+// MethodParams (engine/src/contract.rs): spp; pad[0] is the sample this dispatch runs.
+#include "contract/method_params.glsl"
 
 #define SCENE_BINDING 0
 #include "scene.glsl"
@@ -40,9 +37,6 @@ layout(push_constant) uniform MethodParams {
 #include "random_walk.glsl"
 #include "loop_budget.glsl"
 
-// engine::random_walk_method::PURPOSE_WALK and PURPOSE_WALK_LIGHT.
-const uint RANDOM_WALK_PURPOSE_WALK = 0x52570001u;
-const uint RANDOM_WALK_PURPOSE_WALK_LIGHT = 0x52570002u;
 // The offset of SceneLighting::radiance's visibility ray at both ends.
 const float SCENE_LIGHTING_EPSILON = 1e-4;
 
@@ -237,9 +231,9 @@ void main() {
         if (sample_index == 0u) {
             uint64_t seed = scene_seed();
             state.selection = stream_new(
-                StreamKey(pixel, frame_params.frame, 0u, RANDOM_WALK_PURPOSE_WALK_LIGHT), seed);
+                StreamKey(pixel, frame_params.frame, 0u, PURPOSE_WALK_LIGHT), seed);
             state.walk = stream_new(
-                StreamKey(pixel, frame_params.frame, 0u, RANDOM_WALK_PURPOSE_WALK), seed);
+                StreamKey(pixel, frame_params.frame, 0u, PURPOSE_WALK), seed);
         }
         scene_lighting_selection = state.selection;
         Stream stream = state.walk;

@@ -3,36 +3,29 @@
 // `candidates::generate` + `candidates::shadow_test` (engine/src/candidates.rs) and the
 // diagnostics' `hybrid_choice`, one invocation per pixel [001 §3.1, Eq. 10].
 //
-// Bindings: the scene's 0-8, 9 GPixel in, 10 PixelReservoir out, 11 uvec4 diag out
-// (probes, hits, hybrid choice 0 none / 1 reconnection / 2 delayed, error code). Diagnostics other
-// than the error code are written only when `collect_diagnostics` is set, as on the CPU. The error
-// code is 0 or the InvalidCandidate that `generate` returned, coded as the host's
-// `vulkan::decode_error` reads it (1 Weight, 2 Target, 3 Confidence, 4 Ucw; reported as
-// PipelineError::Candidate); that pixel's reservoir is then empty.
+// Bindings: the scene's, then PassKernel::Candidates's (engine/src/plan/kernels.rs); the diag
+// holds (probes, hits, hybrid choice 0 none / 1 reconnection / 2 delayed, error code).
+// Diagnostics other than the error code are written only when `collect_diagnostics` is set, as
+// on the CPU. The error code is 0 or the ResampleCode RESAMPLE_INVALID_* of the InvalidCandidate
+// that `generate` returned (reported as PipelineError::Candidate); that pixel's reservoir is
+// then empty.
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 
 layout(local_size_x = 64) in;
 
-// Hit lists of 16: the built-in scenes' probes stay far below (engine/tests/vulkan_bssrdf.rs
+// KEPT_HITS, HIT_OVERFLOW, LOOP_BUDGET_CUT and the purposes PURPOSE_*.
+#include "contract/engine.glsl"
+// Hit lists of KEPT_HITS: the built-in scenes' probes stay far below (engine/tests/vulkan_bssrdf.rs
 // measures the largest count); beyond it the CPU's extra hits would be missing here.
-#define BVH_MAX_HITS 16
-// The diag error code of a pixel with a probe of more hits (engine::vulkan::HIT_OVERFLOW).
-const uint HIT_OVERFLOW = 0xFEu;
+#define BVH_MAX_HITS KEPT_HITS
 #define SCENE_BINDING 0
 #include "domain.glsl"
 #include "reservoir.glsl"
 #include "loop_budget.glsl"
 
-#include "pass_params.glsl"
+#include "contract/pass_params.glsl"
 
-layout(std430, binding = 9) readonly buffer GBufferIn { GPixel gbuffer[]; };
-layout(std430, binding = 10) writeonly buffer ReservoirsOut { PixelReservoir reservoirs[]; };
-layout(std430, binding = 11) writeonly buffer DiagOut { uvec4 diag[]; };
-
-// engine::purpose::{PROBE, LIGHT, SELECT}.
-const uint CANDIDATES_PURPOSE_PROBE = 0x100u;
-const uint CANDIDATES_PURPOSE_LIGHT = 0x101u;
-const uint CANDIDATES_PURPOSE_SELECT = 0x102u;
+#include "contract/pass_candidates_bindings.glsl"
 
 // ProbeCounts.
 struct ProbeCounts {
@@ -49,20 +42,6 @@ vec3 candidates_light_numbers(inout Stream rng) {
     return vec3(u0, u1, u2);
 }
 
-// The diag code of an InvalidCandidate returned by reservoir.glsl (see the header).
-uint candidates_error_code(uint invalid) {
-    if (invalid == RESAMPLE_INVALID_WEIGHT) {
-        return 1u;
-    }
-    if (invalid == RESAMPLE_INVALID_TARGET) {
-        return 2u;
-    }
-    if (invalid == RESAMPLE_INVALID_CONFIDENCE) {
-        return 3u;
-    }
-    return 4u;
-}
-
 // candidates::generate: the canonical reservoir of `domain` from `bssrdf_samples` BSSRDF samples;
 // every hit of a probe streams with weight p-hat / (M p_disk p_light) [001 Eq. 10], confidence M.
 // Returns 0 or reservoir.glsl's code of the InvalidCandidate.
@@ -71,11 +50,11 @@ uint candidates_generate(SssDomain domain, uint bssrdf_samples, bool shared_ligh
     result = reservoir_empty();
     counts = ProbeCounts(0u, 0u, false);
     Stream probe_rng = stream_new(
-        StreamKey(domain.pixel, domain.frame, domain.pass, CANDIDATES_PURPOSE_PROBE), domain.seed);
+        StreamKey(domain.pixel, domain.frame, domain.pass, PURPOSE_PROBE), domain.seed);
     Stream light_rng = stream_new(
-        StreamKey(domain.pixel, domain.frame, domain.pass, CANDIDATES_PURPOSE_LIGHT), domain.seed);
+        StreamKey(domain.pixel, domain.frame, domain.pass, PURPOSE_LIGHT), domain.seed);
     Stream select_rng = stream_new(
-        StreamKey(domain.pixel, domain.frame, domain.pass, CANDIDATES_PURPOSE_SELECT), domain.seed);
+        StreamKey(domain.pixel, domain.frame, domain.pass, PURPOSE_SELECT), domain.seed);
     precise float inv_m = 1.0 / float(max(bssrdf_samples, 1u));
     Ris ris = ris_new();
     for (uint m = 0u; m < bssrdf_samples; m++) {
@@ -157,8 +136,8 @@ void main() {
     }
     uint64_t seed = (uint64_t(frame_params.seed_hi) << 32) | uint64_t(frame_params.seed_lo);
     SssDomain domain;
-    if (!domain_new(gbuffer[pixel], pixel, frame_params.frame, params.pass, seed, domain)) {
-        reservoirs[pixel] = reservoir_empty();
+    if (!domain_new(gpixels[pixel], pixel, frame_params.frame, params.pass, seed, domain)) {
+        reservoirs_out[pixel] = reservoir_empty();
         diag[pixel] = uvec4(0u);
         return;
     }
@@ -167,12 +146,12 @@ void main() {
     uint error = candidates_generate(domain, params.bssrdf_samples, params.shared_light != 0u,
         canonical, counts);
     if (error != 0u) {
-        reservoirs[pixel] = reservoir_empty();
-        diag[pixel] = uvec4(0u, 0u, 0u, candidates_error_code(error));
+        reservoirs_out[pixel] = reservoir_empty();
+        diag[pixel] = uvec4(0u, 0u, 0u, error);
         return;
     }
     candidates_shadow_test(domain, canonical);
-    reservoirs[pixel] = canonical;
+    reservoirs_out[pixel] = canonical;
     uvec4 diagnostics = uvec4(0u);
     if (params.collect_diagnostics != 0u) {
         uint choice = candidates_hybrid_choice(domain, canonical);

@@ -1,17 +1,18 @@
 #version 460
 // G-buffer pass: the twin of sss::scene::GBuffer::render per pixel (sss/src/scene/gbuffer.rs):
 // the closest hit of the frame's camera ray, normals flipped toward the camera.
-// Bindings: the scene (0..8, scene.glsl), 9 GPixel out. One invocation per pixel.
+// Bindings: the scene's, then PassKernel::GBuffer's (engine/src/plan/kernels.rs). One invocation
+// per pixel.
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 
 layout(local_size_x = 64) in;
 
-#include "pass_params.glsl"
+#include "contract/pass_params.glsl"
 
 #define SCENE_BINDING 0
 #include "scene.glsl"
 
-layout(std430, binding = 9) writeonly buffer GBufferOut { GPixel gbuffer[]; };
+#include "contract/pass_gbuffer_bindings.glsl"
 
 // primary_hit: the G-buffer entry of pixel (px, py); valid = 0 on a miss.
 GPixel primary_hit(uint px, uint py) {
@@ -64,5 +65,5 @@ void main() {
     if (i >= frame_params.width * frame_params.height) {
         return;
     }
-    gbuffer[i] = primary_hit(i % frame_params.width, i / frame_params.width);
+    gpixels[i] = primary_hit(i % frame_params.width, i / frame_params.width);
 }

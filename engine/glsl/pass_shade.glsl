@@ -5,28 +5,24 @@
 // image and a path-traced one estimate the same radiance everywhere. A non-finite value is
 // written as 0 with w = 1 (the CPU counts it in `nan_count`); so is a path-traced sample whose
 // probe had more than BVH_MAX_HITS hits (the GPU keeps only that many, so it would be biased).
-// Bindings: scene 0-8, 9 G-buffer (GPixel), 10 PixelReservoir in, 11 vec4 out.
+// Bindings: the scene's, then PassKernel::Shade's (engine/src/plan/kernels.rs).
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 
 layout(local_size_x = 64) in;
 
-#include "pass_params.glsl"
+#include "contract/pass_params.glsl"
 
 #define SCENE_BINDING 0
-// Hits kept per probe (engine::vulkan::PT_MAX_HITS). Probes of the path tracer see at most 8
-// on the built-in scenes (bumpy, 32×32, 64 spp); 16 leaves room, beyond is flagged.
-#define BVH_MAX_HITS 16
+// Hits kept per probe (KEPT_HITS of the contract). Probes of the path tracer see at most 8 on
+// the built-in scenes (bumpy, 32×32, 64 spp); 16 leaves room, beyond is flagged.
+#include "contract/engine.glsl"
+#define BVH_MAX_HITS KEPT_HITS
 #include "scene.glsl"
 #include "sample.glsl"
 #include "domain.glsl"
 #include "pt.glsl"
 
-layout(std430, binding = 9) readonly buffer GBufferIn { GPixel gbuffer[]; };
-layout(std430, binding = 10) readonly buffer ReservoirsIn { PixelReservoir reservoirs[]; };
-layout(std430, binding = 11) writeonly buffer ImageOut { vec4 image[]; };
-
-// engine::purpose::OPAQUE.
-const uint SHADE_PURPOSE_OPAQUE = 0x104u;
+#include "contract/pass_shade_bindings.glsl"
 
 // reuse::shade: f(Y) W, 0 for an empty reservoir.
 vec3 reuse_shade(SssDomain domain, PixelReservoir reservoir) {
@@ -42,7 +38,7 @@ void main() {
     if (pixel >= frame_params.width * frame_params.height) {
         return;
     }
-    GPixel x1 = gbuffer[pixel];
+    GPixel x1 = gpixels[pixel];
     if (x1.valid == 0u) {
         image[pixel] = vec4(0.0);
         return;
@@ -51,9 +47,9 @@ void main() {
     SssDomain domain;
     vec3 value;
     if (domain_new(x1, pixel, frame_params.frame, params.pass, seed, domain)) {
-        value = reuse_shade(domain, reservoirs[pixel]);
+        value = reuse_shade(domain, reservoirs_in[pixel]);
     } else {
-        Stream rng = stream_new(StreamKey(pixel, frame_params.frame, params.pass, SHADE_PURPOSE_OPAQUE), seed);
+        Stream rng = stream_new(StreamKey(pixel, frame_params.frame, params.pass, PURPOSE_OPAQUE), seed);
         value = pt_estimate(x1, PT_HITS_ALL, rng);
     }
     bool finite = !any(isnan(value)) && !any(isinf(value));

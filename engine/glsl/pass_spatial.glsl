@@ -3,12 +3,14 @@
 // `neighbours` pixels drawn uniformly in the disk of radius Camera::spatial_radius_px around
 // the pixel centre; one outside the image, equal to the pixel, without a translucent primary hit
 // or on another object is not taken; each taken neighbour's confidence is capped when
-// confidence_cap > 0; the reservoirs are combined by restir/glsl/resample.glsl. Bindings
-// (Vulkan backend contract): 0-8 scene, 9 GPixel, 10 PixelReservoir in, 11 PixelReservoir out,
-// 12 uvec4 diag (shifted, failed, improved, error code of resample.glsl).
+// confidence_cap > 0; the reservoirs are combined by restir/glsl/resample.glsl. Bindings:
+// the scene's, then PassKernel::Spatial's (engine/src/plan/kernels.rs); the diag holds (shifted,
+// failed, improved, error code of resample.glsl).
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
-// Hits kept per probe, as in pass_candidates: a sample's intersection index is below 16.
-#define BVH_MAX_HITS 16
+// KEPT_HITS, LOOP_BUDGET_CUT, TEMPORAL_*, the purposes PURPOSE_*.
+#include "contract/engine.glsl"
+// Hits kept per probe, as in pass_candidates: a sample's intersection index is below KEPT_HITS.
+#define BVH_MAX_HITS KEPT_HITS
 #define SCENE_BINDING 0
 #include "scene.glsl"
 #include "resample.glsl"
@@ -16,16 +18,10 @@
 
 layout(local_size_x = 64) in;
 
-layout(std430, binding = 9) readonly buffer Pixels { GPixel gpixels[]; };
-layout(std430, binding = 10) readonly buffer ReservoirsIn { PixelReservoir reservoirs_in[]; };
-layout(std430, binding = 11) writeonly buffer ReservoirsOut { PixelReservoir reservoirs_out[]; };
-layout(std430, binding = 12) writeonly buffer Diag { uvec4 diag[]; };
+#include "contract/pass_spatial_bindings.glsl"
 
-#include "pass_params.glsl"
+#include "contract/pass_params.glsl"
 
-// engine::purpose::{SELECT, NEIGHBOURS}.
-const uint PURPOSE_SELECT = 0x102u;
-const uint PURPOSE_NEIGHBOURS = 0x103u;
 // std::f32::consts::TAU as an f32.
 const float REUSE_TAU = 6.28318548202514648;
 

@@ -3,12 +3,14 @@
 // pixel. Reprojects x1 into the previous frame, accepts the previous pixel if it shows the same
 // object at a similar depth and normal, caps its confidence and combines the two reservoirs
 // (restir/glsl/resample.glsl). Without a previous frame or an accepted pixel the canonical
-// reservoir passes unchanged. Bindings (Vulkan backend contract): 0-8 scene, 9 GPixel,
-// 10 PixelReservoir in, 11 previous GPixel, 12 previous PixelReservoir, 13 PixelReservoir out,
-// 14 uvec4 diag (shifted, failed, improved, error code of resample.glsl).
+// reservoir passes unchanged. Bindings: the scene's, then
+// PassKernel::Temporal's (engine/src/plan/kernels.rs); the diag holds (shifted, failed, improved,
+// error code of resample.glsl).
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
-// Hits kept per probe, as in pass_candidates: a sample's intersection index is below 16.
-#define BVH_MAX_HITS 16
+// KEPT_HITS, LOOP_BUDGET_CUT, TEMPORAL_*, the purposes PURPOSE_*.
+#include "contract/engine.glsl"
+// Hits kept per probe, as in pass_candidates: a sample's intersection index is below KEPT_HITS.
+#define BVH_MAX_HITS KEPT_HITS
 #define SCENE_BINDING 0
 #include "scene.glsl"
 #include "resample.glsl"
@@ -16,22 +18,9 @@
 
 layout(local_size_x = 64) in;
 
-layout(std430, binding = 9) readonly buffer Pixels { GPixel gpixels[]; };
-layout(std430, binding = 10) readonly buffer ReservoirsIn { PixelReservoir reservoirs_in[]; };
-layout(std430, binding = 11) readonly buffer PreviousPixels { GPixel previous_gpixels[]; };
-layout(std430, binding = 12) readonly buffer PreviousReservoirs {
-    PixelReservoir previous_reservoirs[];
-};
-layout(std430, binding = 13) writeonly buffer ReservoirsOut { PixelReservoir reservoirs_out[]; };
-layout(std430, binding = 14) writeonly buffer Diag { uvec4 diag[]; };
+#include "contract/pass_temporal_bindings.glsl"
 
-#include "pass_params.glsl"
-
-// engine::purpose::SELECT.
-const uint PURPOSE_SELECT = 0x102u;
-// TEMPORAL_DEPTH_TOLERANCE, TEMPORAL_NORMAL_COSINE of engine::reuse.
-const float TEMPORAL_DEPTH_TOLERANCE = 0.1;
-const float TEMPORAL_NORMAL_COSINE = 0.9;
+#include "contract/pass_params.glsl"
 
 // reproject: the previous frame's pixel that shows x1, if it passes the reprojection checks.
 bool reproject(GPixel g, out uint q) {

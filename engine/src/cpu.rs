@@ -1,7 +1,8 @@
-//! The CPU backend (DESIGN §6): per frame, G-buffer → passes → shade. Each pass is a pure
-//! per-pixel kernel that reads the previous buffers and writes a new one (ping-pong between two
-//! reservoir buffers, plus the previous frame's final buffer for temporal reuse), run with rayon
-//! over rows. No shared mutable state, so the output is bit-identical for any thread count.
+//! The CPU backend (DESIGN §6): runs a preset's [`Plan`] — per frame, G-buffer → passes →
+//! shade. Each pass is a pure per-pixel kernel that reads the previous buffers and writes a new
+//! one (the plan's ping-pong between two reservoir buffers, plus the previous frame's final
+//! buffer for temporal reuse), run with rayon over rows. No shared mutable state, so the output
+//! is bit-identical for any thread count.
 
 use std::convert::Infallible;
 use std::time::Instant;
@@ -13,11 +14,15 @@ use shifts::{Hybrid, SssDomain};
 use sss::integrator::pt::{self, PtSettings, Shading};
 use sss::scene::{GBuffer, Scene};
 
+use restir::resample::ResampleError;
+use restir::reservoir::InvalidCandidate;
+use shifts::PixelReservoir;
+use shifts::preset::{PassSpec, Preset};
+
 use crate::candidates::{self, ProbeCounts};
 use crate::diagnostics::{Counters, HybridChoice};
 use crate::image::Image;
-use crate::layout::PixelReservoir;
-use crate::preset::{PassSpec, Preset};
+use crate::plan::{PassKernel, Plan, Resource, Role, Rotation, Slot, Step};
 use crate::reuse::{self, PassInput, Previous, ShiftCounts};
 use crate::{PassTiming, PipelineError, Run, RunConfig, purpose};
 
@@ -53,180 +58,208 @@ struct Cell {
     shifts: ShiftCounts,
 }
 
-/// Runs `preset` (already validated) for `config.frames` frames.
+/// Runs `preset` (already validated) for `config.frames` frames: its [`Plan`], step by step,
+/// on three reservoir vectors that the plan's [`Rotation`] assigns to its slots.
 pub(crate) fn run(
     scene: &Scene,
     preset: &Preset,
     config: &RunConfig,
 ) -> Result<Run, PipelineError> {
+    let plan = Plan::lower(preset);
     let camera = &scene.camera;
     let (width, height) = (camera.width(), camera.height());
     let n = width as usize * height as usize;
-    let seed = config.seed;
-    let mut seconds = vec![0.0f64; preset.passes.len() + 2];
-    let reuse_labels = preset
-        .passes
-        .iter()
-        .filter(|p| p.shift().is_some())
-        .map(PassSpec::label);
-    let mut counters = config
-        .collect_diagnostics
-        .then(|| Counters::new(width, height, reuse_labels.collect()));
-    let mut cells = vec![Cell::default(); n];
-    let mut front = vec![PixelReservoir::empty(); n];
-    let mut previous: Option<(GBuffer, Vec<PixelReservoir>)> = None;
+    let mut seconds = vec![0.0f64; plan.steps.len()];
+    let reuse_labels = plan
+        .passes()
+        .filter(|(_, step)| step.spec.is_some_and(|s| s.shift().is_some()))
+        .map(|(_, step)| step.label.clone());
+    let mut frame_state = Frame {
+        scene,
+        config,
+        width,
+        cells: vec![Cell::default(); n],
+        reservoirs: std::array::from_fn(|_| vec![PixelReservoir::empty(); n]),
+        rotation: Rotation::FIRST,
+        gbuffer: None,
+        previous_gbuffer: None,
+        counters: config
+            .collect_diagnostics
+            .then(|| Counters::new(width, height, reuse_labels.collect())),
+    };
     let mut frames = Vec::with_capacity(config.frames as usize);
     let mut nan_count = 0;
-
     for frame in 0..config.frames {
-        let start = Instant::now();
-        let gbuffer = GBuffer::render(scene, frame);
-        seconds[0] += start.elapsed().as_secs_f64();
-        let mut reuse_pass = 0;
-        for (pass_index, pass) in preset.passes.iter().enumerate() {
+        for (step, seconds) in plan.steps.iter().zip(&mut seconds) {
             let start = Instant::now();
-            let input = PassInput {
-                scene,
-                gbuffer: &gbuffer,
-                reservoirs: &front,
-                pass: pass_index as u32,
-                seed,
-                collect_diagnostics: config.collect_diagnostics,
-            };
-            let wrap = |pixel| {
-                move |error| PipelineError::Resample {
-                    frame,
-                    pass: pass_index,
-                    pixel,
-                    error,
-                }
-            };
-            match *pass {
-                PassSpec::Candidates {
-                    bssrdf_samples,
-                    shared_light,
-                } => {
-                    per_pixel::<_, PipelineError>(&mut cells, width, |pixel, cell| {
-                        *cell = Cell::default();
-                        let Some((domain, _)) = input.domain(pixel) else {
-                            return Ok(());
-                        };
-                        let mut hits = Vec::new();
-                        let (mut canonical, probes) = candidates::generate(
-                            &domain,
-                            bssrdf_samples,
-                            shared_light,
-                            seed,
-                            &mut hits,
-                        )
-                        .map_err(|error| PipelineError::Candidate {
-                            frame,
-                            pixel,
-                            error,
-                        })?;
-                        candidates::shadow_test(&domain, &mut canonical);
-                        cell.reservoir = PixelReservoir::from(&canonical);
-                        if config.collect_diagnostics {
-                            cell.probes = probes;
-                            cell.hybrid = hybrid_choice(&domain, &cell.reservoir);
-                        }
-                        Ok(())
-                    })?;
-                }
-                PassSpec::Temporal {
-                    shift,
-                    mis,
-                    confidence_cap,
-                } => {
-                    let prev = previous.as_ref().map(|(gbuffer, reservoirs)| Previous {
-                        gbuffer,
-                        reservoirs,
-                    });
-                    per_pixel::<_, PipelineError>(&mut cells, width, |pixel, cell| {
-                        let (reservoir, shifts) = reuse::temporal(
-                            &input,
-                            prev.as_ref(),
-                            pixel,
-                            shift,
-                            mis.scheme(),
-                            confidence_cap,
-                        )
-                        .map_err(wrap(pixel))?;
-                        *cell = Cell {
-                            reservoir,
-                            shifts,
-                            ..Cell::default()
-                        };
-                        Ok(())
-                    })?;
-                }
-                PassSpec::Spatial {
-                    shift,
-                    mis,
-                    neighbours,
-                    confidence_cap,
-                } => {
-                    per_pixel::<_, PipelineError>(&mut cells, width, |pixel, cell| {
-                        let (reservoir, shifts) = reuse::spatial(
-                            &input,
-                            pixel,
-                            shift,
-                            mis.scheme(),
-                            neighbours,
-                            confidence_cap,
-                        )
-                        .map_err(wrap(pixel))?;
-                        *cell = Cell {
-                            reservoir,
-                            shifts,
-                            ..Cell::default()
-                        };
-                        Ok(())
-                    })?;
-                }
+            if let Some((image, nans)) = frame_state.step(frame, step)? {
+                frames.push(image);
+                nan_count += nans;
             }
-            for (r, c) in front.iter_mut().zip(&cells) {
-                *r = c.reservoir;
-            }
-            if let Some(counters) = &mut counters {
-                if pass.shift().is_some() {
-                    let shifts: Vec<ShiftCounts> = cells.iter().map(|c| c.shifts).collect();
-                    counters.add_shifts(reuse_pass, &shifts);
-                    reuse_pass += 1;
-                } else {
-                    let probes: Vec<_> = cells.iter().map(|c| (c.probes, c.hybrid)).collect();
-                    counters.add_candidates(&probes);
-                }
-            }
-            seconds[pass_index + 1] += start.elapsed().as_secs_f64();
+            *seconds += start.elapsed().as_secs_f64();
         }
-        let start = Instant::now();
-        let shade_pass = preset.passes.len() as u32;
-        let (image, nans) = shade(scene, &gbuffer, &front, shade_pass, seed);
-        nan_count += nans;
-        frames.push(image);
-        seconds[preset.passes.len() + 1] += start.elapsed().as_secs_f64();
-        let reuse_buffer = previous
-            .take()
-            .map(|(_, r)| r)
-            .unwrap_or_else(|| vec![PixelReservoir::empty(); n]);
-        previous = Some((gbuffer, std::mem::replace(&mut front, reuse_buffer)));
+        frame_state.rotation = frame_state.rotation.next(&plan);
+        frame_state.previous_gbuffer = frame_state.gbuffer.take();
     }
-
-    let labels = std::iter::once("gbuffer".to_string())
-        .chain(preset.passes.iter().map(PassSpec::label))
-        .chain(std::iter::once("shade".to_string()));
-    let timings = labels
+    let timings = plan
+        .steps
+        .iter()
         .zip(seconds)
-        .map(|(label, seconds)| PassTiming { label, seconds })
+        .map(|(step, seconds)| PassTiming {
+            label: step.label.clone(),
+            seconds,
+        })
         .collect();
+    let last = frame_state.rotation.buffer(Slot::Previous);
     Ok(Run {
         frames,
         timings,
-        diagnostics: counters.map(|c| c.finish()),
+        diagnostics: frame_state.counters.map(|c| c.finish()),
         nan_count,
-        reservoirs: previous.map(|(_, r)| r).unwrap_or_default(),
+        reservoirs: std::mem::take(&mut frame_state.reservoirs[last]),
     })
+}
+
+/// The CPU backend's buffers of a run: the plan's frame resources, and the diagnostics.
+struct Frame<'a> {
+    scene: &'a Scene,
+    config: &'a RunConfig,
+    width: u32,
+    /// The output of the running pass per pixel (its reservoir and diagnostics).
+    cells: Vec<Cell>,
+    reservoirs: [Vec<PixelReservoir>; 3],
+    rotation: Rotation,
+    gbuffer: Option<GBuffer>,
+    previous_gbuffer: Option<GBuffer>,
+    counters: Option<Counters>,
+}
+
+impl Frame<'_> {
+    /// Runs `step` of frame `frame`; shade returns the frame's image and its non-finite count.
+    fn step(&mut self, frame: u32, step: &Step) -> Result<Option<(Image, u64)>, PipelineError> {
+        let scene = self.scene;
+        if step.kernel == PassKernel::GBuffer {
+            self.gbuffer = Some(GBuffer::render(scene, frame));
+            return Ok(None);
+        }
+        let gbuffer = self
+            .gbuffer
+            .as_ref()
+            .ok_or_else(|| PipelineError::Config("a plan step before the G-buffer".into()))?;
+        // The reservoirs of the slot `step` binds in `role`; empty if it binds none.
+        let bound = |role| match step.resource(role) {
+            Some(Resource::Reservoirs(slot)) => &self.reservoirs[self.rotation.buffer(slot)][..],
+            _ => &[],
+        };
+        let seed = self.config.seed;
+        let Some(spec) = step.spec else {
+            let reservoirs = bound(Role::ReservoirsIn);
+            return Ok(Some(shade(scene, gbuffer, reservoirs, step.pass, seed)));
+        };
+        let input = PassInput {
+            scene,
+            gbuffer,
+            reservoirs: bound(Role::ReservoirsIn),
+            pass: step.pass,
+            seed,
+            collect_diagnostics: self.config.collect_diagnostics,
+        };
+        let previous = self.previous_gbuffer.as_ref().map(|gbuffer| Previous {
+            gbuffer,
+            reservoirs: bound(Role::PreviousReservoirs),
+        });
+        let cells = &mut self.cells;
+        run_pass(&input, previous.as_ref(), &spec, self.width, cells)
+            .map_err(|e| e.at(frame, step.pass as usize))?;
+        if let Some(Resource::Reservoirs(slot)) = step.resource(Role::ReservoirsOut) {
+            let out = &mut self.reservoirs[self.rotation.buffer(slot)];
+            for (r, c) in out.iter_mut().zip(cells.iter()) {
+                *r = c.reservoir;
+            }
+        }
+        if let Some(counters) = &mut self.counters {
+            if spec.shift().is_some() {
+                let shifts: Vec<ShiftCounts> = cells.iter().map(|c| c.shifts).collect();
+                // Candidates are pass 0 and every later pass reuses (Preset::validate).
+                counters.add_shifts(step.pass as usize - 1, &shifts);
+            } else {
+                let probes: Vec<_> = cells.iter().map(|c| (c.probes, c.hybrid)).collect();
+                counters.add_candidates(&probes);
+            }
+        }
+        Ok(None)
+    }
+}
+
+/// Why a pixel of a pass failed, before the frame and pass are known.
+enum PixelError {
+    Candidate(u32, InvalidCandidate),
+    Resample(u32, ResampleError),
+}
+
+impl PixelError {
+    fn at(self, frame: u32, pass: usize) -> PipelineError {
+        match self {
+            PixelError::Candidate(pixel, error) => PipelineError::Candidate {
+                frame,
+                pixel,
+                error,
+            },
+            PixelError::Resample(pixel, error) => PipelineError::Resample {
+                frame,
+                pass,
+                pixel,
+                error,
+            },
+        }
+    }
+}
+
+/// One preset pass over every pixel into `cells`.
+fn run_pass(
+    input: &PassInput,
+    previous: Option<&Previous>,
+    spec: &PassSpec,
+    width: u32,
+    cells: &mut [Cell],
+) -> Result<(), PixelError> {
+    let seed = input.seed;
+    let collect = input.collect_diagnostics;
+    match *spec {
+        PassSpec::Candidates {
+            bssrdf_samples,
+            shared_light,
+        } => per_pixel(cells, width, |pixel, cell| {
+            *cell = Cell::default();
+            let Some((domain, _)) = input.domain(pixel) else {
+                return Ok(());
+            };
+            let mut hits = Vec::new();
+            let (mut canonical, probes) =
+                candidates::generate(&domain, bssrdf_samples, shared_light, seed, &mut hits)
+                    .map_err(|e| PixelError::Candidate(pixel, e))?;
+            candidates::shadow_test(&domain, &mut canonical);
+            cell.reservoir = PixelReservoir::from(&canonical);
+            if collect {
+                cell.probes = probes;
+                cell.hybrid = hybrid_choice(&domain, &cell.reservoir);
+            }
+            Ok(())
+        }),
+        PassSpec::Temporal { .. } | PassSpec::Spatial { .. } => {
+            per_pixel(cells, width, |pixel, cell| {
+                if let Some(result) = reuse::pass(input, previous, pixel, spec) {
+                    let (reservoir, shifts) = result.map_err(|e| PixelError::Resample(pixel, e))?;
+                    *cell = Cell {
+                        reservoir,
+                        shifts,
+                        ..Cell::default()
+                    };
+                }
+                Ok(())
+            })
+        }
+    }
 }
 
 /// Which shift the hybrid criterion picks for the canonical sample [001 Fig. 4].

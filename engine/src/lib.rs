@@ -1,6 +1,7 @@
-//! `engine`: the reshift engine (DESIGN §6). This crate holds the ReSTIR SSS frame pipeline
-//! as data ([`Preset`], [`PassSpec`]) and its deterministic CPU backend ([`run`]), the
-//! path-traced baseline behind the same interface ([`run_pt`]), diagnostics and images.
+//! `engine`: the reshift engine (DESIGN §6). This crate runs the ReSTIR SSS frame pipeline
+//! described as data ([`Preset`], [`PassSpec`] of `shifts::preset`) on its deterministic CPU
+//! backend ([`run`]), the path-traced baseline behind the same interface ([`run_pt`]),
+//! diagnostics and images.
 //!
 //! Per frame: G-buffer → candidates [001 §3.1] → temporal reuse → spatial pass(es) → shade
 //! `f(Y)·W`. Every random number comes from `StreamKey { pixel, frame, pass, purpose }` with the
@@ -8,11 +9,22 @@
 
 pub mod backend;
 pub mod candidates;
+/// What the kernels (`engine/glsl/`) and the scene twins (`sss/glsl/`) share with the host: the
+/// device buffers' std430 structs, push constants, kinds, limits and diag codes
+/// (`twin::contract!`; rendered to `contract/engine.glsl` and one header per push-constant block
+/// by `build.rs`).
+pub mod contract;
 mod cpu;
 pub mod diagnostics;
+pub mod hash;
 pub mod image;
-pub mod layout;
-pub mod preset;
+pub mod plan;
+/// `purpose` tags of the pipeline's random streams. Every random number of a pass comes from
+/// `StreamKey { pixel, frame, pass, purpose }.stream(seed)`, with `pixel` the receiving pixel's
+/// linear index, `pass` the pass's index in the preset (0 = candidates) and `purpose` one of
+/// these (`PURPOSE_<NAME>` in GLSL). They stay below 2³⁰: the `shifts` crate keys its own
+/// streams (probabilistic inversion's γ, the deferred uniform pick) with the top two bits set,
+/// and the path tracer uses `sss::integrator::pt::PURPOSE_PT`.
 pub mod purpose;
 pub mod random_walk_method;
 pub mod reuse;
@@ -30,8 +42,9 @@ use sss::scene::{FRAMES, GBuffer, Scene};
 pub use backend::Backend;
 pub use diagnostics::Diagnostics;
 pub use image::Image;
-pub use layout::PixelReservoir;
-pub use preset::{MisKind, PassSpec, Preset, PresetError, ShiftKind};
+pub use restir::mis::MisKind;
+pub use shifts::preset::{PassSpec, Preset, PresetError};
+pub use shifts::{PixelReservoir, ShiftKind};
 
 /// What a run does besides the preset: the replica seed, the number of frames of the camera
 /// trajectory, and whether diagnostics are collected (they re-apply shifts and cost time).

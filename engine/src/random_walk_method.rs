@@ -27,10 +27,8 @@ use sss::scene::{GBuffer, Light, Scene};
 use crate::PipelineError;
 use crate::image::Image;
 
-/// `purpose` of the walks' streams (ASCII "RW" + 1).
-pub const PURPOSE_WALK: u32 = 0x5257_0001;
-/// `purpose` of the light-selection numbers of [`SceneLighting`].
-pub const PURPOSE_WALK_LIGHT: u32 = 0x5257_0002;
+/// `purpose` of the walks' streams and of the light-selection numbers of [`SceneLighting`].
+pub use crate::purpose::{WALK as PURPOSE_WALK, WALK_LIGHT as PURPOSE_WALK_LIGHT};
 
 /// The scene's lights as seen from boundary points where a walk leaves, with visibility.
 /// [`Lights::sample`](sss::scene::Lights::sample) takes three numbers and the walk supplies two:

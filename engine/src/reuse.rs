@@ -13,9 +13,10 @@ use restir::shift::{Domain, Shift};
 use shifts::{SssDomain, SssSample, resolve_deferred_index};
 use sss::scene::{GBuffer, GPixel, Scene};
 
-use crate::layout::PixelReservoir;
-use crate::preset::ShiftKind;
 use crate::purpose;
+use shifts::PixelReservoir;
+use shifts::ShiftKind;
+use shifts::preset::PassSpec;
 
 /// Reprojection checks of temporal reuse ([`GBuffer::reproject`]).
 pub use sss::scene::{
@@ -254,6 +255,37 @@ pub fn sample_disk(radius: f32, u_radius: f32, u_angle: f32) -> Vec2 {
     r * Vec2::new(phi.cos(), phi.sin())
 }
 
+/// The reuse pass `spec` at `pixel`: [`temporal`] or [`spatial`] with the pass's shift, MIS
+/// scheme, neighbours and cap; `None` for candidate generation, which is not a reuse pass.
+pub fn pass(
+    input: &PassInput,
+    previous: Option<&Previous>,
+    pixel: u32,
+    spec: &PassSpec,
+) -> Option<Result<(PixelReservoir, ShiftCounts), ResampleError>> {
+    Some(match *spec {
+        PassSpec::Candidates { .. } => return None,
+        PassSpec::Temporal {
+            shift,
+            mis,
+            confidence_cap,
+        } => temporal(input, previous, pixel, shift, mis.scheme(), confidence_cap),
+        PassSpec::Spatial {
+            shift,
+            mis,
+            neighbours,
+            confidence_cap,
+        } => spatial(
+            input,
+            pixel,
+            shift,
+            mis.scheme(),
+            neighbours,
+            confidence_cap,
+        ),
+    })
+}
+
 /// The shaded value `f(Y) · W` of a final reservoir (no ray: visibility is already in `W`).
 pub fn shade(domain: &SssDomain, reservoir: &PixelReservoir) -> Vec3 {
     let r = reservoir.get();
@@ -264,8 +296,7 @@ pub fn shade(domain: &SssDomain, reservoir: &PixelReservoir) -> Vec3 {
 mod tests {
     use super::*;
     use crate::candidates;
-    use crate::preset::MisKind;
-    use shifts::IndexPolicy;
+    use restir::mis::MisKind;
 
     fn scene(name: &str, size: u32) -> Scene {
         let mut scene = Scene::builtin(name).unwrap();
@@ -313,7 +344,7 @@ mod tests {
             seed: 4,
             collect_diagnostics: false,
         };
-        let shift = ShiftKind::InvertingReconnection(IndexPolicy::Deferred);
+        let shift = ShiftKind::InvertingDeferred;
         let (mut moved, mut unknown, mut raw_unknown) = (0, 0, 0);
         for pixel in 0..reservoirs.len() as u32 {
             let Some((receiver, _)) = input.domain(pixel) else {
@@ -329,21 +360,21 @@ mod tests {
             )
             .unwrap();
             let Some(y) = out.get().y else { continue };
-            if out.sample == reservoirs[pixel as usize].sample {
+            if out.y == reservoirs[pixel as usize].y {
                 continue;
             }
             moved += 1;
             unknown += y.index().is_none() as u32;
             let src = reservoirs.iter().position(|r| {
                 r.has_sample != 0
-                    && r.sample.prim() == y.prim()
-                    && r.sample.bary() == y.bary()
-                    && r.sample.x3() == y.x3()
+                    && r.y.prim() == y.prim()
+                    && r.y.bary() == y.bary()
+                    && r.y.x3() == y.x3()
             });
             let src = src.unwrap() as u32;
             let (src_domain, _) = input.domain(src).unwrap();
             let raw = shift.with_shift(receiver.material(), |s| {
-                s.shift(&reservoirs[src as usize].sample, &src_domain, &receiver)
+                s.shift(&reservoirs[src as usize].y, &src_domain, &receiver)
                     .unwrap()
             });
             raw_unknown += raw.y.index().is_none() as u32;

@@ -17,8 +17,8 @@
 //! flips it allows.
 
 use bytemuck::{Pod, Zeroable};
+use engine::PixelReservoir;
 use engine::candidates;
-use engine::layout::PixelReservoir;
 use engine::purpose;
 use engine::vulkan::testing::{Tally, kernel_or_skip, rel_error, scaled_error};
 use engine::vulkan::{
@@ -547,7 +547,7 @@ fn compare_pass(
     let mut tally = Tally::new(&PASS_BOUNDS);
     for ((want, want_diag), (got, got_diag)) in cpu.iter().zip(reservoirs.iter().zip(diag)) {
         tally.compared += 1;
-        let (w, g) = (&want.sample, &got.sample);
+        let (w, g) = (&want.y, &got.y);
         let key = |r: &PixelReservoir, s: &SssSample| {
             (
                 r.has_sample,

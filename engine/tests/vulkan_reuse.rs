@@ -6,20 +6,22 @@
 //! `RESHIFT_REQUIRE_VULKAN=1`, which makes it fail.
 
 use bytemuck::{Pod, Zeroable};
+use engine::PixelReservoir;
 use engine::candidates;
-use engine::layout::PixelReservoir;
-use engine::preset::{MisKind, PassSpec, Preset, ShiftKind};
 use engine::reuse::{self, PassInput, Previous, ShiftCounts};
 use engine::vulkan::testing::{Tally, kernel_or_skip, rel_error, scaled_error};
 use engine::vulkan::{
     Buffer, Context, FrameParams, GpuPixel, GpuScene, Kernel, PassParams, SPATIAL, Shader,
     TEMPORAL, groups_for,
 };
-use restir::mis::MAX_DOMAINS;
+use restir::mis::{MAX_DOMAINS, MisKind};
+use restir::resample::ResampleCode;
 use restir::reservoir::{InvalidCandidate, Ris};
 use restir::rng::StreamKey;
-use restir::shift::{Domain, Fail};
-use shifts::{IndexPolicy, SssSample};
+use restir::shift::Domain;
+use shifts::ShiftKind;
+use shifts::SssSample;
+use shifts::preset::{PassSpec, Preset};
 use sss::scene::{GBuffer, Scene};
 
 /// `parity_reuse.glsl`: bindings 0–10 scene and pass inputs of the shift modes, 11 cases,
@@ -243,11 +245,12 @@ fn ris_cases() -> Vec<RisCase> {
 /// The code `reservoir.glsl` writes for an `InvalidCandidate`.
 fn invalid_code(error: InvalidCandidate) -> u32 {
     match error {
-        InvalidCandidate::Weight(_) => 1,
-        InvalidCandidate::Target(_) => 2,
-        InvalidCandidate::Confidence(_) => 3,
-        InvalidCandidate::Ucw(_) => 4,
+        InvalidCandidate::Weight(_) => ResampleCode::InvalidWeight,
+        InvalidCandidate::Target(_) => ResampleCode::InvalidTarget,
+        InvalidCandidate::Confidence(_) => ResampleCode::InvalidConfidence,
+        InvalidCandidate::Ucw(_) => ResampleCode::InvalidUcw,
     }
+    .code()
 }
 
 /// The CPU's reservoir and error code for `case` (the driver stops at the first error).
@@ -292,7 +295,7 @@ fn reservoir_streaming_is_bit_identical() {
         let (want, code) = cpu_ris(case);
         assert_eq!(
             (bytemuck::bytes_of(&got.reservoir), got.error, got.selected),
-            (bytemuck::bytes_of(&want), code, want.sample.prim()),
+            (bytemuck::bytes_of(&want), code, want.y.prim()),
             "case {k}: {case:?}"
         );
         errors += usize::from(code != 0);
@@ -302,7 +305,7 @@ fn reservoir_streaming_is_bit_identical() {
                 u: cases[(k + 1) % cases.len()].u,
                 ..*case
             };
-            control_equal += usize::from(cpu_ris(&shifted).0.sample == got.reservoir.sample);
+            control_equal += usize::from(cpu_ris(&shifted).0.y == got.reservoir.y);
         }
     }
     eprintln!(
@@ -423,17 +426,6 @@ struct ShiftResult {
     pad: u32,
 }
 
-/// `shift.glsl`'s Fail codes.
-fn fail_code(fail: Fail) -> u32 {
-    match fail {
-        Fail::NotInvertible => 1,
-        Fail::OutOfSupport => 2,
-        Fail::Occluded => 3,
-        Fail::Degenerate => 4,
-        Fail::Rejected => 5,
-    }
-}
-
 /// Pairs (src, dst) of translucent pixels, src holding a sample, dst within ±6 px (drawn from a
 /// fixed stream), for every shift kind.
 fn shift_cases(input: &PassInput, count: usize) -> Vec<ShiftCase> {
@@ -477,7 +469,7 @@ fn shift_cases(input: &PassInput, count: usize) -> Vec<ShiftCase> {
 fn cpu_shift(input: &PassInput, case: &ShiftCase) -> ShiftResult {
     let (src, _) = input.domain(case.src).unwrap();
     let (dst, _) = input.domain(case.dst).unwrap();
-    let x = input.reservoirs[case.src as usize].sample;
+    let x = input.reservoirs[case.src as usize].y;
     ShiftKind::ALL[case.kind as usize].with_shift(dst.material(), |shift| {
         match shift.shift(&x, &src, &dst) {
             Ok(s) => ShiftResult {
@@ -490,7 +482,7 @@ fn cpu_shift(input: &PassInput, case: &ShiftCase) -> ShiftResult {
             Err(f) => ShiftResult {
                 y: SssSample::zeroed(),
                 jacobian: 0.0,
-                fail: fail_code(f),
+                fail: f.code(),
                 target: 0.0,
                 pad: 0,
             },
@@ -638,7 +630,7 @@ fn every_shift_kind_matches_the_cpu() {
             .filter(|&i| {
                 matches!(
                     ShiftKind::ALL[cases[i].kind as usize],
-                    ShiftKind::InvertingReconnection(_)
+                    ShiftKind::InvertingExact | ShiftKind::InvertingDeferred
                 ) && cpu[i].fail == 0
             })
             .collect();
@@ -706,28 +698,9 @@ fn cpu_reuse(
 ) -> Vec<(PixelReservoir, [u32; 4])> {
     (0..input.gbuffer.pixels.len() as u32)
         .map(|pixel| {
-            let (r, c): (PixelReservoir, ShiftCounts) = match *spec {
-                PassSpec::Temporal {
-                    shift,
-                    mis,
-                    confidence_cap,
-                } => reuse::temporal(input, previous, pixel, shift, mis.scheme(), confidence_cap),
-                PassSpec::Spatial {
-                    shift,
-                    mis,
-                    neighbours,
-                    confidence_cap,
-                } => reuse::spatial(
-                    input,
-                    pixel,
-                    shift,
-                    mis.scheme(),
-                    neighbours,
-                    confidence_cap,
-                ),
-                PassSpec::Candidates { .. } => unreachable!("only reuse passes are compared"),
-            }
-            .unwrap();
+            let (r, c): (PixelReservoir, ShiftCounts) = reuse::pass(input, previous, pixel, spec)
+                .expect("only reuse passes are compared")
+                .unwrap();
             (r, [c.shifted, c.failed, c.improved, 0])
         })
         .collect()
@@ -765,12 +738,8 @@ fn compare_pass(
             continue;
         }
         tally.compared += 1;
-        let key = |r: &PixelReservoir| {
-            (
-                r.has_sample,
-                (r.has_sample != 0).then(|| sample_key(&r.sample)),
-            )
-        };
+        let key =
+            |r: &PixelReservoir| (r.has_sample, (r.has_sample != 0).then(|| sample_key(&r.y)));
         if key(want) != key(got) || want_diag != got_diag {
             tally.mismatched += 1;
             continue;
@@ -778,7 +747,7 @@ fn compare_pass(
         let mut beyond = tally.float("confidence", rel_error(got.confidence, want.confidence));
         beyond |= tally.float("ucw", rel_error(got.ucw, want.ucw));
         if want.has_sample != 0 {
-            beyond |= compare_sample_floats(&mut tally, &got.sample, &want.sample);
+            beyond |= compare_sample_floats(&mut tally, &got.y, &want.y);
         }
         tally.beyond_bounds += usize::from(beyond);
     }
@@ -804,14 +773,15 @@ fn reuse_passes_match_the_cpu() {
     let Some((spatial, mut context, temporal)) = opened else {
         return;
     };
-    let index = |kind: ShiftKind| ShiftKind::ALL.iter().position(|&k| k == kind).unwrap() as u32;
     // The wrong shift index of the control: where the camera barely moves between the frames
     // (y1 ≈ x1), delayed reconnection, its negative controls, the hybrid and reconnection all
     // return nearly the same sample (J ≈ 1), so a kind that re-draws the random numbers
     // (inversion) stands in for them, and DelayedWithoutJacobian for the inverting passes.
     let wrong_shift = |spec: &PassSpec| match spec.shift() {
-        Some(ShiftKind::InvertingReconnection(_)) => index(ShiftKind::DelayedWithoutJacobian),
-        _ => index(ShiftKind::InvertingReconnection(IndexPolicy::Deferred)),
+        Some(ShiftKind::InvertingExact | ShiftKind::InvertingDeferred) => {
+            ShiftKind::DelayedWithoutJacobian.code()
+        }
+        _ => ShiftKind::InvertingDeferred.code(),
     };
     for name in SCENES {
         let scene = scene(name);
@@ -868,7 +838,7 @@ fn reuse_passes_match_the_cpu() {
             let moved = cpu
                 .iter()
                 .zip(&r1)
-                .filter(|((r, _), c)| r.has_sample != 0 && r.sample != c.sample)
+                .filter(|((r, _), c)| r.has_sample != 0 && r.y != c.y)
                 .count();
             let shifted: u32 = cpu.iter().map(|(_, d)| d[0]).sum();
             eprintln!(

@@ -5,12 +5,11 @@
 //! Without Vulkan each test prints why it is skipped and passes, unless `RESHIFT_REQUIRE_VULKAN=1`,
 //! which makes it fail.
 
-use engine::layout::PixelReservoir;
+use engine::PixelReservoir;
+use engine::contract::KEPT_HITS;
 use engine::reuse::{self, PassInput};
 use engine::vulkan::testing::{UploadedFrame, kernel_or_skip};
-use engine::vulkan::{
-    Buffer, FrameInput, PT, PT_MAX_HITS, SHADE, VulkanError, render_pt_hits, shade,
-};
+use engine::vulkan::{Buffer, FrameInput, PT, SHADE, VulkanError, render_pt_hits, shade};
 use engine::{candidates, purpose};
 use glam::{DVec3, Vec3};
 use restir::rng::StreamKey;
@@ -172,7 +171,7 @@ fn compare(gpu: &[Vec3], cpu: &[Vec3], tolerance: f64) -> PixelErrors {
 }
 
 /// Largest number of probe hits the CPU path tracer sees over `spp` samples of every pixel (the
-/// hit list `pt::estimate` leaves behind is its probe's). The GPU keeps `PT_MAX_HITS` hits per
+/// hit list `pt::estimate` leaves behind is its probe's). The GPU keeps `KEPT_HITS` hits per
 /// probe, so parity is only meaningful while this stays within the cap.
 fn max_probe_hits(
     scene: &Scene,
@@ -294,7 +293,7 @@ const PT_RATIO: f64 = 1e-3;
 /// `method_pt` at 4 spp on the CPU's G-buffer reproduces `pt::render` with the same seed on
 /// `bumpy`, `materials` and `half-shadow` (32×32, frame 3), for both hit policies:
 /// relMSE(GPU, CPU) ≤ 1e-3 · relMSE(CPU seed 12, CPU seed 11), no sample left out, and every CPU
-/// probe has at most `PT_MAX_HITS` hits (else the GPU's capped hit list could not match).
+/// probe has at most `KEPT_HITS` hits (else the GPU's capped hit list could not match).
 /// Negative control: the GPU image of seed 12 against the CPU image of seed 11 fails the same
 /// ratio. A G-buffer smaller than the frame is refused.
 #[test]
@@ -328,8 +327,8 @@ fn pt_method_matches_the_cpu() {
             };
             let most = max_probe_hits(&scene, &gbuffer, &settings, SEED, PT_SPP);
             assert!(
-                most <= PT_MAX_HITS,
-                "{name} {hits:?}: a CPU probe has {most} hits > {PT_MAX_HITS}"
+                most <= KEPT_HITS,
+                "{name} {hits:?}: a CPU probe has {most} hits > {KEPT_HITS}"
             );
             let cpu_image = |seed| -> Vec<Vec3> {
                 let image = pt::render(&scene, &gbuffer, &settings, seed, 0, PT_SPP);

@@ -22,8 +22,8 @@ use sss::integrator::pt::{self, PtSettings};
 use sss::scene::{GBuffer, Scene};
 
 use crate::regions::{Region, Regions};
-use engine::preset::Preset;
 use engine::{Backend, PipelineError, RunConfig};
+use shifts::preset::Preset;
 
 /// Rec. 709 luminance of linear RGB, in `f64` (statistics accumulate in double precision).
 pub fn luminance(rgb: Vec3) -> f64 {

@@ -279,7 +279,10 @@ mod tests {
             spp_per_batch: 16,
             batches: 32,
         };
-        assert_eq!(key.file_name(), "ref-bumpy-64x48-f15-32x16spp.rsref");
+        assert_eq!(
+            key.file_name(),
+            format!("ref-v{MODEL_VERSION}-bumpy-64x48-f15-32x16spp.rsref")
+        );
         assert_eq!(key.spp(), 512);
     }
 

@@ -7,6 +7,7 @@
 //! `random-walk:2` (the last frame). On a mismatch the test prints every current hash, so the
 //! table below can be updated in one edit.
 
+use engine::hash::Fnv1a;
 use engine::{Preset, RunConfig};
 use lab::methods::Method;
 use sss::scene::{FRAMES, Scene};
@@ -32,22 +33,12 @@ const PINNED: &[(&str, &str, u64)] = &[
     ("half-shadow", "random-walk:2", 0x9bdf417661ddd47f),
 ];
 
-/// 64-bit FNV-1a.
-fn fnv1a(hash: u64, bytes: &[u8]) -> u64 {
-    bytes.iter().fold(hash, |h, &b| {
-        (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
-    })
-}
-
-const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
-
-fn hash_pixels(mut hash: u64, pixels: &[glam::Vec3]) -> u64 {
+fn hash_pixels(hash: &mut Fnv1a, pixels: &[glam::Vec3]) {
     for p in pixels {
         for c in p.to_array() {
-            hash = fnv1a(hash, &c.to_bits().to_le_bytes());
+            hash.write(&c.to_bits().to_le_bytes());
         }
     }
-    hash
 }
 
 fn scene(name: &str) -> Scene {
@@ -69,18 +60,23 @@ fn current_hashes() -> Vec<(String, String, u64)> {
                 collect_diagnostics: false,
             };
             let run = engine::run(&scene, &preset, &config).expect("preset runs");
-            let mut hash = FNV_OFFSET;
+            let mut hash = Fnv1a::new();
             for frame in &run.frames {
-                hash = hash_pixels(hash, &frame.pixels);
+                hash_pixels(&mut hash, &frame.pixels);
             }
-            hash = fnv1a(hash, bytemuck::cast_slice(&run.reservoirs));
-            out.push((scene_name.into(), format!("restir:{}", preset.name), hash));
+            hash.write(bytemuck::cast_slice(&run.reservoirs));
+            out.push((
+                scene_name.into(),
+                format!("restir:{}", preset.name),
+                hash.finish(),
+            ));
         }
         for spec in ["pt:2", "random-walk:2"] {
             let method = Method::parse(spec).expect("registered method");
             let rendered = method.render(&scene, FRAMES, SEED).expect("method renders");
-            let hash = hash_pixels(FNV_OFFSET, &rendered.image.pixels);
-            out.push((scene_name.into(), spec.into(), hash));
+            let mut hash = Fnv1a::new();
+            hash_pixels(&mut hash, &rendered.image.pixels);
+            out.push((scene_name.into(), spec.into(), hash.finish()));
         }
     }
     out

@@ -5,14 +5,8 @@
 #ifndef RESTIR_MIS_GLSL
 #define RESTIR_MIS_GLSL
 
-// restir::mis::MAX_DOMAINS.
-const uint MAX_DOMAINS = 16u;
-
-// engine::preset::MisKind, in declaration order.
-const uint MIS_GBH = 0u;
-const uint MIS_PAIRWISE = 1u;
-const uint MIS_DEFENSIVE_PAIRWISE = 2u;
-const uint MIS_CONFIDENCE_ONLY = 3u;
+// MAX_DOMAINS and the MisKind codes MIS_<KIND> with their list MIS_KINDS(X).
+#include "contract/restir.glsl"
 
 // `num / den`, 0 when `den` is not positive.
 float mis_ratio(float num, float den) {
@@ -93,33 +87,45 @@ float mis_confidence_only_weight(uint i, float targets[MAX_DOMAINS],
     return mis_ratio(confidences[i], sum);
 }
 
-// MisScheme::needs_all_targets of scheme `kind`.
-bool mis_needs_all_targets(uint kind, uint i) {
-    if (kind == MIS_GBH) {
-        return true;
-    }
-    if (kind == MIS_PAIRWISE || kind == MIS_DEFENSIVE_PAIRWISE) {
-        return i == 0u;
-    }
+// MisScheme::needs_all_targets of each scheme: GBH reads every target, the pairwise schemes
+// every target only for the canonical sample, 1/M none.
+bool mis_gbh_needs_all_targets(uint i) {
+    return true;
+}
+
+bool mis_pairwise_needs_all_targets(uint i) {
+    return i == 0u;
+}
+
+bool mis_defensive_pairwise_needs_all_targets(uint i) {
+    return i == 0u;
+}
+
+bool mis_confidence_only_needs_all_targets(uint i) {
     return false;
 }
 
-// MisScheme::weight of scheme `kind` (a MisKind index); 0 for an unknown kind (the host
-// validates the kind before dispatching).
+// MisScheme::needs_all_targets of scheme `kind` (a MisKind code).
+bool mis_needs_all_targets(uint kind, uint i) {
+#define MIS_NEEDS_ALL_TARGETS(KIND, stem) \
+    if (kind == KIND) { \
+        return mis_##stem##_needs_all_targets(i); \
+    }
+    MIS_KINDS(MIS_NEEDS_ALL_TARGETS)
+#undef MIS_NEEDS_ALL_TARGETS
+    return false;
+}
+
+// MisScheme::weight of scheme `kind` (a MisKind code; the host sends no other, see
+// PassParams::new).
 float mis_weight(uint kind, uint i, float targets[MAX_DOMAINS], float confidences[MAX_DOMAINS],
                  uint n) {
-    if (kind == MIS_GBH) {
-        return mis_gbh_weight(i, targets, confidences, n);
+#define MIS_WEIGHT(KIND, stem) \
+    if (kind == KIND) { \
+        return mis_##stem##_weight(i, targets, confidences, n); \
     }
-    if (kind == MIS_PAIRWISE) {
-        return mis_pairwise_weight(i, targets, confidences, n);
-    }
-    if (kind == MIS_DEFENSIVE_PAIRWISE) {
-        return mis_defensive_pairwise_weight(i, targets, confidences, n);
-    }
-    if (kind == MIS_CONFIDENCE_ONLY) {
-        return mis_confidence_only_weight(i, targets, confidences, n);
-    }
+    MIS_KINDS(MIS_WEIGHT)
+#undef MIS_WEIGHT
     return 0.0;
 }
 

@@ -4,10 +4,9 @@
 //
 // The domains and reservoirs of one step are shader-private globals (index 0 = the receiver,
 // 1..n-1 the neighbours) so that no large array is copied per call. Errors (ResampleError) are
-// one uint, 0 = none: the low byte is the kind, bits 8..15 the domain index (`source`; the
-// domain count for RESAMPLE_TOO_MANY_DOMAINS):
-//   1..4 Candidate { Weight, Target, Confidence, Ucw }, 5 TooManyDomains, 6 BadPdf, 7 BadJacobian
-// (engine::vulkan::decode_error reads them back).
+// one uint, 0 = none: the low byte is the kind (a ResampleCode, RESAMPLE_* of the contract),
+// bits 8..15 the domain index (`source`; the domain count for RESAMPLE_TOO_MANY_DOMAINS);
+// restir::resample::ResampleError::from_gpu reads them back.
 // Include after `#define SCENE_BINDING ...`; the including shader enables
 // GL_EXT_shader_explicit_arithmetic_types_int64.
 
@@ -17,10 +16,6 @@
 #include "mis.glsl"
 #include "reservoir.glsl"
 #include "shift.glsl"
-
-const uint RESAMPLE_TOO_MANY_DOMAINS = 5u;
-const uint RESAMPLE_BAD_PDF = 6u;
-const uint RESAMPLE_BAD_JACOBIAN = 7u;
 
 // The inputs of one resampling step.
 SssDomain resample_domains[MAX_DOMAINS];

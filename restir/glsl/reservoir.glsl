@@ -10,12 +10,8 @@
 #define RESTIR_RESERVOIR_GLSL
 
 #include "sample.glsl"
-
-// `InvalidCandidate` variants (restir::reservoir::InvalidCandidate), as low-byte error codes.
-const uint RESAMPLE_INVALID_WEIGHT = 1u;
-const uint RESAMPLE_INVALID_TARGET = 2u;
-const uint RESAMPLE_INVALID_CONFIDENCE = 3u;
-const uint RESAMPLE_INVALID_UCW = 4u;
+// The error codes RESAMPLE_INVALID_* (InvalidCandidate) and RESAMPLE_* (ResampleError).
+#include "contract/restir.glsl"
 
 // `f32::is_finite`.
 bool reservoir_is_finite(float x) {

@@ -6,6 +6,10 @@
 //! conformance kit that tells a user whether their shift is correct.
 
 pub mod check;
+/// What the GLSL twins (`restir/glsl/`) share with this crate: [`contract::MAX_DOMAINS`], the MIS
+/// kinds, the shift failures and the resampling error codes (`twin::contract!`; rendered to
+/// `contract/restir.glsl` by `engine/build.rs`).
+pub mod contract;
 pub mod mis;
 pub mod resample;
 pub mod reservoir;

@@ -7,9 +7,7 @@
 
 use std::fmt;
 
-/// Most domains (receiver + neighbours) one resampling step combines; the weight buffers are
-/// stack arrays of this length.
-pub const MAX_DOMAINS: usize = 16;
+pub use crate::contract::{MAX_DOMAINS, MisKind};
 
 /// What a scheme promises about the estimate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -43,6 +41,18 @@ pub trait MisScheme: Sync {
     fn needs_all_targets(&self, i: usize) -> bool;
     /// `m_i(y)`; `targets.len() == confidences.len()` = number of domains. Finite, in [0, 1].
     fn weight(&self, i: usize, targets: &[f32], confidences: &[f32]) -> f32;
+}
+
+impl MisKind {
+    /// The scheme itself.
+    pub fn scheme(&self) -> &'static dyn MisScheme {
+        match self {
+            MisKind::Gbh => &Gbh,
+            MisKind::Pairwise => &Pairwise,
+            MisKind::DefensivePairwise => &DefensivePairwise,
+            MisKind::ConfidenceOnly => &ConfidenceOnly,
+        }
+    }
 }
 
 /// `num / den`, 0 when `den` is not positive (all domains have `p̂_{←j}(y) = 0`).

@@ -4,6 +4,7 @@
 
 use std::fmt;
 
+pub use crate::contract::ResampleCode;
 use crate::mis::{MAX_DOMAINS, MisScheme};
 use crate::reservoir::{InvalidCandidate, Reservoir, Ris};
 use crate::rng::Stream;
@@ -38,6 +39,30 @@ pub enum ResampleError {
         source: usize,
         error: InvalidCandidate,
     },
+}
+
+impl ResampleError {
+    /// The error a GPU kernel reported as `word` (`restir/glsl/resample.glsl`): the
+    /// [`ResampleCode`] in the low byte, the domain index `source` in bits 8–15 (the domain
+    /// count for `TooManyDomains`). The offending value is not carried and reads as NaN.
+    /// `None` for 0 (no error) or an unknown code.
+    pub fn from_gpu(word: u32) -> Option<ResampleError> {
+        let source = ((word >> 8) & 0xff) as usize;
+        let nan = f32::NAN;
+        let candidate = |error| ResampleError::Candidate { source, error };
+        Some(match ResampleCode::from_code(word & 0xff)? {
+            ResampleCode::InvalidWeight => candidate(InvalidCandidate::Weight(nan)),
+            ResampleCode::InvalidTarget => candidate(InvalidCandidate::Target(nan)),
+            ResampleCode::InvalidConfidence => candidate(InvalidCandidate::Confidence(nan)),
+            ResampleCode::InvalidUcw => candidate(InvalidCandidate::Ucw(nan)),
+            ResampleCode::TooManyDomains => ResampleError::TooManyDomains(source),
+            ResampleCode::BadPdf => ResampleError::BadPdf(nan),
+            ResampleCode::BadJacobian => ResampleError::BadJacobian {
+                source,
+                jacobian: nan,
+            },
+        })
+    }
 }
 
 impl fmt::Display for ResampleError {
@@ -213,6 +238,34 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn gpu_error_words_decode_to_the_errors() {
+        assert!(matches!(
+            ResampleError::from_gpu(0x0204),
+            Some(ResampleError::Candidate {
+                source: 2,
+                error: InvalidCandidate::Ucw(_)
+            })
+        ));
+        assert!(matches!(
+            ResampleError::from_gpu(0x0107),
+            Some(ResampleError::BadJacobian { source: 1, .. })
+        ));
+        assert!(matches!(
+            ResampleError::from_gpu(6),
+            Some(ResampleError::BadPdf(_))
+        ));
+        assert!(matches!(
+            ResampleError::from_gpu(2),
+            Some(ResampleError::Candidate {
+                source: 0,
+                error: InvalidCandidate::Target(_)
+            })
+        ));
+        assert_eq!(ResampleError::from_gpu(0), None);
+        assert_eq!(ResampleError::from_gpu(8), None);
+    }
     use crate::mis::{ConfidenceOnly, DefensivePairwise, Gbh, Pairwise};
     use crate::rng::StreamKey;
     use crate::shift::{Fail, Shifted};

@@ -12,20 +12,7 @@ pub trait Domain: Sync {
     fn target(&self, x: &Self::Sample) -> f32;
 }
 
-/// Why a shift produced no sample. Every failure gives the shifted candidate weight 0.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Fail {
-    /// The inverse map has no solution for this point.
-    NotInvertible,
-    /// The shifted point lies outside the destination domain.
-    OutOfSupport,
-    /// A visibility test of the shift failed.
-    Occluded,
-    /// The Jacobian is 0 or not finite (a singular point of the map).
-    Degenerate,
-    /// A rule of the shift rejects the pair (it must reject in both directions).
-    Rejected,
-}
+pub use crate::contract::Fail;
 
 /// A shifted sample `y = T(x)` and `J = |T'(x)|` in the measure of `p̂`.
 #[derive(Clone, Copy, Debug, PartialEq)]

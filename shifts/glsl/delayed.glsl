@@ -1,6 +1,6 @@
 // Delayed reconnection [001 §3.2.2]: random replay of the stored BSSRDF IS draw at y1, then
-// reconnection to the kept x3: the twin of shifts/src/delayed.rs. Part of shift.glsl (include
-// that file, not this one).
+// reconnection to the kept x3: the twin of shifts/src/delayed.rs. Included by shift.glsl
+// (include that file, not this one).
 
 #ifndef SHIFTS_DELAYED_GLSL
 #define SHIFTS_DELAYED_GLSL
@@ -58,7 +58,7 @@ uint delayed_replay(SssSample x, SssDomain src, SssDomain dst, uint checks, out 
     bssrdf_probe_trace(probe, dst.x1);
     float u_pick = 0.0;
     if (x.index == INDEX_UNKNOWN) {
-        Stream pick = domain_shift_stream(dst, DOMAIN_PURPOSE_PICK, src);
+        Stream pick = domain_shift_stream(dst, PURPOSE_PICK, src);
         u_pick = stream_next_f32(pick);
     }
     uint rank;
@@ -85,6 +85,12 @@ uint delayed_replay(SssSample x, SssDomain src, SssDomain dst, uint checks, out 
         return SHIFT_FAIL_OCCLUDED;
     }
     return SHIFT_OK;
+}
+
+// DelayedReconnection::shift: the replay with every check (run by shift_shift).
+void delayed_shift(ShiftSpec spec, SssSample x, SssDomain src, SssDomain dst,
+                   inout ShiftPlan plan) {
+    plan.replay = DELAYED_CHECKS_ALL;
 }
 
 #endif

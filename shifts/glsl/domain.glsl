@@ -13,13 +13,8 @@
 #include "sample.glsl"
 #include "bssrdf.glsl"
 
-// Offset of shadow-segment ends from x2 (along its geometric normal) and from x3.
-const float DOMAIN_SHADOW_EPSILON = 1e-4;
-// Stream purpose tags of the shifts (top two bits of StreamKey::purpose; the low 30 bits hold
-// the partner pixel): probabilistic inversion's gamma and the uniform hit pick.
-const uint DOMAIN_PURPOSE_INVERSION = 2u << 30;
-const uint DOMAIN_PURPOSE_PICK = 3u << 30;
-const uint DOMAIN_PARTNER_PIXEL_MASK = (1u << 30) - 1u;
+// SHADOW_EPSILON and the shifts' stream purposes PURPOSE_INVERSION, PURPOSE_PICK and
+// PARTNER_PIXEL_MASK come from the contract (shifts/src/contract.rs, via sample.glsl).
 
 // The domain of one pixel: its translucent material, x1, the technique selection and the stream
 // key fields.
@@ -158,8 +153,8 @@ bool domain_visible(SssDomain domain, SssSample y) {
     }
     vec3 n = x2.geometric_normal;
     float side = glam_dot(n, light.wi) < 0.0 ? -1.0 : 1.0;
-    precise vec3 from = x2.position + side * DOMAIN_SHADOW_EPSILON * n;
-    precise vec3 to = light.shadow_target - DOMAIN_SHADOW_EPSILON * light.wi;
+    precise vec3 from = x2.position + side * SHADOW_EPSILON * n;
+    precise vec3 to = light.shadow_target - SHADOW_EPSILON * light.wi;
     // Ray::segment(from, to): dir = to - from, t in (0, 1).
     precise vec3 dir = to - from;
     BvhRay ray;
@@ -178,7 +173,7 @@ float domain_target(SssDomain domain, SssSample y) {
 // paired with `partner`, keyed (pixel, frame, pass, purpose | partner pixel & 0x3FFF_FFFF) under
 // the run seed.
 Stream domain_shift_stream(SssDomain domain, uint purpose, SssDomain partner) {
-    uint tagged = purpose | (partner.pixel & DOMAIN_PARTNER_PIXEL_MASK);
+    uint tagged = purpose | (partner.pixel & PARTNER_PIXEL_MASK);
     return stream_new(StreamKey(domain.pixel, domain.frame, domain.pass, tagged), domain.seed);
 }
 

@@ -4,10 +4,6 @@
 #ifndef SHIFTS_INVERSION_GLSL
 #define SHIFTS_INVERSION_GLSL
 
-// IndexPolicy.
-const uint INDEX_POLICY_EXACT = 0u;
-const uint INDEX_POLICY_DEFERRED = 1u;
-
 // invert_at: probabilistic inversion of x2 at `end`'s x1 with gamma_end, the first number of
 // end's PURPOSE_INVERSION stream keyed by `partner` [001 Alg. 4]; with `find`, x2's rank among
 // the re-traced chord's hits (NotInvertible when x2 is not among them, index INDEX_UNKNOWN
@@ -15,7 +11,7 @@ const uint INDEX_POLICY_DEFERRED = 1u;
 uint inversion_invert_at(SssDomain end, SssDomain partner, EntryPoint x2, bool find,
                          out Probe probe, out float p_disk, out uint index) {
     index = INDEX_UNKNOWN;
-    Stream stream = domain_shift_stream(end, DOMAIN_PURPOSE_INVERSION, partner);
+    Stream stream = domain_shift_stream(end, PURPOSE_INVERSION, partner);
     float gamma = stream_next_f32(stream);
     if (bssrdf_invert_random_numbers(end.x1, end.selection, x2, gamma, probe, p_disk)
         != BSSRDF_INVERT_OK) {
@@ -84,6 +80,20 @@ void inversion_resolve_deferred_index(SssDomain domain, inout SssSample y) {
     uint index;
     bssrdf_find_index(domain.x1, Probe(y.technique, y.u_radius, y.u_angle), x2, index);
     y.index = index;
+}
+
+// The registered InvertingReconnection kinds: inversion_shift with their policy (run by
+// shift_shift).
+void inversion_exact_shift(ShiftSpec spec, SssSample x, SssDomain src, SssDomain dst,
+                           inout ShiftPlan plan) {
+    plan.invert = true;
+    plan.index_policy = INDEX_POLICY_EXACT;
+}
+
+void inversion_deferred_shift(ShiftSpec spec, SssSample x, SssDomain src, SssDomain dst,
+                              inout ShiftPlan plan) {
+    plan.invert = true;
+    plan.index_policy = INDEX_POLICY_DEFERRED;
 }
 
 #endif

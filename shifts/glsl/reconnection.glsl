@@ -1,5 +1,5 @@
 // The identity shift and reconnection [y0, y1, x2, x3] [001 §3.2.1]: the twin of
-// shifts/src/reconnection.rs. Part of shift.glsl (include that file, not this one).
+// shifts/src/reconnection.rs. Included by shift.glsl (include that file, not this one).
 
 #ifndef SHIFTS_RECONNECTION_GLSL
 #define SHIFTS_RECONNECTION_GLSL
@@ -20,10 +20,15 @@ uint reconnection_reconnect(SssSample x, SssDomain dst, out SssSample y) {
     return SHIFT_OK;
 }
 
+// Identity::shift: y = x, J = 1, never fails.
+void reconnection_identity_shift(ShiftSpec spec, SssSample x, SssDomain src, SssDomain dst,
+                                 inout ShiftPlan plan) {
+}
+
 // Reconnection::shift: keeps x2 and x3, J = 1.
-uint reconnection_shift(SssSample x, SssDomain dst, out SssSample y, out float jacobian) {
-    jacobian = 1.0;
-    return reconnection_reconnect(x, dst, y);
+void reconnection_shift(ShiftSpec spec, SssSample x, SssDomain src, SssDomain dst,
+                        inout ShiftPlan plan) {
+    plan.fail = reconnection_reconnect(x, dst, plan.y);
 }
 
 #endif

@@ -1,34 +1,12 @@
-// The stored sample and reservoir of the SSS pipeline: std430 twins of shifts::SssSample
-// (shifts/src/sample.rs, 64 bytes) and engine::layout::PixelReservoir (80 bytes). Arrays of
-// float keep the std430 layout identical to the Rust #[repr(C)] structs (a vec3 would align to 16).
+// The stored sample and reservoir of the SSS pipeline: the twin of shifts/src/sample.rs. The
+// structs SssSample and PixelReservoir and INDEX_UNKNOWN come from the contract
+// (shifts/src/contract.rs), in std430 with arrays of float where Rust has arrays of f32 (a vec3
+// would align to 16).
 
 #ifndef SHIFTS_SAMPLE_GLSL
 #define SHIFTS_SAMPLE_GLSL
 
-// SssSample::index when the intersection index is deferred (shifts::INDEX_UNKNOWN).
-const uint INDEX_UNKNOWN = 0xFFFFFFFFu;
-
-struct SssSample {
-    float x3[3];
-    uint light;
-    float bary[2];
-    uint object;
-    uint prim;
-    uint technique;
-    float u_radius;
-    float u_angle;
-    uint index;
-    float p_disk;
-    uint padding[3];
-};
-
-struct PixelReservoir {
-    SssSample y; // `sample` in Rust (a reserved word in GLSL)
-    float ucw;
-    float confidence;
-    uint has_sample;
-    uint padding;
-};
+#include "contract/shifts.glsl"
 
 vec3 sample_x3(SssSample s) {
     return vec3(s.x3[0], s.x3[1], s.x3[2]);

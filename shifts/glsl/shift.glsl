@@ -1,37 +1,64 @@
-// Shift mappings on SSS paths: the GLSL twins of restir::shift::{Fail, Shift} and of every
-// shift of the `shifts` crate (shifts/src/*.rs), dispatched on the index of
-// engine::preset::ShiftKind::ALL (DESIGN §5, §9).
+// Shift mappings on SSS paths: the GLSL twins of restir::shift::{Fail, Shift} and the dispatch
+// over the registered shifts (shifts/src/registry.rs, DESIGN §5, §9).
 //
-// A shift is `uint f(..., out SssSample y, out float jacobian)`: SHIFT_OK with `y = T(x)` and
-// `J = |T'(x)|`, or the Fail code. Include after `#define SCENE_BINDING ...`; the including
-// shader enables GL_EXT_shader_explicit_arithmetic_types_int64. The twins live in
-// reconnection.glsl, delayed.glsl, hybrid.glsl, inversion.glsl and broken.glsl, which this file
-// includes in dependency order (include shift.glsl, not them).
+// A shift's code is its ShiftKind::code, the constant SHIFT_<KIND> of the contract; the list
+// SHIFT_KINDS(X) names every registered kind with its twin, and contract/shift_twins.glsl
+// includes the twins' files. Include this file after `#define SCENE_BINDING ...`; the including
+// shader enables GL_EXT_shader_explicit_arithmetic_types_int64.
+//
+// A twin is the function its registry line names (`<module>_..._shift` of
+// shifts/glsl/<module>.glsl): `void f(ShiftSpec spec, SssSample x, SssDomain src, SssDomain dst,
+// inout ShiftPlan plan)`. It runs the shift's own checks and fills the plan:
+// SHIFT_OK or a Fail code (SHIFT_FAIL_*) in `plan.fail`, `y = T(x)` and `J = |T'(x)|` so far,
+// and which of the shared steps that trace rays should follow (probabilistic inversion,
+// delayed-reconnection replay). shift_shift runs those steps once for every kind: Mesa inlines
+// every call, so each call site of a ray-tracing function multiplies the shader's size and its
+// compile time on lavapipe. A registered kind without its twin does not compile.
 
 #ifndef SHIFTS_SHIFT_GLSL
 #define SHIFTS_SHIFT_GLSL
 
+// SHIFT_OK and the Fail codes SHIFT_FAIL_*.
+#include "contract/restir.glsl"
+// The kinds SHIFT_<KIND> and their list SHIFT_KINDS(X).
+#include "contract/shifts.glsl"
 #include "domain.glsl"
 
-// restir::shift::Fail (0 = the shift succeeded).
-const uint SHIFT_OK = 0u;
-const uint SHIFT_FAIL_NOT_INVERTIBLE = 1u;
-const uint SHIFT_FAIL_OUT_OF_SUPPORT = 2u;
-const uint SHIFT_FAIL_OCCLUDED = 3u;
-const uint SHIFT_FAIL_DEGENERATE = 4u;
-const uint SHIFT_FAIL_REJECTED = 5u;
+// A ShiftKind built for a receiver (ShiftKind::with_shift): the kind and the receiver's
+// material (the hybrid's thresholds come from it).
+struct ShiftSpec {
+    uint kind;
+    GpuMaterial receiver;
+};
 
-// engine::preset::ShiftKind::ALL, in order.
-const uint SHIFT_IDENTITY = 0u;
-const uint SHIFT_RECONNECTION = 1u;
-const uint SHIFT_DELAYED = 2u;
-const uint SHIFT_HYBRID = 3u;
-const uint SHIFT_INVERTING_EXACT = 4u;
-const uint SHIFT_INVERTING_DEFERRED = 5u;
-const uint SHIFT_DELAYED_WITHOUT_JACOBIAN = 6u;
-const uint SHIFT_DELAYED_WITHOUT_VISIBILITY = 7u;
-const uint SHIFT_HYBRID_IGNORING_CRITERION = 8u;
-const uint SHIFT_KIND_COUNT = 9u;
+// ShiftKind::with_shift(material).
+ShiftSpec shift_spec(uint kind, GpuMaterial receiver_material) {
+    return ShiftSpec(kind, receiver_material);
+}
+
+// What a shift's twin decided, and the shared steps that follow it in shift_shift.
+struct ShiftPlan {
+    // SHIFT_OK, or the Fail code of the shift's own checks (no step runs then).
+    uint fail;
+    // T(x) and |T'(x)| so far (x and 1 to start).
+    SssSample y;
+    float jacobian;
+    // Reconnection with probabilistic inversion of x for dst [001 Alg. 4] (inversion_shift of
+    // inversion.glsl) with `index_policy`, which replaces y and J.
+    bool invert;
+    uint index_policy;
+    // 0, or the DELAYED_CHECK_* bits of a delayed-reconnection replay of x at dst
+    // (delayed.glsl), which replaces y and J.
+    uint replay;
+    // After a replay: fail (Rejected) where the offset path y1-y2 is connectable by `hybrid`
+    // (the hybrid's bijectivity rule, DESIGN §9).
+    bool reject_connectable;
+    Hybrid hybrid;
+};
+
+ShiftPlan shift_plan_new(SssSample x) {
+    return ShiftPlan(SHIFT_OK, x, 1.0, false, INDEX_POLICY_EXACT, 0u, false, Hybrid(0.0, 0.0));
+}
 
 // SssSample::with_bssrdf: the same light vertex with a new BSSRDF part (padding zeroed, as
 // SssSample::new writes it).
@@ -49,73 +76,54 @@ SssSample shift_with_bssrdf(SssSample s, BssrdfSample b) {
     return y;
 }
 
+// The shared steps: reconnection's support checks, inverting reconnection, the replay.
 #include "reconnection.glsl"
-#include "delayed.glsl"
-#include "hybrid.glsl"
 #include "inversion.glsl"
-#include "broken.glsl"
-
-// A ShiftKind built for a receiver (ShiftKind::with_shift): the hybrid's thresholds come from
-// the receiver's material.
-struct ShiftSpec {
-    uint kind;
-    Hybrid hybrid;
-};
-
-// ShiftKind::with_shift(material).
-ShiftSpec shift_spec(uint kind, GpuMaterial receiver_material) {
-    return ShiftSpec(kind, hybrid_for_material(receiver_material));
-}
+#include "delayed.glsl"
+// The registered shifts' twins.
+#include "contract/shift_twins.glsl"
 
 // ShiftKind::resolves_deferred_index.
 bool shift_resolves_deferred_index(uint kind) {
-    return kind == SHIFT_INVERTING_DEFERRED;
+#define SHIFT_RESOLVES(KIND, twin, resolves) \
+    if (kind == KIND) { \
+        return resolves; \
+    }
+    SHIFT_KINDS(SHIFT_RESOLVES)
+#undef SHIFT_RESOLVES
+    return false;
 }
 
-// Shift::shift of kind `spec.kind` from `src` into `dst`; SHIFT_FAIL_REJECTED for an unknown
-// kind (the host validates kinds before dispatching). Mesa inlines every call, so each call
-// site of a ray-tracing function multiplies the shader's size (and its compile time on
-// lavapipe): every replaying kind (delayed, hybrid, the three negative controls) goes through
-// the single delayed_replay call below with the kind's parameters.
+// Shift::shift of kind `spec.kind` from `src` into `dst`: the kind's twin, then the steps it
+// asked for. The host sends registered kinds only (PassParams::new takes a ShiftKind).
 uint shift_shift(ShiftSpec spec, SssSample x, SssDomain src, SssDomain dst, out SssSample y,
                  out float jacobian) {
-    y = x;
-    jacobian = 1.0;
-    uint kind = spec.kind;
-    if (kind == SHIFT_IDENTITY) {
-        return SHIFT_OK;
+    ShiftPlan plan = shift_plan_new(x);
+    switch (spec.kind) {
+#define SHIFT_TWIN(KIND, twin, resolves) \
+    case KIND: \
+        twin(spec, x, src, dst, plan); \
+        break;
+        SHIFT_KINDS(SHIFT_TWIN)
+#undef SHIFT_TWIN
+    default:
+        // Not a registered kind: no shift (never one of them by default).
+        plan.fail = SHIFT_FAIL_REJECTED;
     }
-    if (kind == SHIFT_RECONNECTION) {
-        return reconnection_shift(x, dst, y, jacobian);
+    if (plan.fail == SHIFT_OK && plan.invert) {
+        plan.fail = inversion_shift(plan.index_policy, x, src, dst, plan.y, plan.jacobian);
     }
-    if (kind == SHIFT_INVERTING_EXACT || kind == SHIFT_INVERTING_DEFERRED) {
-        uint policy = kind == SHIFT_INVERTING_EXACT ? INDEX_POLICY_EXACT : INDEX_POLICY_DEFERRED;
-        return inversion_shift(policy, x, src, dst, y, jacobian);
-    }
-    if (kind >= SHIFT_KIND_COUNT) {
-        return SHIFT_FAIL_REJECTED;
-    }
-    bool hybrid = kind == SHIFT_HYBRID || kind == SHIFT_HYBRID_IGNORING_CRITERION;
-    bool respect_offset = kind == SHIFT_HYBRID;
-    Hybrid thresholds = kind == SHIFT_HYBRID
-        ? spec.hybrid
-        : broken_hybrid_ignoring_criterion_thresholds(src);
-    if (hybrid) {
-        bool replay;
-        uint fail = hybrid_reconnection_branch(thresholds, x, src, dst, respect_offset, replay, y);
-        if (fail != SHIFT_OK || !replay) {
-            return fail;
+    if (plan.fail == SHIFT_OK && plan.replay != 0u) {
+        EntryPoint y2;
+        plan.fail = delayed_replay(x, src, dst, plan.replay, plan.y, plan.jacobian, y2);
+        if (plan.fail == SHIFT_OK && plan.reject_connectable
+            && hybrid_connectable(plan.hybrid, dst.x1, y2)) {
+            plan.fail = SHIFT_FAIL_REJECTED;
         }
     }
-    EntryPoint y2;
-    uint fail = delayed_replay(x, src, dst, broken_delayed_checks(kind), y, jacobian, y2);
-    if (fail != SHIFT_OK) {
-        return fail;
-    }
-    if (hybrid && hybrid_offset_rejects(thresholds, dst, y2, respect_offset)) {
-        return SHIFT_FAIL_REJECTED;
-    }
-    return SHIFT_OK;
+    y = plan.y;
+    jacobian = plan.jacobian;
+    return plan.fail;
 }
 
 // Shift::target_from given the back-shift's result T_{r->j}(y) (fail code, sample, Jacobian):

@@ -12,17 +12,9 @@ use sss::geometry::Ray;
 use sss::material::{Material, Translucent};
 use sss::scene::{DIRECTIONAL_DISTANCE, GPixel, Light, Scene};
 
+use crate::contract::{PARTNER_PIXEL_MASK, SHADOW_EPSILON};
+pub(crate) use crate::contract::{PURPOSE_INVERSION, PURPOSE_PICK};
 use crate::sample::SssSample;
-
-/// Offset of shadow-segment ends from x2 (along its geometric normal) and from x3 (scene units;
-/// the built-in scenes are about one unit across).
-const SHADOW_EPSILON: f32 = 1e-4;
-
-/// Stream purpose tags of the shifts, in the top two bits of [`StreamKey::purpose`]; the low 30
-/// bits hold the partner pixel (see [`SssDomain::shift_stream`]).
-pub(crate) const PURPOSE_INVERSION: u32 = 0b10 << 30;
-pub(crate) const PURPOSE_PICK: u32 = 0b11 << 30;
-const PARTNER_PIXEL_MASK: u32 = (1 << 30) - 1;
 
 /// The direction toward the light vertex seen from x2, and what the light sends along it.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -9,17 +9,7 @@ use crate::domain::{PURPOSE_INVERSION, SssDomain};
 use crate::reconnection::reconnect;
 use crate::sample::SssSample;
 
-/// How the intersection index of an inverted sample is found (DESIGN §5).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum IndexPolicy {
-    /// Re-trace the chord during the shift at *both* ends of the pair; fail (`NotInvertible`) if
-    /// x2 is not among the hits of either (matched by triangle and `t`). Unbiased: the shift and
-    /// its back-shift fail on the same events (see [`InvertingReconnection`]).
-    Exact,
-    /// Leave the index unknown; [`resolve_deferred_index`] sets it for the selected sample after
-    /// the pass. Seed 001's fast choice, slightly biased.
-    Deferred,
-}
+pub use crate::contract::IndexPolicy;
 
 /// Reconnection (`J = 1`, same failures as [`crate::Reconnection`]) followed by probabilistic
 /// inversion of x2 for y1 [001 Alg. 4]: the technique is drawn from its posterior

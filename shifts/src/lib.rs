@@ -10,20 +10,32 @@
 //! | [`DelayedReconnection`] | replay at y1 → y2, keep x3 | [001 Eq. 11] |
 //! | [`Hybrid`] | reconnection or delayed by the criterion of [001 §4.1] | as chosen |
 //! | [`InvertingReconnection`] | reconnection + probabilistic inversion [001 Alg. 4] | 1 |
+//! | [`DistantReconnection`] | reconnection where x2 is far from both x1 (worked example) | 1 |
 //!
-//! [`broken`] holds the deliberately wrong shifts the conformance tests must catch.
+//! [`broken`] holds the deliberately wrong shifts the conformance tests must catch. Every shift
+//! is registered by one line of `registry.rs`, which gives it its [`ShiftKind`]: a name, a GPU
+//! code and the CPU shift that presets ([`preset`]) and the backends use.
 
 pub mod broken;
+/// What the GLSL twins (`shifts/glsl/`) share with this crate: the stored sample and reservoir,
+/// the index policy, the shifts' stream purposes (`twin::contract!`; rendered to
+/// `contract/shifts.glsl` by `engine/build.rs`). The shift kinds come from `registry.rs`.
+pub mod contract;
 mod delayed;
+mod distant;
 mod domain;
 mod hybrid;
 mod inversion;
+mod kind;
+pub mod preset;
 mod reconnection;
 mod sample;
 
+pub use contract::{INDEX_UNKNOWN, IndexPolicy, PixelReservoir, SssSample};
 pub use delayed::DelayedReconnection;
+pub use distant::DistantReconnection;
 pub use domain::{LightPath, SssDomain};
 pub use hybrid::Hybrid;
-pub use inversion::{IndexPolicy, InvertingReconnection, resolve_deferred_index};
+pub use inversion::{InvertingReconnection, resolve_deferred_index};
+pub use kind::ShiftKind;
 pub use reconnection::{Identity, Reconnection};
-pub use sample::{INDEX_UNKNOWN, SssSample};

@@ -1,41 +1,15 @@
-//! The reservoir sample of ReSTIR SSS [001 Alg. 3]: the entry point x2, the light vertex x3 and
-//! the BSSRDF IS random numbers that regenerate x2 from the x1 they belong to.
+//! The reservoir sample of ReSTIR SSS [001 Alg. 3] — the entry point x2, the light vertex x3 and
+//! the BSSRDF IS random numbers that regenerate x2 from the x1 they belong to — and the stored
+//! per-pixel reservoir. Both are declared in `contract.rs`, shared with
+//! `shifts/glsl/sample.glsl`.
 
-use bytemuck::{Pod, Zeroable};
+use bytemuck::Zeroable;
 use glam::{Vec2, Vec3};
+use restir::reservoir::Reservoir;
 use sss::bssrdf::{BssrdfSample, Technique};
 
-/// The stored intersection index meaning *unknown* (deferred index policy).
-pub const INDEX_UNKNOWN: u32 = u32::MAX;
-
-/// One SSS path sample `[x0, x1, x2, x3]` without its pixel: x2 on a translucent object, x3 on a
-/// light, and the random numbers of BSSRDF IS [001 Alg. 3].
-///
-/// `#[repr(C)]`, 64 bytes, laid out like a std430 `struct { vec3 x3; uint light; vec2 bary;
-/// uint object; uint prim; uint technique; float u_radius; float u_angle; uint index;
-/// float p_disk; }` padded to its 16-byte alignment.
-///
-/// For a directional light the stored x3 is where the light sampler put the vertex (far along
-/// `−direction`); contributions and visibility use the light's direction instead, so the vertex
-/// acts as the point at infinity.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct SssSample {
-    x3: [f32; 3],
-    light: u32,
-    bary: [f32; 2],
-    object: u32,
-    prim: u32,
-    /// [`Technique::index`] = axis · 3 + channel.
-    technique: u32,
-    u_radius: f32,
-    u_angle: f32,
-    /// Rank of x2 among the probe's hits sorted by `t`, or [`INDEX_UNKNOWN`].
-    index: u32,
-    /// `p_disk(x2 | x1)` of the x1 whose random numbers are stored.
-    p_disk: f32,
-    padding: [u32; 3],
-}
+pub(crate) use crate::contract::SssSample;
+use crate::contract::{INDEX_UNKNOWN, PixelReservoir};
 
 impl SssSample {
     /// Size of one sample in a GPU buffer.
@@ -129,6 +103,43 @@ impl SssSample {
     }
 }
 
+impl PixelReservoir {
+    /// Bytes per pixel of one reservoir buffer.
+    pub const BYTES: usize = std::mem::size_of::<PixelReservoir>();
+
+    /// No sample, `W = 0`, `c = 0` (all bytes zero).
+    pub fn empty() -> PixelReservoir {
+        PixelReservoir::zeroed()
+    }
+
+    /// The reservoir in `restir`'s form.
+    pub fn get(&self) -> Reservoir<SssSample> {
+        Reservoir {
+            y: (self.has_sample != 0).then_some(self.y),
+            ucw: self.ucw,
+            confidence: self.confidence,
+        }
+    }
+}
+
+impl Default for PixelReservoir {
+    fn default() -> Self {
+        PixelReservoir::empty()
+    }
+}
+
+impl From<&Reservoir<SssSample>> for PixelReservoir {
+    fn from(r: &Reservoir<SssSample>) -> PixelReservoir {
+        PixelReservoir {
+            y: r.y.unwrap_or_else(SssSample::zeroed),
+            ucw: r.ucw,
+            confidence: r.confidence,
+            has_sample: r.y.is_some() as u32,
+            padding: 0,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -176,5 +187,30 @@ mod tests {
         s.technique = 9;
         assert_eq!(s.technique(), None);
         assert_eq!(s.bssrdf(), None);
+    }
+
+    #[test]
+    fn layout_is_a_16_byte_multiple_and_round_trips() {
+        assert_eq!(PixelReservoir::BYTES % 16, 0);
+        assert_eq!(PixelReservoir::BYTES, SssSample::BYTES + 16);
+        let empty = Reservoir::<SssSample> {
+            y: None,
+            ucw: 0.0,
+            confidence: 3.0,
+        };
+        assert_eq!(PixelReservoir::from(&empty).get(), empty);
+        let mut sample = SssSample::zeroed();
+        bytemuck::bytes_of_mut(&mut sample)[0] = 7;
+        let full = Reservoir {
+            y: Some(sample),
+            ucw: 0.5,
+            confidence: 2.0,
+        };
+        let stored = PixelReservoir::from(&full);
+        assert_eq!(stored.get(), full);
+        assert_eq!(
+            *bytemuck::from_bytes::<PixelReservoir>(bytemuck::bytes_of(&stored)),
+            stored
+        );
     }
 }

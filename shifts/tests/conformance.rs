@@ -21,8 +21,8 @@ use restir::rng::Stream;
 use restir::shift::{CandidateSampler, Shift};
 use shifts::broken::{DelayedWithoutJacobian, DelayedWithoutVisibility, HybridIgnoringCriterion};
 use shifts::{
-    DelayedReconnection, Hybrid, IndexPolicy, InvertingReconnection, Reconnection, SssDomain,
-    SssSample,
+    DelayedReconnection, DistantReconnection, Hybrid, IndexPolicy, InvertingReconnection,
+    Reconnection, SssDomain, SssSample,
 };
 
 /// Round trip: max deviation of x2, x3 in scene units. Replay re-intersects a triangle in f32
@@ -46,14 +46,16 @@ fn geometry_checks<T>(shift: &T, fx: &Fixture) -> Vec<(String, CheckReport)>
 where
     T: for<'s> Shift<SssDomain<'s>>,
 {
-    geometry_checks_with(shift, fx, &VISIBLE)
+    geometry_checks_with(shift, fx, &VISIBLE, POINTS)
 }
 
-/// Checks 1 and 2 on the spatial and the temporal pairs of `fx`, test points from `sampler`.
+/// Checks 1 and 2 on the spatial and the temporal pairs of `fx`, `points` test points per pair
+/// and direction from `sampler`.
 fn geometry_checks_with<T>(
     shift: &T,
     fx: &Fixture,
     sampler: &dyn for<'s> CandidateSampler<SssDomain<'s>>,
+    points: usize,
 ) -> Vec<(String, CheckReport)>
 where
     T: for<'s> Shift<SssDomain<'s>>,
@@ -66,7 +68,7 @@ where
         let case = ShiftCase {
             pairs: refs(&pairs),
             sampler,
-            samples_per_pair: POINTS,
+            samples_per_pair: points,
             seed: SEED,
         };
         let label = format!("{} {kind}", fx.scene.name);
@@ -127,9 +129,18 @@ fn conforms<T>(name: &str, shift: &T, scenes: &[&str])
 where
     T: for<'s> Shift<SssDomain<'s>>,
 {
+    conforms_with(name, shift, scenes, POINTS);
+}
+
+/// [`conforms`] with `points` test points per pair and direction in checks 1 and 2 (more for a
+/// shift that fails on most pairs, so that at least 20 are tested).
+fn conforms_with<T>(name: &str, shift: &T, scenes: &[&str], points: usize)
+where
+    T: for<'s> Shift<SssDomain<'s>>,
+{
     for &scene in scenes {
         let fx = fixture(scene);
-        for (label, report) in geometry_checks(shift, fx)
+        for (label, report) in geometry_checks_with(shift, fx, &VISIBLE, points)
             .into_iter()
             .chain(mis_checks(shift, fx))
         {
@@ -155,6 +166,17 @@ fn reconnection_conforms() {
 #[test]
 fn delayed_reconnection_conforms() {
     conforms("delayed reconnection", &DelayedReconnection, &SCENES);
+}
+
+/// The worked example of docs/adding-a-shift.md, checked like the other shifts. It rejects
+/// x2 within 2·max d of either exit point, most pairs of the flat `half-shadow` scene, so it
+/// gets 4× the test points.
+#[test]
+fn distant_reconnection_conforms() {
+    for scene in SCENES {
+        let distant = DistantReconnection::for_material(fixture(scene).domain_material());
+        conforms_with("distant reconnection", &distant, &[scene], 4 * POINTS);
+    }
 }
 
 #[test]
@@ -214,7 +236,7 @@ fn sequential_pair_conforms() {
     );
     for scene in SCENES {
         for (label, report) in
-            geometry_checks_with(&DelayedReconnection, fixture(scene), &Reinverted)
+            geometry_checks_with(&DelayedReconnection, fixture(scene), &Reinverted, POINTS)
         {
             println!("delayed after inversion, {label}: {report}");
             assert!(report.passed, "delayed after inversion, {label}: {report}");

@@ -32,8 +32,8 @@ use restir::stats::normal_quantile;
 use restir::stats::{Equivalence, Summary, Verdict, equivalence};
 use shifts::broken::{DelayedWithoutJacobian, DelayedWithoutVisibility};
 use shifts::{
-    DelayedReconnection, Hybrid, IndexPolicy, InvertingReconnection, Reconnection, SssDomain,
-    SssSample, resolve_deferred_index,
+    DelayedReconnection, DistantReconnection, Hybrid, IndexPolicy, InvertingReconnection,
+    Reconnection, SssDomain, SssSample, resolve_deferred_index,
 };
 use sss::bssrdf::{BssrdfSample, EntryPoint, Probe};
 
@@ -211,6 +211,7 @@ where
 /// (δ = [`DELTA`], α = [`ALPHA`], N = `setup.replicas`).
 fn assert_correct_shifts_unbiased(label: &str, setup: &Setup, reference: &Summary) {
     let hybrid = Hybrid::for_material(setup.receiver.material());
+    let distant = DistantReconnection::for_material(setup.receiver.material());
     let exact = InvertingReconnection {
         policy: IndexPolicy::Exact,
     };
@@ -221,6 +222,7 @@ fn assert_correct_shifts_unbiased(label: &str, setup: &Setup, reference: &Summar
             verdict(setup, reference, &DelayedReconnection),
         ),
         ("hybrid", verdict(setup, reference, &hybrid)),
+        ("distant reconnection", verdict(setup, reference, &distant)),
         (
             "inverting reconnection (exact)",
             verdict(setup, reference, &exact),

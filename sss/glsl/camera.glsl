@@ -7,18 +7,8 @@
 
 #include "frame.glsl"
 
-// std430, 68 bytes (Rust twin: engine::vulkan::GpuCamera).
-struct GpuCamera {
-    float eye[3];
-    float forward[3];
-    float right[3];
-    float up[3];
-    // Sub-pixel offset of the frame, Camera::jitter.
-    float jitter[2];
-    float tan_half_fov;
-    uint width;
-    uint height;
-};
+// GpuCamera (engine/src/contract.rs).
+#include "contract/engine.glsl"
 
 vec3 camera_eye(GpuCamera c) {
     return vec3(c.eye[0], c.eye[1], c.eye[2]);

@@ -9,31 +9,13 @@
 #define SSS_LIGHT_GLSL
 
 #include "frame.glsl"
-
-const uint LIGHT_QUAD = 0u;
-const uint LIGHT_TRIANGLE = 1u;
-const uint LIGHT_SPHERE = 2u;
-const uint LIGHT_POINT = 3u;
-const uint LIGHT_DIRECTIONAL = 4u;
+// GpuLight and its kinds LIGHT_<KIND> (engine/src/contract.rs).
+#include "contract/engine.glsl"
 
 const float LIGHT_PI = 3.14159265358979323846;
 // DIRECTIONAL_DISTANCE.
 const float LIGHT_DIRECTIONAL_DISTANCE = 1.0e4;
 
-// std430, 64 bytes (Rust twin: engine::vulkan::GpuLight). By kind:
-// quad: p0 corner, p1 edge_u, p2 edge_v; triangle: p0..p2 vertices; sphere: p0 centre, radius;
-// point: p0 position; directional: p0 direction. `emission` is the radiance, intensity or
-// irradiance. `cdf` and `pmf` are Lights' selection CDF and probability of this light.
-struct GpuLight {
-    uint kind;
-    float radius;
-    float cdf;
-    float pmf;
-    float p0[3];
-    float p1[3];
-    float p2[3];
-    float emission[3];
-};
 
 // A point sampled on a light as seen from x2 (LightSample).
 struct LightSample {

@@ -10,29 +10,8 @@
 #include "frame.glsl"
 #include "fresnel.glsl"
 
-const uint MATERIAL_LAMBERT = 0u;
-const uint MATERIAL_TRANSLUCENT = 1u;
-
-// std430, 60 bytes (Rust twin: engine::vulkan::GpuMaterial). For a Lambert material only
-// kind and albedo are set; the rest is 0.
-struct GpuMaterial {
-    uint kind;
-    // Surface albedo A (Translucent) or diffuse reflectance (Lambert) per channel.
-    float albedo[3];
-    // Translucent::d: Burley d per channel [004 Eq. 5].
-    float d[3];
-    // Translucent::r_max per channel.
-    float r_max[3];
-    // Translucent::r_max_all = max of r_max.
-    float r_max_all;
-    float ior;
-    // Henyey–Greenstein g (random walk).
-    float g;
-    // Hybrid shift criterion κ_dist = 2 · max d [001 §5.1].
-    float kappa_dist;
-    // Translucent::fresnel().normalization = 1 − F_dr(ior) (f64 closed form on the host).
-    float fresnel_normalization;
-};
+// GpuMaterial and its kinds MATERIAL_<KIND> (engine/src/contract.rs).
+#include "contract/engine.glsl"
 
 bool material_is_translucent(GpuMaterial m) {
     return m.kind == MATERIAL_TRANSLUCENT;

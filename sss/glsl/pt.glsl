@@ -19,10 +19,9 @@
 const uint PT_PURPOSE_PT = 0x50540001u;
 // SHADOW_EPSILON: shadow-ray origin offset along the normal and shortening at the light.
 const float PT_SHADOW_EPSILON = 1e-4;
-// HitPolicy in declaration order (engine::vulkan::PtParams::hits).
-const uint PT_HITS_UNIFORM_ONE = 0u;
-const uint PT_HITS_ALL = 1u;
-// ProfileKind in declaration order (PtSettings::profile).
+// PtParams::hits: PT_HITS_UNIFORM_ONE, PT_HITS_ALL (engine/src/contract.rs).
+#include "contract/engine.glsl"
+// ProfileKind in declaration order (PtSettings::profile; no buffer carries it yet).
 const uint PT_PROFILE_BURLEY = 0u;
 const uint PT_PROFILE_DIPOLE = 1u;
 // std::f32::consts::FRAC_1_PI.

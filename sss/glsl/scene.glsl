@@ -18,46 +18,8 @@
 #include "camera.glsl"
 #include "material.glsl"
 
-// std430, 76 bytes: the triangle's vertices, its per-vertex shading normals and its object
-// (the contract's 72-byte struct plus the object id, which Geometry::object_of needs).
-struct GpuTriangle {
-    float v[9];
-    float n[9];
-    uint object;
-};
-
-// std430, 176 bytes (Rust twin: engine::vulkan::FrameParams).
-struct FrameParams {
-    uint width;
-    uint height;
-    uint frame;
-    uint light_count;
-    uint node_count;
-    uint object_count;
-    uint seed_lo;
-    uint seed_hi;
-    uint pad; // keeps the Rust twin's layout explicit
-    GpuCamera camera;
-    // The camera of the previous frame (valid when has_previous != 0): temporal reprojection.
-    GpuCamera previous_camera;
-    uint has_previous;
-};
-
-// std430, 80 bytes (Rust twin: engine::vulkan::GpuPixel): sss::scene::GPixel, valid = 0
-// where the CPU has None.
-struct GPixel {
-    float position[3];
-    uint object;
-    float geometric_normal[3];
-    uint prim;
-    float shading_normal[3];
-    float depth;
-    float view[3];
-    uint valid;
-    float bary[2];
-    uint pad0;
-    uint pad1;
-};
+// GpuTriangle, FrameParams and GPixel (engine/src/contract.rs).
+#include "contract/engine.glsl"
 
 layout(std430, binding = SCENE_BINDING + 4) readonly buffer SceneTriangles { GpuTriangle scene_triangles[]; };
 layout(std430, binding = SCENE_BINDING + 5) readonly buffer SceneObjects { uint scene_objects[]; };

@@ -10,12 +10,15 @@
 
 mod bvh;
 mod compute;
+mod decode;
 mod device;
 mod error;
+mod frame;
 mod memory;
-mod pipeline;
+mod pass_params;
 mod pt;
 mod random_walk;
+mod renderer;
 mod scene;
 mod shaders;
 pub mod testing;
@@ -25,19 +28,21 @@ use bytemuck::{Pod, Zeroable};
 
 pub use bvh::{BVH_MAX_HITS, BvhRayInput, BvhRayOutput, GpuBvh};
 pub use compute::{Dispatch, Kernel, groups_for};
+pub use decode::decode_error;
 pub use device::{Context, DEVICE_ENV, DeviceInfo, DeviceKind, choose_device};
 pub use error::VulkanError;
+pub use frame::{CANDIDATES, SPATIAL, TEMPORAL};
 pub use memory::Buffer;
-pub use pipeline::{CANDIDATES, PassParams, Renderer, SPATIAL, TEMPORAL, decode_error};
-pub use pt::{
-    DeviceImage, FrameInput, MethodParams, PT, PT_MAX_HITS, PtParams, SHADE, render_pt,
-    render_pt_hits, shade,
-};
+pub use pt::{DeviceImage, FrameInput, PT, SHADE, render_pt, render_pt_hits, shade};
 pub use random_walk::{
     GpuMedium, RANDOM_WALK, RandomWalkImage, WalkStats, render_random_walk, scene_media,
 };
-pub use scene::{
-    FrameParams, GBUFFER, GpuCamera, GpuLight, GpuMaterial, GpuPixel, GpuScene, GpuTriangle,
+pub use renderer::Renderer;
+pub use scene::{GBUFFER, GpuScene};
+
+pub use crate::contract::{
+    FrameParams, GpuCamera, GpuLight, GpuMaterial, GpuPixel, GpuTriangle, MethodParams, PassParams,
+    PtParams,
 };
 pub use shaders::Shader;
 

@@ -2,7 +2,6 @@
 //! pass (`pass_shade.glsl`, twin of the CPU backend's `shade`) on the device: dispatch over one
 //! frame's G-buffer and read back an [`Image`].
 
-use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use sss::integrator::pt::HitPolicy;
@@ -10,46 +9,17 @@ use sss::integrator::pt::HitPolicy;
 use super::{
     Buffer, Context, GpuPixel, GpuScene, Kernel, PassParams, Shader, VulkanError, groups_for,
 };
+use crate::contract::{PtHits, PtParams, PtState};
 use crate::image::Image;
+use crate::plan::PassKernel;
 
 /// `method_pt.glsl`: scene bindings 0–8, 9 G-buffer (`GpuPixel`), 10 `vec4` out (mean of `spp`
 /// samples, `w` = samples left out, see [`DeviceImage`]), 11 the per-pixel running sum between
 /// its dispatches (one per sample). Push constants: [`PtParams`].
 pub const PT: Shader = Shader::new("method_pt", 12, 32);
-/// `pass_shade.glsl`: scene bindings 0–8, 9 G-buffer, 10 `PixelReservoir` in, 11 `vec4` out
-/// (`f(Y)·W` or one path-traced sample, `w` = 1 where the value was written as 0, see
-/// [`DeviceImage`]). Push constants: [`PassParams`] (only `pass` is read).
-pub const SHADE: Shader = Shader::new("pass_shade", 12, 32);
-
-/// Push constants of the per-pixel methods (the contract's `uint spp; uint pad[7]`): samples per
-/// pixel, padded to 32 bytes.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
-pub struct MethodParams {
-    pub spp: u32,
-    pub pad: [u32; 7],
-}
-
-/// Push constants of `method_pt`: [`MethodParams`] whose first padding word carries the
-/// path tracer's [`HitPolicy`] (declaration order: 0 = `UniformOne`, 1 = `All`) and the second
-/// the sample that the dispatch adds.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
-pub struct PtParams {
-    pub spp: u32,
-    pub hits: u32,
-    pub sample_index: u32,
-    pub pad: [u32; 5],
-}
-
-/// `method_pt.glsl`'s `PtState` (std430, 32 bytes): a pixel's running sum between dispatches.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-struct PtState {
-    sum: [f64; 3],
-    left_out: u32,
-    cut: u32,
-}
+/// `pass_shade.glsl` ([`PassKernel::Shade`]): `f(Y)·W` or one path-traced sample, `w` = 1 where the
+/// value was written as 0 (see [`DeviceImage`]). Of its [`PassParams`] only `pass` is read.
+pub const SHADE: Shader = Shader::of(PassKernel::Shade);
 
 /// What a per-pixel kernel of one frame reads: the uploaded scene, the frame's `FrameParams`
 /// buffer (binding 8) and its G-buffer (binding 9, `width × height` `GpuPixel`s).
@@ -61,13 +31,10 @@ pub struct FrameInput<'a> {
     pub height: u32,
 }
 
-/// Hits per probe that `method_pt` and `pass_shade` keep (their `BVH_MAX_HITS`). The CPU keeps
-/// every hit; a GPU sample whose probe has more is left out like a non-finite one.
-pub const PT_MAX_HITS: usize = 16;
-
 /// An image read back from the device, and how many samples (`method_pt`) or pixels
 /// (`pass_shade`) were left out of a mean or written as 0: NaN or infinite values, as on the CPU,
-/// and path-traced samples whose probe had more than [`PT_MAX_HITS`] hits.
+/// and path-traced samples whose probe had more than [`KEPT_HITS`](crate::contract::KEPT_HITS)
+/// hits.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DeviceImage {
     pub image: Image,
@@ -130,9 +97,10 @@ pub fn render_pt_hits(
     hits: HitPolicy,
 ) -> Result<DeviceImage, VulkanError> {
     let hits = match hits {
-        HitPolicy::UniformOne => 0,
-        HitPolicy::All => 1,
-    };
+        HitPolicy::UniformOne => PtHits::UniformOne,
+        HitPolicy::All => PtHits::All,
+    }
+    .code();
     let count = frame.width * frame.height;
     let output = Buffer::zeroed(context, count as usize * 16)?;
     let state = Buffer::zeroed(context, count as usize * size_of::<PtState>())?;
@@ -188,6 +156,7 @@ pub fn shade(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::contract::MethodParams;
 
     #[test]
     fn push_constants_are_32_bytes() {

@@ -6,51 +6,23 @@
 //! the camera basis and jitter, the light selection CDF) is computed here in `f32` exactly as
 //! `sss` computes it and uploaded, so the shaders never re-derive it.
 
-use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 use sss::material::Material;
 use sss::scene::{Camera, GPixel, Light, Scene};
 
 use super::{Buffer, Context, GpuBvh, Shader, VulkanError};
+use crate::contract::{
+    FrameParams, GpuCamera, GpuLight, GpuMaterial, GpuPixel, GpuTriangle, LightKind, MaterialKind,
+};
+use crate::plan::PassKernel;
 
-/// `engine/glsl/pass_gbuffer.glsl`: the scene (0–8), 9 [`GpuPixel`] out; `PassParams`
-/// push constants (unused). One invocation per pixel.
-pub const GBUFFER: Shader = Shader::new("pass_gbuffer", 10, 32);
-
-/// `scene.glsl`'s `GpuTriangle` (std430, 76 bytes): vertices, per-vertex shading normals and
-/// the object id of one global triangle id.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuTriangle {
-    pub v: [f32; 9],
-    pub n: [f32; 9],
-    pub object: u32,
-}
-
-/// `material.glsl`'s `GpuMaterial` (std430, 60 bytes). `kind` 0 is Lambert (only `albedo` set),
-/// 1 is translucent with `Translucent`'s derived values.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuMaterial {
-    pub kind: u32,
-    pub albedo: [f32; 3],
-    /// `Translucent::d`.
-    pub d: [f32; 3],
-    /// `Translucent::r_max`.
-    pub r_max: [f32; 3],
-    /// `Translucent::r_max_all`.
-    pub r_max_all: f32,
-    pub ior: f32,
-    pub g: f32,
-    /// κ_dist = 2 · max d, the hybrid shift's distance criterion [001 §5.1].
-    pub kappa_dist: f32,
-    /// `Translucent::fresnel().normalization`, `1 − F_dr(ior)` (computed with logarithms).
-    pub fresnel_normalization: f32,
-}
+/// `engine/glsl/pass_gbuffer.glsl` ([`PassKernel::GBuffer`]): [`GpuPixel`] out; its `PassParams`
+/// are unused. One invocation per pixel.
+pub const GBUFFER: Shader = Shader::of(PassKernel::GBuffer);
 
 impl GpuMaterial {
-    pub const LAMBERT: u32 = 0;
-    pub const TRANSLUCENT: u32 = 1;
+    pub const LAMBERT: u32 = MaterialKind::Lambert.code();
+    pub const TRANSLUCENT: u32 = MaterialKind::Translucent.code();
 
     pub fn new(material: &Material) -> GpuMaterial {
         match material {
@@ -77,29 +49,12 @@ impl GpuMaterial {
     }
 }
 
-/// `light.glsl`'s `GpuLight` (std430, 64 bytes): one [`Light`] with its selection CDF value and
-/// pmf. Points by kind: quad (corner, edge_u, edge_v), triangle (vertices), sphere (centre),
-/// point (position), directional (direction); `emission` is the radiance, intensity or
-/// irradiance.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuLight {
-    pub kind: u32,
-    pub radius: f32,
-    pub cdf: f32,
-    pub pmf: f32,
-    pub p0: [f32; 3],
-    pub p1: [f32; 3],
-    pub p2: [f32; 3],
-    pub emission: [f32; 3],
-}
-
 impl GpuLight {
-    pub const QUAD: u32 = 0;
-    pub const TRIANGLE: u32 = 1;
-    pub const SPHERE: u32 = 2;
-    pub const POINT: u32 = 3;
-    pub const DIRECTIONAL: u32 = 4;
+    pub const QUAD: u32 = LightKind::Quad.code();
+    pub const TRIANGLE: u32 = LightKind::Triangle.code();
+    pub const SPHERE: u32 = LightKind::Sphere.code();
+    pub const POINT: u32 = LightKind::Point.code();
+    pub const DIRECTIONAL: u32 = LightKind::Directional.code();
 
     pub fn new(light: &Light, cdf: f32, pmf: f32) -> GpuLight {
         let (kind, radius, [p0, p1, p2], emission) = match *light {
@@ -152,21 +107,6 @@ impl GpuLight {
     }
 }
 
-/// `camera.glsl`'s `GpuCamera` (std430, 68 bytes): a [`Camera`] at one frame, filled from the
-/// camera's own methods.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuCamera {
-    pub eye: [f32; 3],
-    pub forward: [f32; 3],
-    pub right: [f32; 3],
-    pub up: [f32; 3],
-    pub jitter: [f32; 2],
-    pub tan_half_fov: f32,
-    pub width: u32,
-    pub height: u32,
-}
-
 impl GpuCamera {
     /// `camera` at `frame`.
     pub fn new(camera: &Camera, frame: u32) -> GpuCamera {
@@ -182,29 +122,6 @@ impl GpuCamera {
             height: camera.height(),
         }
     }
-}
-
-/// `scene.glsl`'s `FrameParams` (std430, 176 bytes), binding 8: one frame's constants. The host
-/// pipeline rewrites it each frame ([`FrameParams::buffer`]).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct FrameParams {
-    pub width: u32,
-    pub height: u32,
-    pub frame: u32,
-    pub light_count: u32,
-    /// BVH nodes (`BVH_NODE_COUNT`, 0 for an empty scene).
-    pub node_count: u32,
-    pub object_count: u32,
-    /// The run seed of `restir::rng`, low and high 32 bits.
-    pub seed_lo: u32,
-    pub seed_hi: u32,
-    /// Keeps `camera` at offset 36 (std430 needs no padding here; the word is unused).
-    pub pad: u32,
-    pub camera: GpuCamera,
-    /// The camera at `previous` (zeroed when there is none).
-    pub previous_camera: GpuCamera,
-    pub has_previous: u32,
 }
 
 impl FrameParams {
@@ -232,23 +149,6 @@ impl FrameParams {
     pub fn buffer(&self, context: &Context) -> Result<Buffer, VulkanError> {
         Buffer::from_slice(context, std::slice::from_ref(self))
     }
-}
-
-/// `scene.glsl`'s `GPixel` (std430, 80 bytes): [`GPixel`] with `valid = 0` for `None`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuPixel {
-    pub position: [f32; 3],
-    pub object: u32,
-    pub geometric_normal: [f32; 3],
-    pub prim: u32,
-    pub shading_normal: [f32; 3],
-    pub depth: f32,
-    pub view: [f32; 3],
-    pub valid: u32,
-    pub bary: [f32; 2],
-    pub pad0: u32,
-    pub pad1: u32,
 }
 
 impl GpuPixel {

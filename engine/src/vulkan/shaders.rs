@@ -4,6 +4,7 @@
 //! that fills the buffers.
 
 use super::error::VulkanError;
+use crate::plan::{PassKernel, SCENE_BINDINGS};
 
 /// A compute shader of `engine/glsl/` and its binding interface: storage buffers at
 /// bindings `0..buffers`, `push_bytes` of push constants, `local_size` invocations per group.
@@ -28,6 +29,18 @@ impl Shader {
     /// [`BvhRayOutput`](super::BvhRayOutput), then the four buffers of a
     /// [`GpuBvh`](super::GpuBvh). Push constants: ray count and node count (`[u32; 2]`).
     pub const PARITY_BVH: Shader = Shader::new("parity_bvh", 6, 8);
+
+    /// The shader of a pass kernel: the scene's buffers and the kernel's, [`PassParams`]
+    /// push constants.
+    ///
+    /// [`PassParams`]: crate::contract::PassParams
+    pub const fn of(kernel: PassKernel) -> Shader {
+        Shader::new(
+            kernel.name(),
+            SCENE_BINDINGS + kernel.buffers().len() as u32,
+            size_of::<crate::contract::PassParams>() as u32,
+        )
+    }
 
     /// A shader with 64 invocations per group.
     pub const fn new(name: &'static str, buffers: u32, push_bytes: u32) -> Shader {

@@ -10,7 +10,7 @@ use super::{
     Buffer, Context, FrameInput, FrameParams, GpuPixel, GpuScene, Kernel, REQUIRE_ENV, Shader,
     VulkanError,
 };
-use crate::Backend;
+use crate::{Backend, Run};
 
 /// `Some(value)`, or `None` after printing why `test` is skipped; panics instead when
 /// [`REQUIRE_ENV`] is `1`.
@@ -46,6 +46,24 @@ pub fn backend_or_skip(test: &str) -> Option<Backend> {
     let backend = or_skip(test, opened.clone())?;
     eprintln!("{test}: on {backend}");
     Some(backend)
+}
+
+/// Mean over frames and pixels of `Σ_c (a − b)² / (b² + ε)` over RGB, ε = 1e-2 (a relative MSE
+/// that does not explode on black pixels), accumulated in f64: the yardstick of whole-run
+/// parity, compared with the same figure between two CPU seeds.
+pub fn rel_mse(a: &Run, b: &Run) -> f64 {
+    const EPSILON: f64 = 1e-2;
+    let (mut sum, mut n) = (0.0, 0usize);
+    for (fa, fb) in a.frames.iter().zip(&b.frames) {
+        for (pa, pb) in fa.pixels.iter().zip(&fb.pixels) {
+            for c in 0..3 {
+                let (x, y) = (pa[c] as f64, pb[c] as f64);
+                sum += (x - y) * (x - y) / (y * y + EPSILON);
+                n += 1;
+            }
+        }
+    }
+    sum / n.max(1) as f64
 }
 
 /// Relative error of `got` against `want`; equal values (0 included) give 0, a 0 or

@@ -5,8 +5,8 @@
 //! The only file of the lab that names presets and shift kinds: when presets move crates, the
 //! import below is the one to change.
 
-use engine::preset::PRESET_NAMES;
 use engine::{Backend, PassSpec, PipelineError, Preset, RunConfig, ShiftKind};
+use shifts::preset::PRESET_NAMES;
 use sss::scene::Scene;
 
 use super::estimator::{Entry, Estimator, Frame, Method};

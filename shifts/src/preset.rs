@@ -1,119 +1,16 @@
-//! The pipeline as data (DESIGN §6): a [`Preset`] is a list of passes, each naming its shift, MIS
-//! scheme, neighbour count and confidence cap, and the registry of named presets [001 §5.1].
+//! Pass schedules as data (DESIGN §1, §6): a [`Preset`] is a list of passes, each naming its
+//! shift, MIS scheme, neighbour count and confidence cap, and [`PRESETS`] names the presets of
+//! seed 001 [001 §5.1].
 //!
-//! A new shift is usable in any pass by adding one arm to [`ShiftKind`] (its name and how to
-//! build it); the backend never matches on shifts.
+//! A registered shift (`registry.rs`) is usable in any pass by its [`ShiftKind`]; the backends
+//! never match on shifts.
 
 use std::fmt;
 
-use restir::mis::{ConfidenceOnly, DefensivePairwise, Gbh, MAX_DOMAINS, MisScheme, Pairwise};
-use restir::shift::Shift;
-use shifts::{
-    DelayedReconnection, Hybrid, Identity, IndexPolicy, InvertingReconnection, Reconnection,
-    SssDomain, broken,
-};
-use sss::material::Translucent;
+use restir::mis::{MAX_DOMAINS, MisKind};
 
-/// Every shift of the `shifts` crate, negative controls included (so a test can build a preset
-/// with a deliberately wrong shift).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum ShiftKind {
-    Identity,
-    Reconnection,
-    DelayedReconnection,
-    /// Hybrid shift [001 §4.1] with κ_dist = 2·max d of the receiver's material, κ_orient = 0.5.
-    Hybrid,
-    /// Reconnection + probabilistic inversion [001 Alg. 4], the sequential scheme's reconnection.
-    InvertingReconnection(IndexPolicy),
-    /// Negative control: delayed reconnection with J = 1.
-    DelayedWithoutJacobian,
-    /// Negative control: delayed reconnection without the y2↔x3 visibility test.
-    DelayedWithoutVisibility,
-    /// Negative control: a hybrid whose offset path ignores the criterion.
-    HybridIgnoringCriterion,
-}
-
-impl ShiftKind {
-    /// Every kind, for registries and tests.
-    pub const ALL: [ShiftKind; 9] = [
-        ShiftKind::Identity,
-        ShiftKind::Reconnection,
-        ShiftKind::DelayedReconnection,
-        ShiftKind::Hybrid,
-        ShiftKind::InvertingReconnection(IndexPolicy::Exact),
-        ShiftKind::InvertingReconnection(IndexPolicy::Deferred),
-        ShiftKind::DelayedWithoutJacobian,
-        ShiftKind::DelayedWithoutVisibility,
-        ShiftKind::HybridIgnoringCriterion,
-    ];
-
-    pub fn name(&self) -> &'static str {
-        match self {
-            ShiftKind::Identity => "identity",
-            ShiftKind::Reconnection => "reconnection",
-            ShiftKind::DelayedReconnection => "delayed",
-            ShiftKind::Hybrid => "hybrid",
-            ShiftKind::InvertingReconnection(IndexPolicy::Exact) => "inverting-reconnection-exact",
-            ShiftKind::InvertingReconnection(IndexPolicy::Deferred) => {
-                "inverting-reconnection-deferred"
-            }
-            ShiftKind::DelayedWithoutJacobian => "broken:delayed-without-jacobian",
-            ShiftKind::DelayedWithoutVisibility => "broken:delayed-without-visibility",
-            ShiftKind::HybridIgnoringCriterion => "broken:hybrid-ignoring-criterion",
-        }
-    }
-
-    /// Whether the selected sample of a pass with this shift needs its intersection index
-    /// resolved afterwards (`shifts::resolve_deferred_index`, deferred policy [001 §4.3]).
-    pub fn resolves_deferred_index(&self) -> bool {
-        matches!(
-            self,
-            ShiftKind::InvertingReconnection(IndexPolicy::Deferred)
-        )
-    }
-
-    /// Runs `f` with the shift built for a receiver of material `material` (the hybrid's κ_dist
-    /// depends on it; every shift fails between different objects, so one material suffices).
-    pub fn with_shift<R>(
-        &self,
-        material: &Translucent,
-        f: impl FnOnce(&dyn for<'s> Shift<SssDomain<'s>>) -> R,
-    ) -> R {
-        match self {
-            ShiftKind::Identity => f(&Identity),
-            ShiftKind::Reconnection => f(&Reconnection),
-            ShiftKind::DelayedReconnection => f(&DelayedReconnection),
-            ShiftKind::Hybrid => f(&Hybrid::for_material(material)),
-            ShiftKind::InvertingReconnection(policy) => {
-                f(&InvertingReconnection { policy: *policy })
-            }
-            ShiftKind::DelayedWithoutJacobian => f(&broken::DelayedWithoutJacobian),
-            ShiftKind::DelayedWithoutVisibility => f(&broken::DelayedWithoutVisibility),
-            ShiftKind::HybridIgnoringCriterion => f(&broken::HybridIgnoringCriterion),
-        }
-    }
-}
-
-/// The resampling MIS schemes of `restir::mis`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MisKind {
-    Gbh,
-    Pairwise,
-    DefensivePairwise,
-    /// `1/M` with confidences: biased unless supports agree (a control, not a default).
-    ConfidenceOnly,
-}
-
-impl MisKind {
-    pub fn scheme(&self) -> &'static dyn MisScheme {
-        match self {
-            MisKind::Gbh => &Gbh,
-            MisKind::Pairwise => &Pairwise,
-            MisKind::DefensivePairwise => &DefensivePairwise,
-            MisKind::ConfidenceOnly => &ConfidenceOnly,
-        }
-    }
-}
+use crate::IndexPolicy;
+use crate::kind::ShiftKind;
 
 /// One pass of a frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -196,15 +93,6 @@ impl std::error::Error for PresetError {}
 /// Temporal confidence cap of seed 001 §5.1.
 pub const TEMPORAL_CAP: f32 = 20.0;
 
-/// Names of the registered presets.
-pub const PRESET_NAMES: [&str; 5] = [
-    "reconnection",
-    "delayed",
-    "hybrid",
-    "sequential",
-    "sequential-exact",
-];
-
 fn candidates() -> PassSpec {
     PassSpec::Candidates {
         bssrdf_samples: 1,
@@ -229,6 +117,34 @@ fn spatial(shift: ShiftKind, neighbours: u32) -> PassSpec {
     }
 }
 
+/// The registered presets: a name and how to build the preset called that [001 §5.1].
+pub const PRESETS: [(&str, fn(&str) -> Preset); 5] = [
+    ("reconnection", |n| {
+        Preset::single_shift(n, ShiftKind::Reconnection)
+    }),
+    ("delayed", |n| {
+        Preset::single_shift(n, ShiftKind::DelayedReconnection)
+    }),
+    ("hybrid", |n| Preset::single_shift(n, ShiftKind::Hybrid)),
+    ("sequential", |n| {
+        Preset::sequential(n, IndexPolicy::Deferred)
+    }),
+    ("sequential-exact", |n| {
+        Preset::sequential(n, IndexPolicy::Exact)
+    }),
+];
+
+/// Names of the registered presets, in [`PRESETS`] order.
+pub const PRESET_NAMES: [&str; PRESETS.len()] = {
+    let mut names = [""; PRESETS.len()];
+    let mut i = 0;
+    while i < names.len() {
+        names[i] = PRESETS[i].0;
+        i += 1;
+    }
+    names
+};
+
 impl Preset {
     /// Candidates → temporal → one spatial pass with 4 neighbours, all with `shift` [001 §5.1].
     pub fn single_shift(name: &str, shift: ShiftKind) -> Preset {
@@ -243,7 +159,10 @@ impl Preset {
     /// numbers for the receiver (the delayed pass replays the numbers a sample carries, which
     /// must belong to the pixel it sits in, also for samples taken over by temporal reuse).
     pub fn sequential(name: &str, policy: IndexPolicy) -> Preset {
-        let invert = ShiftKind::InvertingReconnection(policy);
+        let invert = match policy {
+            IndexPolicy::Exact => ShiftKind::InvertingExact,
+            IndexPolicy::Deferred => ShiftKind::InvertingDeferred,
+        };
         Preset {
             name: name.into(),
             passes: vec![
@@ -255,24 +174,15 @@ impl Preset {
         }
     }
 
-    /// The registered preset `name` ([`PRESET_NAMES`]), or `None`.
+    /// The registered preset `name` ([`PRESETS`]), or `None`.
     pub fn named(name: &str) -> Option<Preset> {
-        Some(match name {
-            "reconnection" => Preset::single_shift(name, ShiftKind::Reconnection),
-            "delayed" => Preset::single_shift(name, ShiftKind::DelayedReconnection),
-            "hybrid" => Preset::single_shift(name, ShiftKind::Hybrid),
-            "sequential" => Preset::sequential(name, IndexPolicy::Deferred),
-            "sequential-exact" => Preset::sequential(name, IndexPolicy::Exact),
-            _ => return None,
-        })
+        let (_, build) = PRESETS.iter().find(|(n, _)| *n == name)?;
+        Some(build(name))
     }
 
     /// Every registered preset.
     pub fn all() -> Vec<Preset> {
-        PRESET_NAMES
-            .iter()
-            .filter_map(|n| Preset::named(n))
-            .collect()
+        PRESETS.iter().map(|(name, build)| build(name)).collect()
     }
 
     /// Checks that the preset can run: exactly one candidate pass, first; at least one BSSRDF
@@ -396,7 +306,5 @@ mod tests {
             }],
         };
         assert!(p.validate().is_err());
-        let names: std::collections::HashSet<_> = ShiftKind::ALL.iter().map(|s| s.name()).collect();
-        assert_eq!(names.len(), ShiftKind::ALL.len());
     }
 }

@@ -1,0 +1,193 @@
+use bytemuck::{Pod, Zeroable};
+
+twin::contract! {
+    /// Hits per BSSRDF probe that the pass and path-tracer kernels keep (their `BVH_MAX_HITS`).
+    /// The CPU keeps every hit; a probe with more fails a run with `VulkanError::TooManyHits`
+    /// (passes) or leaves its sample out (path tracer).
+    pub const KEPT_HITS: usize = 16;
+
+    /// The diag `w` of a pixel whose loops the device cut short (`restir/glsl/loop_budget.glsl`).
+    pub const LOOP_BUDGET_CUT: u32 = 0xFF;
+    /// The diag `w` of a pixel with a BSSRDF probe of more than `KEPT_HITS` hits.
+    pub const HIT_OVERFLOW: u32 = 0xFE;
+
+    /// Reprojection checks of temporal reuse: the previous pixel must show the same object at a
+    /// view depth within this relative tolerance of x1's, ...
+    pub const TEMPORAL_DEPTH_TOLERANCE: f32 = 0.1;
+    /// ... with geometric normals at least this aligned.
+    pub const TEMPORAL_NORMAL_COSINE: f32 = 0.9;
+
+    /// `GpuMaterial::kind`.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub enum MaterialKind in MATERIAL {
+        /// Only `albedo` is set.
+        Lambert,
+        /// `Translucent` with its derived values.
+        Translucent,
+    }
+
+    /// `GpuLight::kind`.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub enum LightKind in LIGHT {
+        Quad,
+        Triangle,
+        Sphere,
+        Point,
+        Directional,
+    }
+
+    /// `PtParams::hits`: the path tracer's `sss::integrator::pt::HitPolicy`.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub enum PtHits in PT_HITS {
+        UniformOne,
+        All,
+    }
+
+    /// One global triangle id: vertices, per-vertex shading normals and the object id
+    /// (`sss::geometry::Geometry`), binding 4 of the scene.
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct GpuTriangle {
+        pub v: [f32; 9],
+        pub n: [f32; 9],
+        pub object: u32,
+    }
+
+    /// A material, binding 6 of the scene. Derived values are computed on the host in `f32`
+    /// exactly as `Translucent::d`, `r_max` and `r_max_all` compute them, so the GPU never
+    /// re-derives them with its own transcendentals. For a Lambert material only `kind` and
+    /// `albedo` are set.
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct GpuMaterial {
+        /// A `MaterialKind` code.
+        pub kind: u32,
+        /// Surface albedo A (translucent) or diffuse reflectance (Lambert) per channel.
+        pub albedo: [f32; 3],
+        /// `Translucent::d`: Burley d per channel [004 Eq. 5].
+        pub d: [f32; 3],
+        /// `Translucent::r_max` per channel.
+        pub r_max: [f32; 3],
+        /// `Translucent::r_max_all` = max of `r_max`.
+        pub r_max_all: f32,
+        pub ior: f32,
+        /// Henyey–Greenstein g (random walk).
+        pub g: f32,
+        /// κ_dist = 2 · max d, the hybrid shift's distance criterion [001 §5.1].
+        pub kappa_dist: f32,
+        /// `Translucent::fresnel().normalization`, `1 − F_dr(ior)` (computed with logarithms on
+        /// the host).
+        pub fresnel_normalization: f32,
+    }
+
+    /// One `sss::scene::Light` with its selection CDF value and pmf, binding 7 of the scene.
+    /// Points by kind: quad (corner, edge_u, edge_v), triangle (vertices), sphere (centre),
+    /// point (position), directional (direction); `emission` is the radiance, intensity or
+    /// irradiance.
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct GpuLight {
+        /// A `LightKind` code.
+        pub kind: u32,
+        pub radius: f32,
+        pub cdf: f32,
+        pub pmf: f32,
+        pub p0: [f32; 3],
+        pub p1: [f32; 3],
+        pub p2: [f32; 3],
+        pub emission: [f32; 3],
+    }
+
+    /// A `sss::scene::Camera` at one frame, filled from the camera's own methods.
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct GpuCamera {
+        pub eye: [f32; 3],
+        pub forward: [f32; 3],
+        pub right: [f32; 3],
+        pub up: [f32; 3],
+        pub jitter: [f32; 2],
+        pub tan_half_fov: f32,
+        pub width: u32,
+        pub height: u32,
+    }
+
+    /// One frame's constants, binding 8 of the scene (rewritten every frame).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct FrameParams {
+        pub width: u32,
+        pub height: u32,
+        pub frame: u32,
+        pub light_count: u32,
+        /// BVH nodes (`BVH_NODE_COUNT`, 0 for an empty scene).
+        pub node_count: u32,
+        pub object_count: u32,
+        /// The run seed of `restir::rng`, low and high 32 bits.
+        pub seed_lo: u32,
+        pub seed_hi: u32,
+        /// Unused; keeps `camera` at offset 36.
+        pub pad: u32,
+        pub camera: GpuCamera,
+        /// The camera of the previous frame, for temporal reprojection (zeroed when there is
+        /// none).
+        pub previous_camera: GpuCamera,
+        pub has_previous: u32,
+    }
+
+    /// A G-buffer pixel: `sss::scene::GPixel` with `valid = 0` where the CPU has `None`.
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct GpuPixel as GPixel {
+        pub position: [f32; 3],
+        pub object: u32,
+        pub geometric_normal: [f32; 3],
+        pub prim: u32,
+        pub shading_normal: [f32; 3],
+        pub depth: f32,
+        pub view: [f32; 3],
+        pub valid: u32,
+        pub bary: [f32; 2],
+        pub pad0: u32,
+        pub pad1: u32,
+    }
+
+    /// Push constants of every pass kernel.
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct PassParams in push_constant params {
+        /// The pass's index in the preset (the stream key's `pass`); the pass count for shade.
+        pub pass: u32,
+        /// `ShiftKind::code`.
+        pub shift: u32,
+        /// `MisKind::code`.
+        pub mis: u32,
+        pub neighbours: u32,
+        /// ≤ 0: no cap (a spatial pass's `None`).
+        pub confidence_cap: f32,
+        pub bssrdf_samples: u32,
+        pub shared_light: u32,
+        pub collect_diagnostics: u32,
+    }
+
+    /// Push constants of `method_pt`.
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+    pub struct PtParams in push_constant params {
+        pub spp: u32,
+        /// A `PtHits` code.
+        pub hits: u32,
+        /// The sample this dispatch adds (one dispatch per sample).
+        pub sample_index: u32,
+        pub pad: [u32; 5],
+    }
+
+    /// Push constants of `method_random_walk`.
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+    pub struct MethodParams in push_constant params {
+        pub spp: u32,
+        /// `pad[0]`: the sample this dispatch runs.
+        pub pad: [u32; 7],
+    }
+
+    /// A pixel's running sum between the dispatches of `method_pt`.
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct PtState {
+        pub sum: [f64; 3],
+        pub left_out: u32,
+        /// Samples whose loops the device cut short.
+        pub cut: u32,
+    }
+}

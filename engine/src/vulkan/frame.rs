@@ -1,0 +1,470 @@
+//! One run of a preset's [`Plan`] on the device: the twin of `cpu::run`.
+//!
+//! A run allocates its buffers once and records each distinct frame — the plan's steps, each
+//! bound to the frame's buffers in its kernel's binding order with a barrier where
+//! [`Plan::waits`] says, then read-back copies — into a command buffer once; frames are
+//! re-submitted. Frames differ only in which buffers play "current" and "previous" (the
+//! G-buffer alternates, the reservoir buffers rotate as [`Rotation`] says), so a run records at
+//! most six command buffers. `FrameParams` is copied from a staging buffer at the start of
+//! every frame, and a timestamp pair around each step gives [`Run::timings`] in GPU seconds.
+
+use std::collections::HashMap;
+
+use ash::vk;
+use sss::scene::Scene;
+
+use super::compute::bind_buffers;
+use super::decode::{add_diag, check_diag};
+use super::device::Context;
+use super::error::{VulkanError, api};
+use super::memory::{Allocation, Buffer, Placement, barrier};
+use super::scene::GpuScene;
+use super::shaders::Shader;
+use super::timing::Timestamps;
+use super::{Kernel, groups_for};
+use crate::contract::{FrameParams, GpuPixel, PassParams};
+use crate::diagnostics::Counters;
+use crate::image::Image;
+use crate::plan::{PassKernel, Plan, Resource, Rotation};
+use crate::{PassTiming, PipelineError, Run, RunConfig};
+use shifts::PixelReservoir;
+
+/// `pass_candidates.glsl` ([`PassKernel::Candidates`]).
+pub const CANDIDATES: Shader = Shader::of(PassKernel::Candidates);
+/// `pass_temporal.glsl` ([`PassKernel::Temporal`]).
+pub const TEMPORAL: Shader = Shader::of(PassKernel::Temporal);
+/// `pass_spatial.glsl` ([`PassKernel::Spatial`]).
+pub const SPATIAL: Shader = Shader::of(PassKernel::Spatial);
+
+/// Bytes per pixel of a diag buffer (`uvec4`) and of the shaded image (`vec4`).
+const TEXEL: usize = 16;
+
+/// One run's buffers, recorded frames and read-back staging.
+pub(super) struct FrameRun<'a> {
+    context: &'a Context,
+    scene: &'a GpuScene,
+    kernels: &'a HashMap<&'static str, Kernel>,
+    plan: &'a Plan,
+    /// [`Plan::waits`]: where a step waits for the steps before it (a barrier).
+    waits: Vec<bool>,
+    config: &'a RunConfig,
+    width: u32,
+    height: u32,
+    params: Buffer,
+    params_staging: Allocation,
+    gpixels: [Buffer; 2],
+    reservoirs: [Buffer; 3],
+    /// One per preset pass.
+    diags: Vec<Buffer>,
+    image: Buffer,
+    /// Image, then each pass's diag, then the final reservoirs.
+    readback: Allocation,
+    descriptor_pool: vk::DescriptorPool,
+    /// Recorded frames by (current G-buffer, reservoir rotation).
+    recorded: HashMap<(usize, Rotation), Recorded>,
+}
+
+/// A recorded frame.
+struct Recorded {
+    cb: vk::CommandBuffer,
+    timestamps: Option<Timestamps>,
+}
+
+impl<'a> FrameRun<'a> {
+    pub(super) fn new(
+        context: &'a Context,
+        scene_gpu: &'a GpuScene,
+        kernels: &'a HashMap<&'static str, Kernel>,
+        scene: &Scene,
+        plan: &'a Plan,
+        config: &'a RunConfig,
+    ) -> Result<FrameRun<'a>, VulkanError> {
+        let (width, height) = (scene.camera.width(), scene.camera.height());
+        let n = width as usize * height as usize;
+        let zeroed = |bytes| Buffer::zeroed(context, bytes);
+        let reservoir_bytes = n * PixelReservoir::BYTES;
+        let passes = plan.passes().count();
+        // At most six recorded frames (two G-buffers × three rotations), one set per step.
+        let per_frame = 6 * plan.steps.len() as u32;
+        let sizes = [vk::DescriptorPoolSize::default()
+            .ty(vk::DescriptorType::STORAGE_BUFFER)
+            .descriptor_count(per_frame * 16)];
+        // SAFETY: valid create info on a live device; destroyed in `Drop`.
+        let descriptor_pool = unsafe {
+            context.shared.device.create_descriptor_pool(
+                &vk::DescriptorPoolCreateInfo::default()
+                    .max_sets(per_frame)
+                    .pool_sizes(&sizes),
+                None,
+            )
+        }
+        .map_err(api("vkCreateDescriptorPool"))?;
+        let mut run = FrameRun {
+            context,
+            scene: scene_gpu,
+            kernels,
+            plan,
+            waits: plan.waits(),
+            config,
+            width,
+            height,
+            params: zeroed(size_of::<FrameParams>())?,
+            params_staging: Allocation::new(
+                &context.shared,
+                size_of::<FrameParams>() as u64,
+                vk::BufferUsageFlags::TRANSFER_SRC,
+                Placement::Host,
+            )?,
+            gpixels: [
+                zeroed(n * size_of::<GpuPixel>())?,
+                zeroed(n * size_of::<GpuPixel>())?,
+            ],
+            reservoirs: [
+                zeroed(reservoir_bytes)?,
+                zeroed(reservoir_bytes)?,
+                zeroed(reservoir_bytes)?,
+            ],
+            diags: Vec::new(),
+            image: zeroed(n * TEXEL)?,
+            readback: Allocation::new(
+                &context.shared,
+                ((passes + 1) * n * TEXEL + reservoir_bytes) as u64,
+                vk::BufferUsageFlags::TRANSFER_DST,
+                Placement::Host,
+            )?,
+            descriptor_pool,
+            recorded: HashMap::new(),
+        };
+        run.diags = (0..passes)
+            .map(|_| zeroed(n * TEXEL))
+            .collect::<Result<_, _>>()?;
+        Ok(run)
+    }
+
+    fn pixels(&self) -> usize {
+        self.width as usize * self.height as usize
+    }
+
+    /// Runs every frame and assembles the [`Run`].
+    pub(super) fn run(&mut self, scene: &Scene) -> Result<Run, PipelineError> {
+        let n = self.pixels();
+        let config = *self.config;
+        let plan = self.plan;
+        let passes = plan.passes().count();
+        let reuse_labels = plan
+            .passes()
+            .filter(|(_, step)| step.spec.is_some_and(|s| s.shift().is_some()))
+            .map(|(_, step)| step.label.clone());
+        let mut counters = config
+            .collect_diagnostics
+            .then(|| Counters::new(self.width, self.height, reuse_labels.collect()));
+        let mut seconds = vec![0.0f64; plan.steps.len()];
+        let mut timed = true;
+        let mut frames = Vec::with_capacity(config.frames as usize);
+        let mut nan_count = 0;
+        let mut rotation = Rotation::FIRST;
+        for frame in 0..config.frames {
+            let params = FrameParams::new(scene, frame, frame.checked_sub(1), config.seed);
+            self.params_staging
+                .mapped_mut()
+                .ok_or(VulkanError::NoMemoryType)?[..size_of::<FrameParams>()]
+                .copy_from_slice(bytemuck::bytes_of(&params));
+            let key = ((frame % 2) as usize, rotation);
+            if !self.recorded.contains_key(&key) {
+                let recorded = self.record(key)?;
+                self.recorded.insert(key, recorded);
+            }
+            let recorded = &self.recorded[&key];
+            {
+                let submit = self.context.shared.lock();
+                // SAFETY: the command buffer was recorded by `record`; the lock is held.
+                unsafe {
+                    super::device::submit_and_wait(
+                        &self.context.shared.device,
+                        submit.queue,
+                        recorded.cb,
+                    )
+                }?;
+            }
+            match &recorded.timestamps {
+                Some(t) => {
+                    for (s, t) in seconds.iter_mut().zip(t.seconds()?) {
+                        *s += t;
+                    }
+                }
+                None => timed = false,
+            }
+            rotation = rotation.next(plan);
+            let bytes = self.readback.mapped().ok_or(VulkanError::NoMemoryType)?;
+            let texels: &[[f32; 4]] = bytemuck::cast_slice(&bytes[..n * TEXEL]);
+            nan_count += texels.iter().filter(|t| t[3] != 0.0).count() as u64;
+            frames.push(Image {
+                width: self.width,
+                height: self.height,
+                pixels: texels
+                    .iter()
+                    .map(|t| glam::Vec3::new(t[0], t[1], t[2]))
+                    .collect(),
+            });
+            for (index, step) in plan.passes() {
+                let start = (index + 1) * n * TEXEL;
+                let diag: &[[u32; 4]] = bytemuck::cast_slice(&bytes[start..start + n * TEXEL]);
+                check_diag(frame, index, step, diag)?;
+                if let Some(counters) = &mut counters {
+                    add_diag(counters, index, step, diag);
+                }
+            }
+        }
+        let bytes = self.readback.mapped().ok_or(VulkanError::NoMemoryType)?;
+        let start = (passes + 1) * n * TEXEL;
+        let reservoirs: &[PixelReservoir] =
+            bytemuck::cast_slice(&bytes[start..start + n * PixelReservoir::BYTES]);
+        let timings = if timed {
+            plan.steps
+                .iter()
+                .zip(seconds)
+                .map(|(step, seconds)| PassTiming {
+                    label: step.label.clone(),
+                    seconds,
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        Ok(Run {
+            frames,
+            timings,
+            diagnostics: counters.map(|c| c.finish()),
+            nan_count,
+            reservoirs: reservoirs.to_vec(),
+        })
+    }
+
+    /// The buffer that plays `resource` in the frame whose G-buffer is `gpixels[current]` and
+    /// whose reservoir buffers rotate as `rotation`.
+    fn buffer(&self, resource: Resource, current: usize, rotation: Rotation) -> &Buffer {
+        match resource {
+            Resource::GBuffer => &self.gpixels[current],
+            Resource::PreviousGBuffer => &self.gpixels[1 - current],
+            Resource::Reservoirs(slot) => &self.reservoirs[rotation.buffer(slot)],
+            Resource::Diag(pass) => &self.diags[pass],
+            Resource::Image => &self.image,
+        }
+    }
+
+    /// Records the frame whose current G-buffer is `gpixels[current]` and whose reservoir
+    /// buffers rotate as `rotation`: the plan's steps, each bound to the frame's buffers in its
+    /// kernel's binding order, a barrier where [`Plan::waits`] says, then the read-back copies.
+    fn record(&self, (current, rotation): (usize, Rotation)) -> Result<Recorded, VulkanError> {
+        let device = &self.context.shared.device;
+        let n = self.pixels();
+        let passes = self.plan.passes().count();
+        let timestamps = Timestamps::new(self.context, self.plan.steps.len() as u32)?;
+        let cb = {
+            let submit = self.context.shared.lock();
+            // SAFETY: allocation from the pool while its lock is held.
+            unsafe {
+                device.allocate_command_buffers(
+                    &vk::CommandBufferAllocateInfo::default()
+                        .command_pool(submit.command_pool)
+                        .level(vk::CommandBufferLevel::PRIMARY)
+                        .command_buffer_count(1),
+                )
+            }
+            .map_err(api("vkAllocateCommandBuffers"))?[0]
+        };
+        // The command buffer is freed with the pool's other buffers in `Drop` from here on.
+        let recorded = Recorded { cb, timestamps };
+        let groups = groups_for(n as u32, 64);
+        // SAFETY: `cb` is recorded here from live objects of this run, which outlive it.
+        unsafe {
+            device
+                .begin_command_buffer(cb, &vk::CommandBufferBeginInfo::default())
+                .map_err(api("vkBeginCommandBuffer"))?;
+            if let Some(t) = &recorded.timestamps {
+                t.reset(cb);
+            }
+            // The previous submission's transfers are done (its fence was waited on); this
+            // orders them before this frame's writes all the same.
+            barrier(
+                device,
+                cb,
+                (
+                    vk::PipelineStageFlags::ALL_COMMANDS,
+                    vk::AccessFlags::MEMORY_WRITE,
+                ),
+                (
+                    vk::PipelineStageFlags::ALL_COMMANDS,
+                    vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE,
+                ),
+            );
+            let region = [vk::BufferCopy::default().size(size_of::<FrameParams>() as u64)];
+            device.cmd_copy_buffer(
+                cb,
+                self.params_staging.buffer,
+                self.params.allocation.buffer,
+                &region,
+            );
+            barrier(
+                device,
+                cb,
+                (
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::AccessFlags::TRANSFER_WRITE,
+                ),
+                (
+                    vk::PipelineStageFlags::COMPUTE_SHADER,
+                    vk::AccessFlags::SHADER_READ,
+                ),
+            );
+            for (section, (step, wait)) in self.plan.steps.iter().zip(&self.waits).enumerate() {
+                if *wait {
+                    barrier(
+                        device,
+                        cb,
+                        (
+                            vk::PipelineStageFlags::COMPUTE_SHADER,
+                            vk::AccessFlags::SHADER_WRITE,
+                        ),
+                        (
+                            vk::PipelineStageFlags::COMPUTE_SHADER,
+                            vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE,
+                        ),
+                    );
+                }
+                let mut buffers: Vec<&Buffer> = self.scene.buffers().to_vec();
+                buffers.push(&self.params);
+                buffers.extend(
+                    step.buffers
+                        .iter()
+                        .map(|&(resource, _)| self.buffer(resource, current, rotation)),
+                );
+                let push = step.params(self.config.collect_diagnostics);
+                let shader = Shader::of(step.kernel);
+                self.dispatch(
+                    cb,
+                    &recorded,
+                    section as u32,
+                    shader,
+                    &buffers,
+                    &push,
+                    groups,
+                )?;
+            }
+            barrier(
+                device,
+                cb,
+                (
+                    vk::PipelineStageFlags::COMPUTE_SHADER,
+                    vk::AccessFlags::SHADER_WRITE,
+                ),
+                (
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::AccessFlags::TRANSFER_READ,
+                ),
+            );
+            let texels = (n * TEXEL) as u64;
+            let copy = |src: &Buffer, offset: u64, size: u64| {
+                let region = [vk::BufferCopy::default().dst_offset(offset).size(size)];
+                device.cmd_copy_buffer(cb, src.allocation.buffer, self.readback.buffer, &region);
+            };
+            copy(&self.image, 0, texels);
+            for (index, diag) in self.diags.iter().enumerate() {
+                copy(diag, (index as u64 + 1) * texels, texels);
+            }
+            copy(
+                &self.reservoirs[rotation.buffer(self.plan.final_reservoirs)],
+                (passes as u64 + 1) * texels,
+                (n * PixelReservoir::BYTES) as u64,
+            );
+            barrier(
+                device,
+                cb,
+                (
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::AccessFlags::TRANSFER_WRITE,
+                ),
+                (vk::PipelineStageFlags::HOST, vk::AccessFlags::HOST_READ),
+            );
+            device
+                .end_command_buffer(cb)
+                .map_err(api("vkEndCommandBuffer"))?;
+        }
+        Ok(recorded)
+    }
+
+    /// Records one timed step: bind, push, dispatch.
+    #[allow(clippy::too_many_arguments)]
+    fn dispatch(
+        &self,
+        cb: vk::CommandBuffer,
+        recorded: &Recorded,
+        section: u32,
+        shader: Shader,
+        buffers: &[&Buffer],
+        push: &PassParams,
+        groups: u32,
+    ) -> Result<(), VulkanError> {
+        let kernel = self
+            .kernels
+            .get(shader.name)
+            .ok_or_else(|| VulkanError::UnknownShader(shader.name.to_string()))?;
+        if buffers.len() != kernel.buffers as usize
+            || kernel.push_bytes as usize != size_of::<PassParams>()
+        {
+            return Err(VulkanError::Binding(format!(
+                "{} takes {} buffers and {} push bytes, got {} and {}",
+                shader.name,
+                kernel.buffers,
+                kernel.push_bytes,
+                buffers.len(),
+                size_of::<PassParams>()
+            )));
+        }
+        let device = &self.context.shared.device;
+        // SAFETY: the set is allocated from this run's pool with the kernel's layout and
+        // written with live buffers; `cb` is recording.
+        unsafe {
+            let set = bind_buffers(device, self.descriptor_pool, kernel, buffers)?;
+            if let Some(t) = &recorded.timestamps {
+                t.begin(cb, section);
+            }
+            device.cmd_bind_pipeline(cb, vk::PipelineBindPoint::COMPUTE, kernel.pipeline);
+            device.cmd_bind_descriptor_sets(
+                cb,
+                vk::PipelineBindPoint::COMPUTE,
+                kernel.layout,
+                0,
+                &[set],
+                &[],
+            );
+            device.cmd_push_constants(
+                cb,
+                kernel.layout,
+                vk::ShaderStageFlags::COMPUTE,
+                0,
+                bytemuck::bytes_of(push),
+            );
+            device.cmd_dispatch(cb, groups, 1, 1);
+            if let Some(t) = &recorded.timestamps {
+                t.end(cb, section);
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Drop for FrameRun<'_> {
+    fn drop(&mut self) {
+        let device = &self.context.shared.device;
+        let submit = self.context.shared.lock();
+        let cbs: Vec<_> = self.recorded.values().map(|r| r.cb).collect();
+        // SAFETY: every submission was waited on; the pool lock is held while freeing.
+        unsafe {
+            if !cbs.is_empty() {
+                device.free_command_buffers(submit.command_pool, &cbs);
+            }
+            device.destroy_descriptor_pool(self.descriptor_pool, None);
+        }
+    }
+}

@@ -1,0 +1,207 @@
+//! The front of the Vulkan backend (DESIGN §6): a [`Renderer`] holds the [`Context`], the
+//! compiled kernels and the uploaded [`GpuScene`] across runs (creating a pipeline on lavapipe
+//! compiles LLVM code, so it is done once per shader) and runs the methods on them: a preset's
+//! frames ([`FrameRun`]), the path tracer and the random walk.
+
+use std::collections::HashMap;
+use std::collections::hash_map::Entry;
+
+use sss::scene::Scene;
+
+use super::device::Context;
+use super::error::VulkanError;
+use super::frame::FrameRun;
+use super::memory::Buffer;
+use super::random_walk::{RANDOM_WALK, render_random_walk, scene_media};
+use super::scene::{GBUFFER, GpuScene};
+use super::shaders::Shader;
+use super::{FrameInput, Kernel, PT, groups_for, render_pt};
+use crate::contract::{FrameParams, GpuPixel, PassParams};
+use crate::hash::Fnv1a;
+use crate::image::Image;
+use crate::plan::Plan;
+use crate::{PipelineError, Run, RunConfig};
+use shifts::preset::Preset;
+
+/// A Vulkan device with its kernels and the last uploaded scene, reused across runs.
+pub struct Renderer {
+    context: Context,
+    kernels: HashMap<&'static str, Kernel>,
+    /// The uploaded scene and the fingerprint of the [`Scene`] it came from.
+    scene: Option<(u64, GpuScene)>,
+}
+
+impl Renderer {
+    /// A renderer on `context`; kernels are built on first use.
+    pub fn new(context: Context) -> Renderer {
+        Renderer {
+            context,
+            kernels: HashMap::new(),
+            scene: None,
+        }
+    }
+
+    /// The device the renderer runs on.
+    pub fn context(&self) -> &Context {
+        &self.context
+    }
+
+    /// Builds (once) the kernels of `shaders`.
+    pub fn prepare(&mut self, shaders: &[Shader]) -> Result<(), VulkanError> {
+        for &shader in shaders {
+            if let Entry::Vacant(slot) = self.kernels.entry(shader.name) {
+                slot.insert(Kernel::for_shader(&self.context, shader)?);
+            }
+        }
+        Ok(())
+    }
+
+    /// Uploads `scene` unless the cached upload came from an identical scene (cameras aside:
+    /// the camera travels in [`FrameParams`]).
+    pub fn upload(&mut self, scene: &Scene) -> Result<(), VulkanError> {
+        let key = fingerprint(scene);
+        if self.scene.as_ref().is_none_or(|(k, _)| *k != key) {
+            self.scene = None;
+            self.scene = Some((key, GpuScene::upload(&self.context, scene)?));
+        }
+        Ok(())
+    }
+
+    /// The uploaded scene (after [`Renderer::upload`]).
+    pub fn gpu_scene(&self) -> Result<&GpuScene, VulkanError> {
+        self.scene
+            .as_ref()
+            .map(|(_, s)| s)
+            .ok_or_else(|| VulkanError::Binding("no scene was uploaded".into()))
+    }
+
+    /// The context, a built kernel and the uploaded scene, borrowed together.
+    pub fn parts(
+        &mut self,
+        shader: Shader,
+    ) -> Result<(&mut Context, &Kernel, &GpuScene), VulkanError> {
+        self.prepare(&[shader])?;
+        let scene = self
+            .scene
+            .as_ref()
+            .map(|(_, s)| s)
+            .ok_or_else(|| VulkanError::Binding("no scene was uploaded".into()))?;
+        Ok((&mut self.context, &self.kernels[shader.name], scene))
+    }
+
+    /// The G-buffer of `frame` of `scene`'s trajectory on the device (uploading the scene if
+    /// needed), with the frame's parameter buffer: the input of the memoryless methods.
+    pub fn gbuffer(
+        &mut self,
+        scene: &Scene,
+        frame: u32,
+        seed: u64,
+    ) -> Result<(Buffer, Buffer), VulkanError> {
+        self.upload(scene)?;
+        let n = pixel_count(scene);
+        let params = FrameParams::new(scene, frame, frame.checked_sub(1), seed);
+        let params = Buffer::from_slice(&self.context, &[params])?;
+        let gpixels = Buffer::zeroed(&self.context, n * size_of::<GpuPixel>())?;
+        let (context, kernel, gpu) = self.parts(GBUFFER)?;
+        let mut buffers: Vec<&Buffer> = gpu.buffers().to_vec();
+        buffers.extend([&params, &gpixels]);
+        let push = PassParams::new(0, None, false);
+        context.dispatch(
+            kernel,
+            &buffers,
+            bytemuck::bytes_of(&push),
+            [groups_for(n as u32, GBUFFER.local_size), 1, 1],
+        )?;
+        Ok((gpixels, params))
+    }
+
+    /// The `pt:spp` method at `frame`: the image and the samples left out of the means.
+    pub fn pt(
+        &mut self,
+        scene: &Scene,
+        frame: u32,
+        seed: u64,
+        spp: u32,
+    ) -> Result<(Image, u64), VulkanError> {
+        let (gbuffer, params) = self.gbuffer(scene, frame, seed)?;
+        let (context, kernel, gpu) = self.parts(PT)?;
+        let input = FrameInput {
+            scene: gpu,
+            params: &params,
+            gbuffer: &gbuffer,
+            width: scene.camera.width(),
+            height: scene.camera.height(),
+        };
+        let out = render_pt(context, kernel, &input, spp)?;
+        Ok((out.image, out.left_out))
+    }
+
+    /// The `random-walk:spp` method at `frame`: the image and the samples left out.
+    pub fn random_walk(
+        &mut self,
+        scene: &Scene,
+        frame: u32,
+        seed: u64,
+        spp: u32,
+    ) -> Result<(Image, u64), PipelineError> {
+        let media = scene_media(scene)?;
+        let (gbuffer, params) = self.gbuffer(scene, frame, seed)?;
+        let (context, kernel, gpu) = self.parts(RANDOM_WALK)?;
+        let input = FrameInput {
+            scene: gpu,
+            params: &params,
+            gbuffer: &gbuffer,
+            width: scene.camera.width(),
+            height: scene.camera.height(),
+        };
+        let out = render_random_walk(context, kernel, &input, &media, spp)?;
+        if out.cut > 0 {
+            return Err(PipelineError::Vulkan(VulkanError::LoopsCut {
+                shader: RANDOM_WALK.name,
+                count: out.cut,
+            }));
+        }
+        Ok((out.image.image, out.image.left_out))
+    }
+
+    /// Renders `config.frames` frames of `scene` with `preset` (validated by the caller) on
+    /// the device: the GPU twin of [`crate::run`]. `Run::timings` are GPU seconds from the
+    /// timestamps; they are empty on a queue that writes no timestamps.
+    pub fn run(
+        &mut self,
+        scene: &Scene,
+        preset: &Preset,
+        config: &RunConfig,
+    ) -> Result<Run, PipelineError> {
+        let plan = Plan::lower(preset);
+        let shaders: Vec<Shader> = plan.steps.iter().map(|s| Shader::of(s.kernel)).collect();
+        self.prepare(&shaders)?;
+        self.upload(scene)?;
+        let gpu = self.gpu_scene()?;
+        FrameRun::new(&self.context, gpu, &self.kernels, scene, &plan, config)?.run(scene)
+    }
+}
+
+fn pixel_count(scene: &Scene) -> usize {
+    scene.camera.width() as usize * scene.camera.height() as usize
+}
+
+/// FNV-1a over what [`GpuScene`] is built from: materials, objects, lights, every triangle's
+/// vertices, shading normals and object. Two scenes with the same fingerprint upload the same
+/// buffers.
+fn fingerprint(scene: &Scene) -> u64 {
+    let mut hash = Fnv1a::new();
+    hash.write(format!("{:?}{:?}{:?}", scene.materials, scene.objects, scene.lights).as_bytes());
+    let geometry = &scene.geometry;
+    for prim in 0..geometry.triangle_count() {
+        for v in geometry.vertices(prim) {
+            hash.write(bytemuck::bytes_of(&v.to_array()));
+        }
+        for bary in [[0.0f32, 0.0], [1.0, 0.0], [0.0, 1.0]] {
+            let n = geometry.shading_normal(prim, glam::Vec2::from_array(bary));
+            hash.write(bytemuck::bytes_of(&n.to_array()));
+        }
+        hash.write(&geometry.object_of(prim).to_le_bytes());
+    }
+    hash.finish()
+}

@@ -1,0 +1,70 @@
+use bytemuck::{Pod, Zeroable};
+
+twin::contract! {
+    /// The stored intersection index meaning *unknown* (deferred index policy).
+    pub const INDEX_UNKNOWN: u32 = u32::MAX;
+
+    /// Stream purpose tags of the shifts, in the top two bits of `StreamKey::purpose`; the low
+    /// 30 bits hold the source pixel (see `SssDomain::shift_stream`): probabilistic
+    /// inversion's γ.
+    pub const PURPOSE_INVERSION: u32 = 0b10 << 30;
+    /// The uniform hit pick of delayed reconnection when the intersection index is unknown.
+    pub const PURPOSE_PICK: u32 = 0b11 << 30;
+    /// The source pixel's bits of a shift's stream purpose.
+    pub const PARTNER_PIXEL_MASK: u32 = (1 << 30) - 1;
+
+    /// Offset of shadow-segment ends from x2 (along its geometric normal) and from x3 (scene
+    /// units; the built-in scenes are about one unit across).
+    pub const SHADOW_EPSILON: f32 = 1e-4;
+
+    /// How the intersection index of an inverted sample is found (DESIGN §5).
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub enum IndexPolicy in INDEX_POLICY {
+        /// Re-trace the chord during the shift at *both* ends of the pair; fail (`NotInvertible`)
+        /// if x2 is not among the hits of either (matched by triangle and `t`). Unbiased: the
+        /// shift and its back-shift fail on the same events (see `InvertingReconnection`).
+        Exact,
+        /// Leave the index unknown; `resolve_deferred_index` sets it for the selected sample
+        /// after the pass. Seed 001's fast choice, slightly biased.
+        Deferred,
+    }
+
+    /// One SSS path sample `[x0, x1, x2, x3]` without its pixel: x2 on a translucent object, x3
+    /// on a light, and the random numbers of BSSRDF IS [001 Alg. 3] (methods in `sample.rs`).
+    ///
+    /// For a directional light the stored x3 is where the light sampler put the vertex (far
+    /// along `−direction`); contributions and visibility use the light's direction instead, so
+    /// the vertex acts as the point at infinity.
+    #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+    pub struct SssSample {
+        pub(crate) x3: [f32; 3],
+        pub(crate) light: u32,
+        pub(crate) bary: [f32; 2],
+        pub(crate) object: u32,
+        pub(crate) prim: u32,
+        /// `Technique::index` = axis · 3 + channel.
+        pub(crate) technique: u32,
+        pub(crate) u_radius: f32,
+        pub(crate) u_angle: f32,
+        /// Rank of x2 among the probe's hits sorted by `t`, or `INDEX_UNKNOWN`.
+        pub(crate) index: u32,
+        /// `p_disk(x2 | x1)` of the x1 whose random numbers are stored.
+        pub(crate) p_disk: f32,
+        pub(crate) padding: [u32; 3],
+    }
+
+    /// A stored reservoir `{y, W, c}` of one pixel [001 Alg. 2], the per-pixel buffer that the
+    /// passes read and write (a multiple of 16 bytes, so arrays of it have no gaps).
+    #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+    pub struct PixelReservoir {
+        /// The selected sample `Y` (meaningful when `has_sample` is 1).
+        pub y: SssSample,
+        /// Unbiased contribution weight `W` (`ucw`), finite and ≥ 0.
+        pub ucw: f32,
+        /// Confidence weight `c`.
+        pub confidence: f32,
+        /// 1 when `y` holds the selected sample, 0 for an empty reservoir.
+        pub has_sample: u32,
+        pub(crate) padding: u32,
+    }
+}

@@ -1,0 +1,48 @@
+//! Reconnection with a distance threshold: reconnection [001 §3.2.1] restricted to paths whose
+//! entry point x2 lies at least `min_distance` from the exit point on both sides of the shift —
+//! where the hybrid shift [001 §4.1] prefers reconnection because the profile varies slowly.
+//! Elsewhere it fails, and the canonical sample and the MIS weights cover those paths.
+//!
+//! The worked example of `docs/adding-a-shift.md`: this file, its twin
+//! `shifts/glsl/distant.glsl` and one line of `registry.rs`.
+
+use restir::shift::{Fail, Shift, Shifted};
+use sss::bssrdf::ExitPoint;
+use sss::material::Translucent;
+
+use crate::domain::SssDomain;
+use crate::reconnection::reconnect;
+use crate::sample::SssSample;
+
+/// Reconnection where `‖x2 − x1‖ ≥ min_distance` for the exit points x1 of both domains.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DistantReconnection {
+    pub min_distance: f32,
+}
+
+impl DistantReconnection {
+    /// The hybrid shift's distance threshold `κ_dist = 2 · max_c d_c` [001 §5.1].
+    pub fn for_material(material: &Translucent) -> DistantReconnection {
+        DistantReconnection {
+            min_distance: 2.0 * material.d().max_element(),
+        }
+    }
+}
+
+/// `J = 1` (reconnection). The rule reads x2 and both exit points, which a round trip
+/// exchanges, so the shift fails in one direction exactly when it fails in the other.
+impl Shift<SssDomain<'_>> for DistantReconnection {
+    fn shift(
+        &self,
+        x: &SssSample,
+        src: &SssDomain,
+        dst: &SssDomain,
+    ) -> Result<Shifted<SssSample>, Fail> {
+        let x2 = src.entry_point(x).ok_or(Fail::Rejected)?;
+        let far = |x1: &ExitPoint| (x2.position - x1.position).length() >= self.min_distance;
+        if !(far(src.x1()) && far(dst.x1())) {
+            return Err(Fail::Rejected);
+        }
+        reconnect(x, dst).map(|y| Shifted { y, jacobian: 1.0 })
+    }
+}

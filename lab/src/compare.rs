@@ -19,7 +19,7 @@ use crate::error::Error;
 use crate::images::write_comparison_images;
 use crate::method_result::{MethodResult, Replica};
 use crate::methods::pt::Pt;
-use crate::methods::{Method, MethodError};
+use crate::methods::{Method, MethodError, SampleCounts};
 use crate::progress::Progress;
 use crate::reference_cache::{self, FrameReference, Obtained, REFERENCE_SEED, ReferenceSource};
 use crate::regions::Regions;
@@ -302,6 +302,7 @@ fn render_replica(
             seconds_per_frame: r.seconds_per_frame,
             frames_rendered: r.frames_rendered,
             nonfinite: r.nonfinite,
+            spp: r.spp,
         });
     }
     let (trajectory, seconds_per_frame) =
@@ -315,6 +316,10 @@ fn render_replica(
         seconds_per_frame,
         frames_rendered: trajectory.frames_rendered,
         nonfinite: trajectory.nonfinite,
+        spp: trajectory
+            .counts
+            .as_ref()
+            .map_or(method.spp() as f64, SampleCounts::mean),
     })
 }
 

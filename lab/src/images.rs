@@ -11,7 +11,7 @@ use crate::error::Error;
 use crate::metrics::error_maps;
 use crate::reference_cache::mean_image;
 use crate::report::file_stem;
-use crate::report::plots::error_map;
+use crate::report::plots::false_colour_map;
 use crate::report::results::{ErrorMapScale, ImageFiles};
 
 /// Writes `reference.exr`/`.png` and, per method `(spec, replica-0 final frame)`, its frame and
@@ -52,7 +52,7 @@ pub fn write_comparison_images(
         image.write_png(out.join(&files.final_png))?;
         let size = (image.width, image.height);
         let title = format!("{spec}: luminance of |I − R|");
-        error_map(
+        false_colour_map(
             &out.join(&files.abs_error_png),
             abs,
             size,
@@ -60,7 +60,7 @@ pub fn write_comparison_images(
             &title,
         )?;
         let title = format!("{spec}: |I − R| / (Y(R) + 0.1)");
-        error_map(
+        false_colour_map(
             &out.join(&files.rel_error_png),
             rel,
             size,

@@ -19,6 +19,8 @@ pub struct Replica {
     pub seconds_per_frame: f64,
     pub frames_rendered: u32,
     pub nonfinite: u64,
+    /// Mean samples per pixel of the last frame ([`Rendered::spp`](crate::methods::Rendered)).
+    pub spp: f64,
 }
 
 /// The metrics per area at one frame.
@@ -57,8 +59,12 @@ impl Measured {
 pub struct MethodResult {
     /// The method as requested (`pt`, `restir:hybrid`).
     pub method: String,
-    /// Samples per pixel per frame actually used (after equal-time calibration).
+    /// Samples per pixel per frame actually used (after equal-time calibration); for a method
+    /// that chooses counts per pixel, the most a pixel may take.
     pub spp: u32,
+    /// Mean over replicas of the mean samples per pixel of the final frame
+    /// ([`Rendered::spp`]): `spp` unless the method chooses counts per pixel (`adaptive`).
+    pub mean_spp: f64,
     pub replicas: usize,
     /// Wall-clock seconds per rendered frame over replicas (one timing per replica).
     pub seconds: Estimate,
@@ -105,6 +111,7 @@ impl MethodResult {
         Some(MethodResult {
             method: method.to_string(),
             spp,
+            mean_spp: replicas.iter().map(|r| r.spp).sum::<f64>() / replicas.len() as f64,
             replicas: replicas.len(),
             seconds: Estimate::mean(&seconds),
             frames_rendered: replicas.iter().map(|r| r.frames_rendered).max()?,

@@ -8,6 +8,7 @@ use std::time::Instant;
 
 use engine::image::Image;
 use engine::{Backend, PipelineError};
+use sss::integrator::pt::PtSettings;
 use sss::limits::{self, MAX_SPP};
 use sss::scene::Scene;
 
@@ -44,10 +45,31 @@ pub trait Estimator: fmt::Debug + Send + Sync + 'static {
         seed: u64,
     ) -> Result<Frame, PipelineError>;
 
-    /// Renders replica `seed` like [`Estimator::render`] and returns every frame `0..frames`.
-    /// The default renders each frame `f` on its own (`render` of `f + 1` frames): right and
-    /// cheap for a memoryless estimator. An estimator with memory across frames overrides it
-    /// with one run of the trajectory.
+    /// [`Estimator::render`] with the per-pixel sample counts of the returned frame, for a
+    /// method that chooses them itself (adaptive sampling). The default is `render` and `None`:
+    /// every pixel with a primary hit takes [`Estimator::spp`] samples.
+    fn render_counted(
+        &self,
+        backend: &Backend,
+        scene: &Scene,
+        frames: u32,
+        seed: u64,
+    ) -> Result<(Frame, Option<SampleCounts>), PipelineError> {
+        Ok((self.render(backend, scene, frames, seed)?, None))
+    }
+
+    /// The path-tracer settings whose converged image this method estimates, i.e. its
+    /// reference in `bias` (DESIGN §7): the default path tracer (Burley BSSRDF) unless the
+    /// method renders another transport model (`image-space`: the dipole profile).
+    fn reference(&self) -> PtSettings {
+        PtSettings::default()
+    }
+
+    /// Renders replica `seed` like [`Estimator::render`] and returns every frame `0..frames`,
+    /// with the sample counts of the last (as [`Estimator::render_counted`]). The default
+    /// renders each frame `f` on its own (`render_counted` of `f + 1` frames): right and cheap
+    /// for a memoryless estimator. An estimator with memory across frames overrides it with
+    /// one run of the trajectory.
     fn render_trajectory(
         &self,
         backend: &Backend,
@@ -59,14 +81,43 @@ pub trait Estimator: fmt::Debug + Send + Sync + 'static {
             frames: Vec::with_capacity(frames as usize),
             frames_rendered: 0,
             nonfinite: 0,
+            counts: None,
         };
         for f in 1..=frames {
-            let frame = self.render(backend, scene, f, seed)?;
+            let (frame, counts) = self.render_counted(backend, scene, f, seed)?;
             trajectory.frames.push(frame.image);
             trajectory.frames_rendered += frame.frames_rendered;
             trajectory.nonfinite += frame.nonfinite;
+            trajectory.counts = counts;
         }
         Ok(trajectory)
+    }
+}
+
+/// The samples each pixel of a frame took, for a method that chooses them per pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SampleCounts {
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel, row-major from the top row (0 without a primary hit).
+    pub counts: Vec<u32>,
+    /// The most samples a pixel may take (the top of the count map's scale).
+    pub max: u32,
+}
+
+impl SampleCounts {
+    /// The mean count over `pixels` (indices into `counts`); 0 for none.
+    pub fn mean_over(&self, pixels: &[usize]) -> f64 {
+        let sum: u64 = pixels.iter().map(|&p| self.counts[p] as u64).sum();
+        sum as f64 / pixels.len().max(1) as f64
+    }
+
+    /// The mean count over the pixels with a primary hit (those with a count > 0).
+    pub fn mean(&self) -> f64 {
+        let hit: Vec<usize> = (0..self.counts.len())
+            .filter(|&p| self.counts[p] > 0)
+            .collect();
+        self.mean_over(&hit)
     }
 }
 
@@ -90,6 +141,8 @@ pub struct Trajectory {
     pub frames_rendered: u32,
     /// Shaded values that were NaN or infinite, over all frames.
     pub nonfinite: u64,
+    /// Per-pixel sample counts of the last frame (`None`: [`Estimator::spp`] everywhere).
+    pub counts: Option<SampleCounts>,
 }
 
 /// The final frame of one replica of a method, and what it cost.
@@ -103,6 +156,12 @@ pub struct Rendered {
     pub frames_rendered: u32,
     /// Shaded values that were NaN or infinite (written as 0 or left out of the mean).
     pub nonfinite: u64,
+    /// Mean samples per pixel of the frame over the pixels with a primary hit: the method's
+    /// [`Method::spp`], or the mean of `counts` for a method that chooses them per pixel. An
+    /// equal-cost comparison holds this equal, not `spp`.
+    pub spp: f64,
+    /// Per-pixel sample counts of the frame (`None`: `spp` everywhere).
+    pub counts: Option<SampleCounts>,
 }
 
 /// A rendering method: a shared [`Estimator`]. Two methods are equal when their canonical
@@ -121,7 +180,8 @@ impl Method {
         self.0.name()
     }
 
-    /// Samples per pixel per frame: the path tracers' `spp`, 1 candidate for ReSTIR.
+    /// Samples per pixel per frame: the path tracers' `spp`, 1 candidate for ReSTIR; for a method
+    /// that chooses counts per pixel, the most a pixel may take (the mean is [`Rendered::spp`]).
     pub fn spp(&self) -> u32 {
         self.0.spp()
     }
@@ -136,6 +196,11 @@ impl Method {
     /// camera's).
     pub fn render(&self, scene: &Scene, frames: u32, seed: u64) -> Result<Rendered, PipelineError> {
         self.render_on(&Backend::Cpu, scene, frames, seed)
+    }
+
+    /// The path-tracer settings of this method's reference ([`Estimator::reference`]).
+    pub fn reference(&self) -> PtSettings {
+        self.0.reference()
     }
 
     /// [`Method::render`] on `backend`, timed: `seconds_per_frame` is wall-clock time per
@@ -158,12 +223,16 @@ impl Method {
             })
             .map_err(|e| PipelineError::Config(e.to_string()))?;
         let start = Instant::now();
-        let frame = self.0.render(backend, scene, frames, seed)?;
+        let (frame, counts) = self.0.render_counted(backend, scene, frames, seed)?;
         Ok(Rendered {
             seconds_per_frame: start.elapsed().as_secs_f64() / frame.frames_rendered as f64,
             image: frame.image,
             frames_rendered: frame.frames_rendered,
             nonfinite: frame.nonfinite,
+            spp: counts
+                .as_ref()
+                .map_or(self.spp() as f64, SampleCounts::mean),
+            counts,
         })
     }
 
@@ -215,5 +284,16 @@ pub fn parse_spp(arg: Option<&str>) -> Result<u32, String> {
                 "samples per pixel {text:?} is not an integer in 1..={MAX_SPP}"
             )),
         },
+    }
+}
+
+/// `Ok` on the CPU; on another backend the one-line error of a method (`family`) whose device
+/// kernels do not exist yet.
+pub fn cpu_only(backend: &Backend, family: &str) -> Result<(), PipelineError> {
+    match backend.renderer() {
+        None => Ok(()),
+        Some(_) => Err(PipelineError::Config(format!(
+            "{family} is not yet available on Vulkan (use --backend cpu)"
+        ))),
     }
 }

@@ -125,6 +125,7 @@ impl Estimator for Restir {
             frames: result.frames,
             frames_rendered: frames,
             nonfinite: result.nan_count,
+            counts: None,
         })
     }
 }

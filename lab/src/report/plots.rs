@@ -1,7 +1,7 @@
 //! Plots of a comparison, drawn with `plotters` into RGB buffers and written as PNG: the
 //! convergence plot (MSE against frame, log y, one line per method with its 95% band, one panel
 //! per region; [`convergence`]) and false-colour error maps with a labelled colour bar
-//! ([`error_map`]). Text uses the bundled DejaVu Sans (`lab/assets/fonts`). [`write_figures`]
+//! ([`false_colour_map`]). Text uses the bundled DejaVu Sans (`lab/assets/fonts`). [`write_figures`]
 //! writes the convergence plot and the inset figure ([`super::figure`]).
 
 use std::path::Path;
@@ -209,10 +209,10 @@ fn convergence_panel(
         .draw()
 }
 
-/// A false-colour error map: `values` (row-major `width × height`, luminance of an error)
-/// scaled up to at least 256 pixels wide, viridis from 0 to `max` ([`crate::images::ramp`];
+/// A false-colour map (an error map, a sample-count map): `values` (row-major
+/// `width × height`) scaled up to at least 256 pixels wide, viridis from 0 to `max` ([`crate::images::ramp`];
 /// magenta: not finite), `title` above and a colour bar with labelled ticks to the right.
-pub fn error_map(
+pub fn false_colour_map(
     path: &Path,
     values: &[f64],
     (width, height): (u32, u32),
@@ -221,7 +221,7 @@ pub fn error_map(
 ) -> Result<(), Error> {
     if values.len() != width as usize * height as usize || width == 0 || height == 0 {
         return Err(Error::Invalid(format!(
-            "{}: {} values for a {width}×{height} error map",
+            "{}: {} values for a {width}×{height} false-colour map",
             path.display(),
             values.len()
         )));

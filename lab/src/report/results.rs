@@ -125,6 +125,7 @@ pub struct FigureFiles {
 pub struct MethodEntry {
     pub method: String,
     pub spp: u32,
+    pub mean_spp: f64,
     pub replicas: usize,
     /// Mean over replicas of the wall-clock seconds per rendered frame.
     pub seconds_per_frame: f64,
@@ -288,6 +289,7 @@ impl MethodEntry {
         MethodEntry {
             method: r.method.clone(),
             spp: r.spp,
+            mean_spp: r.mean_spp,
             replicas: r.replicas,
             seconds_per_frame: seconds.value,
             seconds_per_frame_ci: seconds.ci,

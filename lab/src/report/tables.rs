@@ -9,7 +9,7 @@ use crate::metrics::Area;
 use crate::uncertainty::Interval;
 
 /// Column names of [`csv`], in order.
-pub const CSV_HEADER: &str = "method,spp,replicas,area,pixels,ms_per_frame,ms_per_frame_lo,ms_per_frame_hi,mse,mse_lo,mse_hi,rel_mse,rel_mse_lo,rel_mse_hi,bias,bias_ci99,relative_bias,variance,reference_mse,efficiency,efficiency_lo,efficiency_hi,efficiency_ratio,efficiency_ratio_lo,efficiency_ratio_hi,tonemapped_mse,tonemapped_mse_lo,tonemapped_mse_hi";
+pub const CSV_HEADER: &str = "method,spp,mean_spp,replicas,area,pixels,ms_per_frame,ms_per_frame_lo,ms_per_frame_hi,mse,mse_lo,mse_hi,rel_mse,rel_mse_lo,rel_mse_hi,bias,bias_ci99,relative_bias,variance,reference_mse,efficiency,efficiency_lo,efficiency_hi,efficiency_ratio,efficiency_ratio_lo,efficiency_ratio_hi,tonemapped_mse,tonemapped_mse_lo,tonemapped_mse_hi";
 
 /// Column names of [`convergence_csv`], in order.
 pub const CONVERGENCE_HEADER: &str = "method,frame,area,pixels,mse,mse_lo,mse_hi,reference_mse";
@@ -95,7 +95,7 @@ pub fn markdown(results: &[MethodResult], baseline: Option<&MethodResult>) -> St
                 out,
                 "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 r.method,
-                r.spp,
+                spp_cell(r),
                 m.area.name(),
                 m.pixels,
                 with_ci(Some(Measured::of(&m.mse))),
@@ -155,6 +155,16 @@ fn cells(m: Option<Measured>) -> String {
     )
 }
 
+/// The `spp` cell: the method's spp, or `mean ≤ max` for a method that chooses its counts per
+/// pixel.
+fn spp_cell(r: &MethodResult) -> String {
+    if r.mean_spp == r.spp as f64 {
+        r.spp.to_string()
+    } else {
+        format!("{:.1} ≤ {}", r.mean_spp, r.spp)
+    }
+}
+
 /// The rows of [`markdown`] as CSV with [`CSV_HEADER`]; empty cells for values that do not
 /// exist.
 pub fn csv(results: &[MethodResult], baseline: Option<&MethodResult>) -> String {
@@ -164,9 +174,10 @@ pub fn csv(results: &[MethodResult], baseline: Option<&MethodResult>) -> String 
         for m in &r.metrics {
             let _ = writeln!(
                 out,
-                "{},{},{},{},{},{},{},{},{:e},{},{},{},{:e},{},{},{}",
+                "{},{},{},{},{},{},{},{},{},{:e},{},{},{},{:e},{},{},{}",
                 r.method,
                 r.spp,
+                r.mean_spp,
                 r.replicas,
                 m.area.name(),
                 m.pixels,
@@ -236,6 +247,7 @@ mod tests {
         MethodResult {
             method: method.into(),
             spp: 1,
+            mean_spp: 1.0,
             replicas: 2,
             seconds: Estimate::mean(&[0.45, 0.55]),
             frames_rendered: 16,
@@ -277,15 +289,24 @@ mod tests {
         );
         assert!(md.contains("| eff. / pt:1 [95% CI] |"), "{md}");
         assert!(md.contains("+2.00%"), "relative bias 0.01/0.5: {md}");
+        let adaptive = MethodResult {
+            spp: 64,
+            mean_spp: 12.34,
+            ..result("adaptive", 0.1)
+        };
+        assert!(
+            markdown(&[adaptive], None).contains("| adaptive | 12.3 ≤ 64 | image |"),
+            "a method that chooses its counts shows their mean and maximum"
+        );
         let csv = csv(&results, baseline);
         let columns = CSV_HEADER.split(',').count();
         assert_eq!(csv.lines().count(), 1 + 4);
         for line in csv.lines() {
             assert_eq!(line.split(',').count(), columns, "{line}");
         }
-        // Efficiency = 1 / (0.2 · 0.5) = 10 (column 20); the tonemapped MSE has no spread.
+        // Efficiency = 1 / (0.2 · 0.5) = 10 (column 21); the tonemapped MSE has no spread.
         let row = csv.lines().nth(1).unwrap();
-        let efficiency: f64 = row.split(',').nth(19).unwrap().parse().unwrap();
+        let efficiency: f64 = row.split(',').nth(20).unwrap().parse().unwrap();
         assert!((efficiency - 10.0).abs() < 1e-9, "{row}");
         assert!(row.ends_with(",2.5e-1,2.5e-1,2.5e-1"), "{row}");
         let v = verdict(&results, baseline);

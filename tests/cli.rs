@@ -533,8 +533,9 @@ fn assert_schema_rejects_broken(schema: &Value, good: &Value) {
 }
 
 /// `compare` on every built-in scene at 16×12 (2 frames, 2 replicas, `pt` and two presets, a
-/// 2 × 8 spp reference): exits 0, writes every output, and its results.json validates against
-/// the schema. The second run on `bumpy` reuses the cached reference.
+/// 2 × 8 spp reference per frame, `pt:2` the baseline): exits 0, writes every output (figures
+/// and report.html included), measures both frames, and its results.json validates against the
+/// schema. The second run on `bumpy` reuses the cached references.
 #[test]
 fn compare_runs_on_every_builtin_scene_and_validates() {
     let dir = scratch("compare");
@@ -548,6 +549,8 @@ fn compare_runs_on_every_builtin_scene_and_validates() {
             name,
             "--methods",
             "pt:2,restir:hybrid,restir:sequential",
+            "--baseline",
+            "pt:2",
             "--replicas",
             "2",
             "--frames",
@@ -579,13 +582,36 @@ fn compare_runs_on_every_builtin_scene_and_validates() {
                 );
             }
         }
-        for file in ["table.md", "table.csv", "reference.exr", "reference.png"] {
+        for file in written["figures"].as_object().unwrap().values() {
+            assert!(out.join(file.as_str().unwrap()).is_file(), "{name}: {file}");
+        }
+        for file in [
+            "table.md",
+            "table.csv",
+            "convergence.csv",
+            "reference.exr",
+            "reference.png",
+        ] {
             assert!(out.join(file).is_file(), "{name}: {file}");
+        }
+        assert_eq!(written["baseline"], "pt:2", "{name}");
+        assert_eq!(written["frame_references"].as_array().unwrap().len(), 2);
+        for method in written["methods"].as_array().unwrap() {
+            let frames: Vec<&Value> = method["convergence"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|f| &f["frame"])
+                .collect();
+            assert_eq!(frames, [0, 1], "{name}");
         }
         if *name == "bumpy" {
             assert_schema_rejects_broken(schema, &written);
             let again: Value = serde_json::from_str(&ok(&reshift(&args))).unwrap();
             assert_eq!(again["reference"]["cached"], true);
+            for f in again["frame_references"].as_array().unwrap() {
+                assert_eq!(f["cached"], true);
+            }
             // Same reference and seeds → the same errors (timings, and so efficiency, differ).
             let mse = |v: &Value| v["methods"][0]["areas"][1]["mse"].clone();
             assert_eq!(mse(&again), mse(&written));

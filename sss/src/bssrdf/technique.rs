@@ -1,18 +1,11 @@
 //! BSSRDF IS techniques: a projection axis times a profile channel [001 §2.1, §4.3].
 
-/// Projection axis of the probe ray, in the frame of x1's geometric normal (DESIGN §9).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Axis {
-    Normal,
-    Tangent,
-    Bitangent,
-}
+pub use crate::contract::bssrdf::Axis;
+use crate::contract::bssrdf::TECHNIQUE_COUNT;
 
 impl Axis {
-    pub const ALL: [Axis; 3] = [Axis::Normal, Axis::Tangent, Axis::Bitangent];
-
     pub const fn index(self) -> usize {
-        self as usize
+        self.code() as usize
     }
 }
 
@@ -26,16 +19,16 @@ pub struct Technique {
 }
 
 impl Technique {
-    pub const COUNT: usize = 9;
+    pub const COUNT: usize = TECHNIQUE_COUNT;
 
     /// All techniques in index order (`axis · 3 + channel`).
-    pub const ALL: [Technique; 9] = {
+    pub const ALL: [Technique; TECHNIQUE_COUNT] = {
         let mut all = [Technique {
             axis: Axis::Normal,
             channel: 0,
-        }; 9];
+        }; TECHNIQUE_COUNT];
         let mut i = 0;
-        while i < 9 {
+        while i < TECHNIQUE_COUNT {
             all[i] = Technique {
                 axis: Axis::ALL[i / 3],
                 channel: i % 3,

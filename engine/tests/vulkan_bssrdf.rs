@@ -709,13 +709,14 @@ fn candidates_pass_matches_the_cpu() {
     }
 }
 
-/// The candidates pass keeps 16 hits per probe (`BVH_MAX_HITS` in `pass_candidates.glsl`,
-/// bvh.glsl's default is 8); a probe with more would lose candidates the CPU streams. Over 64
-/// probes of every translucent pixel of every built-in scene (48×48, seed 1) the largest count
-/// stays within 16. Control: the measurement must see multi-hit probes at all (largest > 2).
+/// The candidates pass keeps `KEPT_HITS` (16) hits per probe (its `BVH_MAX_HITS`; bvh.glsl's
+/// default is `BVH_DEFAULT_MAX_HITS`, 8); a probe with more would lose candidates the CPU
+/// streams. Over 64 probes of every translucent pixel of every built-in scene (48×48, seed 1)
+/// the largest count stays within it. Control: the measurement must see multi-hit probes at all
+/// (largest > 2).
 #[test]
 fn probe_hit_counts_stay_within_the_pass_capacity() {
-    const PASS_MAX_HITS: usize = 16;
+    const PASS_MAX_HITS: usize = engine::contract::KEPT_HITS;
     let mut hits = Vec::new();
     let mut largest = 0;
     for (name, _) in Scene::BUILTIN {

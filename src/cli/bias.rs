@@ -3,17 +3,20 @@
 //! tolerance δ (`lab::bias`).
 
 use clap::Args;
-use lab::bias::{BiasRow, Protocol, Table, bias_rows, luminance, reference_images, summarize};
+use lab::bias::{
+    BiasRow, Protocol, Table, bias_rows, luminance, reference_images, summarize, test_bytes,
+};
 use lab::methods::Method;
 use lab::reference_cache::REFERENCE_SEED;
 use lab::regions::Regions;
 use restir::stats::Verdict;
 use serde_json::{Value, json};
+use sss::limits::{self, MAX_REPLICAS, MAX_SPP};
 use sss::scene::GBuffer;
 
 use super::common::{
-    BackendArgs, CliError, CliResult, interrupted, json_number, load_scene, parse_resolution,
-    progress, with_resolution,
+    BackendArgs, CliError, CliResult, command_line, interrupted, json_number, load_scene,
+    parse_resolution, progress, with_resolution,
 };
 
 #[derive(Args, Clone, Debug)]
@@ -61,14 +64,10 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
             args.delta, args.alpha
         )));
     }
-    if args.replicas < 2 || args.reference_batches < 2 || args.frames == 0 {
-        return Err(CliError(
-            "--replicas and --reference-batches must be ≥ 2, --frames ≥ 1".into(),
-        ));
-    }
+    let resolution = check_sizes(args)?;
     let backend = args.backend.open()?;
     let loaded = load_scene(&args.scene)?;
-    let scene = with_resolution(loaded.scene, Some(parse_resolution(&args.resolution)?));
+    let scene = with_resolution(loaded.scene, Some(resolution));
     let frame = args.frames - 1;
     let regions = Regions::classify(&scene, &GBuffer::render(&scene, frame), REFERENCE_SEED);
     let reference = reference_images(
@@ -152,6 +151,38 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
         )));
     }
     Ok(())
+}
+
+/// The resolution, once every count is within `sss::limits` (at least two replicas and two
+/// reference batches, for their standard errors) and the test fits the memory budget.
+fn check_sizes(args: &BiasArgs) -> CliResult<(u32, u32)> {
+    let line = command_line();
+    let count = |flag: &str, n: u32, min: u32, max: u32| {
+        limits::count(line, flag, n as u64, min as u64, max as u64)
+    };
+    count("--replicas", args.replicas, 2, MAX_REPLICAS)?;
+    count(
+        "--reference-batches",
+        args.reference_batches,
+        2,
+        MAX_REPLICAS,
+    )?;
+    count(
+        "--reference-batch-spp",
+        args.reference_batch_spp,
+        1,
+        MAX_SPP,
+    )?;
+    limits::frames(line, "--frames", args.frames)?;
+    let (width, height) = parse_resolution(&args.resolution)?;
+    let value = format!(
+        "{} replicas, {} reference batches, {} frames at {width}×{height}",
+        args.replicas, args.reference_batches, args.frames
+    );
+    let pixels = width as u64 * height as u64;
+    let needed = test_bytes(pixels, args.replicas, args.reference_batches, args.frames);
+    limits::memory(line, "--replicas", &value, needed, "the bias test")?;
+    Ok((width, height))
 }
 
 /// Over regions: biased if any region is, unbiased if all are, else inconclusive.

@@ -8,8 +8,11 @@ use lab::methods::Method;
 use lab::report::{file_stem, output_dir};
 use serde_json::json;
 
+use sss::limits;
+
 use super::common::{
-    BackendArgs, CliResult, json_number, load_scene, parse_resolution, with_resolution,
+    BackendArgs, CliResult, command_line, json_number, load_scene, parse_resolution,
+    with_resolution,
 };
 
 #[derive(Args, Clone, Debug)]
@@ -40,6 +43,7 @@ pub struct RenderArgs {
 }
 
 pub fn command(args: &RenderArgs) -> CliResult<()> {
+    limits::frames(command_line(), "--frames", args.frames)?;
     let method = Method::parse(&args.method)?;
     let loaded = load_scene(&args.scene)?;
     let resolution = args

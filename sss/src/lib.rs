@@ -10,6 +10,7 @@ pub mod contract;
 pub mod error;
 pub mod geometry;
 pub mod integrator;
+pub mod limits;
 pub mod material;
 pub mod profile;
 pub mod random_walk;

@@ -2,11 +2,13 @@
 //! [`Entry`] that registers a family of methods by name.
 
 use std::fmt;
+use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
 use engine::image::Image;
 use engine::{Backend, PipelineError};
+use sss::limits::{self, MAX_SPP};
 use sss::scene::Scene;
 
 /// One family of methods: `family[:argument]`.
@@ -109,9 +111,16 @@ impl Method {
         frames: u32,
         seed: u64,
     ) -> Result<Rendered, PipelineError> {
-        if frames == 0 {
-            return Err(PipelineError::Config("frames = 0; need at least 1".into()));
-        }
+        let origin = Path::new("(run)");
+        let (width, height) = (scene.camera.width(), scene.camera.height());
+        limits::frames(origin, "frames", frames)
+            .and_then(|_| limits::resolution(origin, "width×height", width, height))
+            .and_then(|_| {
+                let bytes = limits::run_bytes(width as u64 * height as u64, frames);
+                let value = format!("{frames} frames at {width}×{height}");
+                limits::memory(origin, "frames", &value, bytes, "the run")
+            })
+            .map_err(|e| PipelineError::Config(e.to_string()))?;
         let start = Instant::now();
         let frame = self.0.render(backend, scene, frames, seed)?;
         Ok(Rendered {
@@ -141,14 +150,14 @@ impl fmt::Display for Method {
     }
 }
 
-/// `spp` of `family[:spp]`: 1 without an argument, else a positive integer.
+/// `spp` of `family[:spp]`: 1 without an argument, else an integer in `1..=`[`MAX_SPP`].
 pub fn parse_spp(arg: Option<&str>) -> Result<u32, String> {
     match arg {
         None => Ok(1),
         Some(text) => match text.parse::<u32>() {
-            Ok(n) if n > 0 => Ok(n),
+            Ok(n) if (1..=MAX_SPP).contains(&n) => Ok(n),
             _ => Err(format!(
-                "samples per pixel {text:?} is not a positive integer"
+                "samples per pixel {text:?} is not an integer in 1..={MAX_SPP}"
             )),
         },
     }

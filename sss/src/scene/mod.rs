@@ -9,6 +9,7 @@ mod gbuffer;
 mod light;
 mod load;
 mod many_lights;
+mod parse;
 
 use std::path::{Path, PathBuf};
 

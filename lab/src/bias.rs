@@ -106,6 +106,20 @@ pub fn reference_images(
     spp_per_batch: u32,
     seed: u64,
 ) -> Result<Images, InputError> {
+    let settings = PtSettings::default();
+    reference_images_with(&settings, scene, frame, batches, spp_per_batch, seed)
+}
+
+/// [`reference_images`] of the path tracer with `settings`: a method's own reference
+/// (`lab::methods::Method::reference`, e.g. the dipole profile of `image-space`).
+pub fn reference_images_with(
+    settings: &PtSettings,
+    scene: &Scene,
+    frame: u32,
+    batches: u32,
+    spp_per_batch: u32,
+    seed: u64,
+) -> Result<Images, InputError> {
     let bad = |field: &str, value: String, reason: &str| {
         Err(InputError::new("(bias reference)", field, value, reason))
     };
@@ -128,13 +142,12 @@ pub fn reference_images(
         );
     }
     let gbuffer = GBuffer::render(scene, frame);
-    let settings = PtSettings::default();
     let images: Vec<pt::Image> = (0..batches)
         .map(|b| {
             pt::render(
                 scene,
                 &gbuffer,
-                &settings,
+                settings,
                 seed,
                 b * spp_per_batch,
                 spp_per_batch,

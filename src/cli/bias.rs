@@ -1,10 +1,12 @@
-//! `reshift bias`: N replicas of one method against independent path-traced reference batches;
+//! `reshift bias`: N replicas of one method against independent path-traced reference batches
+//! (the path tracer with the method's reference settings, `Method::reference`: the dipole
+//! profile for `image-space`);
 //! per region the Welch test of zero bias (Holm across regions) and the equivalence verdict with
 //! tolerance δ (`lab::bias`).
 
 use clap::Args;
 use lab::bias::{
-    BiasRow, Protocol, Table, bias_rows, luminance, reference_images, summarize, test_bytes,
+    BiasRow, Protocol, Table, bias_rows, luminance, reference_images_with, summarize, test_bytes,
 };
 use lab::methods::Method;
 use lab::reference_cache::REFERENCE_SEED;
@@ -70,7 +72,10 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
     let scene = with_resolution(loaded.scene, Some(resolution));
     let frame = args.frames - 1;
     let regions = Regions::classify(&scene, &GBuffer::render(&scene, frame), REFERENCE_SEED);
-    let reference = reference_images(
+    let reference_settings = method.reference();
+    let profile = reference_settings.profile.name();
+    let reference = reference_images_with(
+        &reference_settings,
         &scene,
         frame,
         args.reference_batches,
@@ -115,6 +120,7 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
             args,
             &scene.name,
             &rows,
+            profile,
             [nonfinite, reference.nonfinite],
             images.len(),
             stopped,
@@ -125,7 +131,7 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
         );
     } else {
         println!(
-            "# bias of {} on {} ({}, frame {frame}): N = {} replicas vs {} reference batches × {} spp, δ = {}%, α = {}\n",
+            "# bias of {} on {} ({}, frame {frame}): N = {} replicas vs {} reference batches × {} spp ({profile} profile), δ = {}%, α = {}\n",
             method,
             scene.name,
             args.resolution,
@@ -209,6 +215,7 @@ fn bias_json(
     args: &BiasArgs,
     scene: &str,
     rows: &[BiasRow],
+    profile: &str,
     [replica_nonfinite, reference_nonfinite]: [u64; 2],
     replicas: usize,
     interrupted: bool,
@@ -246,6 +253,7 @@ fn bias_json(
         "reference": {
             "batches": args.reference_batches,
             "spp_per_batch": args.reference_batch_spp,
+            "profile": profile,
             "seed": REFERENCE_SEED,
         },
         "nonfinite": { "replicas": replica_nonfinite, "reference": reference_nonfinite },

@@ -8,6 +8,8 @@
 pub fn glsl_items() -> Vec<twin::Item> {
     [
         burley::glsl_items(),
+        xie::glsl_items(),
+        dipole::glsl_items(),
         light::glsl_items(),
         bvh::glsl_items(),
         material::glsl_items(),
@@ -15,6 +17,7 @@ pub fn glsl_items() -> Vec<twin::Item> {
         pt::glsl_items(),
         random_walk::glsl_items(),
         single_scatter::glsl_items(),
+        image_space::glsl_items(),
     ]
     .concat()
 }
@@ -26,6 +29,37 @@ pub mod burley {
 
         /// The quantile of the radius CDF used as the truncation radius `r_max` (DESIGN §9).
         pub const R_MAX_QUANTILE: f32 = 0.999;
+    }
+}
+
+/// `xie.glsl`.
+pub mod xie {
+    twin::contract! {
+        glsl_prefix = XIE;
+
+        /// Iteration cap of the bracketed Newton solve behind [`crate::profile::Xie::cdf`]
+        /// (converged to f32 in the round-trip test over ξ ∈ [1e-7, 1 − 2⁻²⁴]).
+        pub const INVERSE_ITERATIONS: usize = 12;
+    }
+}
+
+/// `dipole.glsl`.
+pub mod dipole {
+    twin::contract! {
+        glsl_prefix = DIPOLE;
+
+        /// Iteration cap of the monotone Newton solve in `Dipole::sample_pole` (converged to
+        /// f32 in the round-trip test).
+        pub const NEWTON_ITERATIONS: usize = 32;
+
+        /// One of the two sources of the dipole.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+        pub enum Pole in DIPOLE_POLE {
+            /// The real source at depth `z_r = 1/σt′` below the surface.
+            Real,
+            /// The virtual (negative) source at height `z_v = z_r(1 + 4A/3)` above it.
+            Virtual,
+        }
     }
 }
 
@@ -110,6 +144,19 @@ pub mod bssrdf {
             Bitangent,
         }
 
+        /// How every technique draws its disk radius from its channel's Burley profile (DESIGN §4
+        /// "Radius sampling"). The density of the result enters `p_disk`, so both choices are
+        /// unbiased.
+        #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+        pub enum RadiusSampling in BSSRDF_RADIUS {
+            /// The exact inverse of the radius CDF (`Burley::sample_radius`); density `R̄_d`.
+            #[default]
+            Exact,
+            /// Xie et al.'s approximate inverse `g(ξ)` [004 Eq. 21] weighted by the density of
+            /// `g(U)` itself (`Xie::pdf_disk`), not by `R̄_d`.
+            Xie,
+        }
+
         /// Why x2 cannot be regenerated from x1; on the GPU the inverse returns its code, or
         /// `BSSRDF_INVERT_OK` (0).
         #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -134,6 +181,16 @@ pub mod pt {
         /// light, in scene units (scenes are about 1 unit across; the BVH ignores hits closer
         /// than 1e-4 anyway).
         pub const SHADOW_EPSILON: f32 = 1e-4;
+
+        /// Which diffusion profile a BSSRDF evaluates: Burley's normalized diffusion `A R̄_d`
+        /// (DESIGN §9, every method's default) or the Jensen dipole of the same material
+        /// (`DipoleProfiles`), the profile of seed 002 (`PtSettings::profile`).
+        #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+        pub enum ProfileKind in PT_PROFILE {
+            #[default]
+            Burley,
+            Dipole,
+        }
     }
 }
 
@@ -190,6 +247,30 @@ pub mod single_scatter {
             /// `P_c = σs,c / Σ σs = σt,c α_c / Σ σt α` [000 "RGB variation in σt"] (uniform when
             /// the medium does not scatter).
             Scattering,
+        }
+    }
+}
+
+/// `image_space.glsl`.
+pub mod image_space {
+    twin::contract! {
+        glsl_prefix = IMAGE_SPACE;
+
+        /// `purpose` of the irradiance streams (ASCII "ISIR").
+        pub const PURPOSE_IRRADIANCE: u32 = 0x4953_4952;
+        /// `purpose` of the gather streams (ASCII "ISGA").
+        pub const PURPOSE_GATHER: u32 = 0x4953_4741;
+
+        /// What the image shows under a tangent-plane point
+        /// ([`crate::integrator::image_space::Lookup::kind`]); on the GPU the lookup returns
+        /// its code.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        pub enum LookupKind in IMAGE_SPACE {
+            /// An entry point with its normal and irradiance.
+            Entry,
+            OffScreen,
+            /// Another object or no hit.
+            Occluded,
         }
     }
 }

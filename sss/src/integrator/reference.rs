@@ -14,7 +14,7 @@
 //! | width, height, frame | u32 ×3 |
 //! | seed | u64 |
 //! | spp_per_batch, batches (planned total), start, next, end | u32 ×5 |
-//! | hit policy (0 = uniform one, 1 = all) | u8 |
+//! | estimator: bit 0 hit policy (0 = uniform one, 1 = all), bit 1 Xie radii, bit 2 dipole profile | u8 |
 //! | P(axis) ×3, P(channel) ×3 | f32 ×6 |
 //! | nonfinite | u64 |
 //! | scene name: length, UTF-8 bytes | u32, bytes |
@@ -30,8 +30,9 @@ use glam::DVec3;
 use super::exact::ExactSum;
 use super::pt::{self, HitPolicy, PtSettings};
 use crate::InputError;
-use crate::bssrdf::TechniqueSelection;
+use crate::bssrdf::{RadiusSampling, TechniqueSelection};
 use crate::limits::{self, MAX_PIXELS, bytes as human};
+use crate::profile::ProfileKind;
 use crate::scene::{GBuffer, Scene};
 
 const MAGIC: &[u8; 8] = b"RSSSREF1";
@@ -43,6 +44,26 @@ const PIXEL_BYTES: u64 = 2 * 3 * 4 * 8;
 const MAX_NAME_BYTES: u64 = 4096;
 /// Largest checkpoint file: [`MAX_PIXELS`] pixels.
 pub const MAX_CHECKPOINT_BYTES: u64 = FIXED_BYTES + MAX_NAME_BYTES + MAX_PIXELS * PIXEL_BYTES;
+
+/// Bits of the checkpoint's estimator byte (a byte of 0 or 1 is a file from before the options).
+const FLAG_ALL_HITS: u8 = 1;
+const FLAG_XIE: u8 = 2;
+const FLAG_DIPOLE: u8 = 4;
+
+/// The estimator byte of `settings`.
+fn estimator_flags(settings: &PtSettings) -> u8 {
+    let mut flags = 0;
+    if settings.hits == HitPolicy::All {
+        flags |= FLAG_ALL_HITS;
+    }
+    if settings.radius == RadiusSampling::Xie {
+        flags |= FLAG_XIE;
+    }
+    if settings.profile == ProfileKind::Dipole {
+        flags |= FLAG_DIPOLE;
+    }
+    flags
+}
 
 /// What a reference integrates; two references can be merged only if these agree.
 #[derive(Clone, Debug, PartialEq)]
@@ -332,10 +353,7 @@ impl Reference {
         for v in [c.spp_per_batch, c.batches, self.start, self.next, self.end] {
             out.extend_from_slice(&v.to_le_bytes());
         }
-        out.push(match c.settings.hits {
-            HitPolicy::UniformOne => 0,
-            HitPolicy::All => 1,
-        });
+        out.push(estimator_flags(&c.settings));
         for p in c
             .settings
             .selection
@@ -395,18 +413,15 @@ impl Reference {
                 "inconsistent batch range",
             ));
         }
-        let hits = match reader.take(1, "hit_policy")?[0] {
-            0 => HitPolicy::UniformOne,
-            1 => HitPolicy::All,
-            other => {
-                return Err(InputError::new(
-                    path,
-                    "hit_policy",
-                    other.to_string(),
-                    "expected 0 or 1",
-                ));
-            }
-        };
+        let flags = reader.take(1, "estimator")?[0];
+        if flags > FLAG_ALL_HITS | FLAG_XIE | FLAG_DIPOLE {
+            return Err(InputError::new(
+                path,
+                "estimator",
+                flags.to_string(),
+                "expected bits 0 (all hits), 1 (Xie radii) and 2 (dipole profile) only",
+            ));
+        }
         let mut probabilities = [0.0f32; 6];
         for p in &mut probabilities {
             *p = f32::from_le_bytes(reader.array("selection")?);
@@ -460,7 +475,24 @@ impl Reference {
             seed,
             spp_per_batch,
             batches,
-            settings: PtSettings { hits, selection },
+            settings: PtSettings {
+                hits: if flags & FLAG_ALL_HITS != 0 {
+                    HitPolicy::All
+                } else {
+                    HitPolicy::UniformOne
+                },
+                selection,
+                radius: if flags & FLAG_XIE != 0 {
+                    RadiusSampling::Xie
+                } else {
+                    RadiusSampling::Exact
+                },
+                profile: if flags & FLAG_DIPOLE != 0 {
+                    ProfileKind::Dipole
+                } else {
+                    ProfileKind::Burley
+                },
+            },
         };
         let mut reference =
             Reference::new(config, width, height, Shard::WHOLE).map_err(|e| InputError {
@@ -622,6 +654,43 @@ mod tests {
             sequential, grouped,
             "control: plain f64 sums happen to be associative here"
         );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Every combination of hit policy, radius sampling and profile survives a checkpoint; an
+    /// estimator byte with an unknown bit is a typed error naming the field.
+    #[test]
+    fn estimator_options_round_trip_through_checkpoints() {
+        let dir =
+            std::env::temp_dir().join(format!("reshift-reference-flags-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("checkpoint.bin");
+        for hits in [HitPolicy::UniformOne, HitPolicy::All] {
+            for radius in [RadiusSampling::Exact, RadiusSampling::Xie] {
+                for profile in [ProfileKind::Burley, ProfileKind::Dipole] {
+                    let settings = PtSettings {
+                        hits,
+                        radius,
+                        profile,
+                        ..PtSettings::default()
+                    };
+                    let config = ReferenceConfig {
+                        settings,
+                        ..config(2)
+                    };
+                    let r = Reference::new(config, 3, 2, Shard::WHOLE).unwrap();
+                    r.save(&path).unwrap();
+                    assert_eq!(Reference::load(&path).unwrap(), r, "{settings:?}");
+                }
+            }
+        }
+        let mut bytes = std::fs::read(&path).unwrap();
+        let flags_at = 8 + 3 * 4 + 8 + 5 * 4;
+        assert_eq!(bytes[flags_at], 7, "the all-options file sets bits 0–2");
+        bytes[flags_at] = 8;
+        std::fs::write(&path, &bytes).unwrap();
+        let err = Reference::load(&path).unwrap_err();
+        assert_eq!((err.field.as_str(), err.value.as_str()), ("estimator", "8"));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

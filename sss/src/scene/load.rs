@@ -648,8 +648,8 @@ impl Ctx<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::Scene;
     use crate::error::MAX_MESSAGE_CHARS;
+    use crate::scene::Scene;
 
     const ORIGIN: &str = "tests/minimal.toml";
 

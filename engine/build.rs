@@ -2,12 +2,12 @@
 //! shaders to SPIR-V with `glslc` (DESIGN §6, docs/gpu-backend.md).
 //!
 //! Contract: the crates declare what their GLSL twins share with them in `twin::contract!`
-//! files (`restir/src/contract.rs`, `shifts/src/contract.rs`, `src/contract.rs`,
-//! `src/purpose.rs`) and register shifts in `shifts/src/registry.rs`. This script includes the
-//! same files, so the items it renders are the ones the crates compile, and writes
-//! `$OUT_DIR/glsl/contract/`: `restir.glsl`, `shifts.glsl` (with the shift kinds and their
-//! dispatch list), `engine.glsl`, one header per push-constant block, and `shift_twins.glsl`
-//! (the includes of the registered shifts' GLSL twins).
+//! files (`restir/src/contract.rs`, `sss/src/contract.rs`, `shifts/src/contract.rs`,
+//! `src/contract.rs`, `src/purpose.rs`) and register shifts in `shifts/src/registry.rs`. This
+//! script includes the same files, so the items it renders are the ones the crates compile, and
+//! writes `$OUT_DIR/glsl/contract/`: `restir.glsl`, `sss.glsl`, `shifts.glsl` (with the shift
+//! kinds and their dispatch list), `engine.glsl`, one header per push-constant block, and
+//! `shift_twins.glsl` (the includes of the registered shifts' GLSL twins).
 //!
 //! Shaders: every `glsl/*.glsl` is one compute entry point; the GLSL twins it includes live
 //! beside their Rust modules (`restir/glsl/`, `sss/glsl/`, `shifts/glsl/`) and are found through
@@ -15,6 +15,10 @@
 //! `$OUT_DIR/spirv_table.rs` maps stems to it, and the cfg `reshift_glslc` tells the crate to
 //! embed it. Without `glslc` the build still succeeds (with a warning) and the backend reports
 //! what to install; a shader that fails to compile fails the build.
+//!
+//! Freshness: the script watches the `glslc` it runs, or, when there is none, every directory it
+//! looked in (`$PATH`, or the parent of an absolute `$GLSLC`), so installing `glslc` after a
+//! build without it rebuilds the backend with shaders (`tests/newcomer_order.rs`).
 
 use std::env;
 use std::path::{Path, PathBuf};
@@ -23,6 +27,11 @@ use std::process::Command;
 #[allow(dead_code)]
 mod restir_contract {
     include!("../restir/src/contract.rs");
+}
+
+#[allow(dead_code)]
+mod sss_contract {
+    include!("../sss/src/contract.rs");
 }
 
 #[allow(dead_code)]
@@ -96,8 +105,9 @@ macro_rules! shift_registry {
 include!("../shifts/src/registry.rs");
 
 /// The contract files this script includes, relative to this crate.
-const CONTRACTS: [&str; 6] = [
+const CONTRACTS: [&str; 7] = [
     "../restir/src/contract.rs",
+    "../sss/src/contract.rs",
     "../shifts/src/contract.rs",
     "../shifts/src/registry.rs",
     "src/contract.rs",
@@ -123,6 +133,11 @@ fn write_contract(dir: &Path) -> Vec<twin::Item> {
             "restir/src/contract.rs",
             &restir_contract::glsl_items(),
         ),
+    );
+    let sss = sss_contract::glsl_items();
+    write(
+        "sss.glsl",
+        twin::header("CONTRACT_SSS_GLSL", "sss/src/contract.rs", &sss),
     );
     let (kinds, files) = shift_registry();
     let mut shifts = shifts_contract::glsl_items();
@@ -166,6 +181,7 @@ fn write_contract(dir: &Path) -> Vec<twin::Item> {
         );
     }
     let mut items = restir_contract::glsl_items();
+    items.extend(sss);
     items.extend(shifts);
     items.extend(engine);
     items
@@ -201,8 +217,9 @@ fn check_layouts(glslc: &std::ffi::OsStr, include: &Path, out_dir: &Path, items:
     let mut probes = vec![(
         "layout_probe".to_string(),
         String::from(
-            "#version 460\n#include \"contract/restir.glsl\"\n#include \"contract/shifts.glsl\"\n\
-             #include \"contract/engine.glsl\"\nlayout(local_size_x = 1) in;\n",
+            "#version 460\n#include \"contract/restir.glsl\"\n#include \"contract/sss.glsl\"\n\
+             #include \"contract/shifts.glsl\"\n#include \"contract/engine.glsl\"\n\
+             layout(local_size_x = 1) in;\n",
         ),
     )];
     for (binding, item) in items.iter().enumerate() {
@@ -275,6 +292,30 @@ fn check_layouts(glslc: &std::ffi::OsStr, include: &Path, out_dir: &Path, items:
     }
 }
 
+/// Reruns this script when the `glslc` it would run changes, appears or disappears: watches the
+/// resolved executable when `found`, otherwise every existing directory it would be looked up in.
+fn watch_glslc(glslc: &Path, found: bool) {
+    println!("cargo::rerun-if-env-changed=PATH");
+    let candidates: Vec<PathBuf> = if glslc.components().count() > 1 {
+        vec![glslc.to_path_buf()]
+    } else {
+        env::split_paths(&env::var_os("PATH").unwrap_or_default())
+            .map(|dir| dir.join(glslc))
+            .collect()
+    };
+    let resolved = candidates.iter().find(|path| path.is_file());
+    match resolved {
+        Some(path) if found => println!("cargo::rerun-if-changed={}", path.display()),
+        _ => {
+            for dir in candidates.iter().filter_map(|path| path.parent()) {
+                if dir.is_dir() {
+                    println!("cargo::rerun-if-changed={}", dir.display());
+                }
+            }
+        }
+    }
+}
+
 fn main() {
     println!("cargo::rustc-check-cfg=cfg(reshift_glslc)");
     println!("cargo::rerun-if-env-changed=GLSLC");
@@ -290,10 +331,11 @@ fn main() {
         .arg("--version")
         .output()
         .is_ok_and(|o| o.status.success());
+    watch_glslc(Path::new(&glslc), found);
     if !found {
         println!(
             "cargo::warning=glslc was not found; the Vulkan backend is disabled \
-             (install it with `apt-get install glslc` and rebuild)"
+             (install it with `apt-get install glslc`; the next build picks it up)"
         );
         return;
     }

@@ -7,9 +7,9 @@ use std::path::PathBuf;
 use clap::builder::PossibleValue;
 use clap::{Args, ValueEnum};
 use lab::experiments::{Experiment, Settings};
-use sss::InputError;
+use sss::{InputError, limits};
 
-use super::common::{BackendArgs, Bars, CliResult, parse_resolution};
+use super::common::{BackendArgs, Bars, CliResult, command_line, parse_resolution};
 
 /// An experiment name on the command line; the names and their help are
 /// `lab::experiments::Experiment`'s.
@@ -71,7 +71,7 @@ pub fn command(args: &ExperimentArgs) -> CliResult<()> {
     let defaults = args.name.0.defaults();
     if !args.scenes.is_empty() && !args.name.0.takes_scenes() {
         return Err(InputError::new(
-            "(command line)",
+            command_line(),
             "--scenes",
             args.scenes.join(","),
             format!("experiment {} runs its own scenes", args.name.0.name()),
@@ -82,8 +82,13 @@ pub fn command(args: &ExperimentArgs) -> CliResult<()> {
         Some(text) => parse_resolution(text)?,
         None => defaults.resolution,
     };
+    let replicas = limits::replicas(
+        command_line(),
+        "--replicas",
+        args.replicas.unwrap_or(defaults.replicas),
+    )?;
     let settings = Settings {
-        replicas: args.replicas.unwrap_or(defaults.replicas),
+        replicas,
         resolution,
         reference_spp: args.reference_spp.unwrap_or(defaults.reference_spp),
         out: args.out.clone(),

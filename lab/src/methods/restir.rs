@@ -9,7 +9,7 @@ use engine::{Backend, PassSpec, PipelineError, Preset, RunConfig, ShiftKind};
 use shifts::preset::PRESET_NAMES;
 use sss::scene::Scene;
 
-use super::estimator::{Entry, Estimator, Frame, Method};
+use super::estimator::{Entry, Estimator, Frame, Method, Trajectory};
 
 pub const ENTRY: Entry = Entry {
     family: "restir",
@@ -98,6 +98,34 @@ impl Estimator for Restir {
             image,
             frames_rendered: frames,
             nonfinite: result.nan_count,
+        })
+    }
+
+    /// One run of the trajectory: `engine::Run::frames` holds every frame.
+    fn render_trajectory(
+        &self,
+        backend: &Backend,
+        scene: &Scene,
+        frames: u32,
+        seed: u64,
+    ) -> Result<Trajectory, PipelineError> {
+        let config = RunConfig {
+            seed,
+            frames,
+            collect_diagnostics: false,
+        };
+        let result = backend.run(scene, &self.0, &config)?;
+        if result.frames.len() != frames as usize {
+            return Err(PipelineError::Config(format!(
+                "the run returned {} frames, not {frames}",
+                result.frames.len()
+            )));
+        }
+        Ok(Trajectory {
+            frames: result.frames,
+            frames_rendered: frames,
+            nonfinite: result.nan_count,
+            counts: None,
         })
     }
 }

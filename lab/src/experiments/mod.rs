@@ -101,7 +101,7 @@ impl Experiment {
         }
     }
 
-    /// Its defaults: `ground-truth` (21 scenes, 9 methods, the walk as reference; 32×24, 16
+    /// Its defaults: `ground-truth` (21 scenes, every registry method, the walk as reference; 32×24, 16
     /// replicas, a 4096-spp walk: about 5 minutes on the shared 2-core machine) and `model-gap`
     /// (7 scenes × 3 boundaries, 8 estimators per sample; `reference_spp` is every estimator's
     /// total over the replicas) run small; the figures at 128×96, 16 replicas, 8192-spp

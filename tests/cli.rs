@@ -754,6 +754,101 @@ fn diagnostics_experiments_write_tables_and_findings() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `ground-truth` at a tiny size on a built-in scene and a measured-material sphere: every
+/// registry family appears (restir with every preset), the outputs are written, the ground truth
+/// is cached and reused; `model-gap` writes its decomposition; `--scenes` is refused by an
+/// experiment with its own scenes.
+#[test]
+fn ground_truth_and_model_gap_run_small() {
+    let dir = scratch("ground-truth");
+    let (out, cache) = (dir.join("gt"), dir.join("cache"));
+    let args = [
+        "experiment",
+        "ground-truth",
+        "--resolution",
+        "8x6",
+        "--replicas",
+        "3",
+        "--reference-spp",
+        "32",
+        "--scenes",
+        "bumpy,sphere-skin1",
+        "--out",
+        out.to_str().unwrap(),
+        "--cache",
+        cache.to_str().unwrap(),
+    ];
+    let text = ok(&reshift(&args));
+    assert!(
+        text.contains("| scene | method | model error translucent"),
+        "{text}"
+    );
+    for method in [
+        "pt:4",
+        "restir:reconnection",
+        "restir:sequential-exact",
+        "random-walk:4",
+        "pt-one-hit:4",
+        "single-scatter:4",
+    ] {
+        for scene in ["bumpy", "sphere-skin1"] {
+            assert!(
+                text.contains(&format!("| {scene} | {method} |")),
+                "{scene} {method}: {text}"
+            );
+        }
+    }
+    for file in [
+        "table.md",
+        "table-full.md",
+        "table.csv",
+        "findings.md",
+        "results.json",
+    ] {
+        assert!(out.join(file).is_file(), "{file}");
+    }
+    let json = |o: &Output| -> Value { serde_json::from_str(&ok(o)).unwrap() };
+    let again = json(&reshift(&[&args[..], &["--json"]].concat()));
+    assert_eq!(again["schema"], "reshift-ground-truth/1");
+    assert_eq!(again["scenes"][1]["truth"]["cached"], true, "{again}");
+    assert_eq!(again["scenes"][1]["truth"]["spp_per_batch"], 2);
+
+    let gap = ok(&reshift(&[
+        "experiment",
+        "model-gap",
+        "--resolution",
+        "8x6",
+        "--replicas",
+        "2",
+        "--reference-spp",
+        "4",
+        "--scenes",
+        "slab",
+        "--out",
+        dir.join("gap").to_str().unwrap(),
+    ]));
+    assert!(
+        gap.contains("walk − BSSRDF") && gap.contains("| slab | index_matched |"),
+        "{gap}"
+    );
+    fails_with(
+        &["experiment", "hybrid-map", "--scenes", "bumpy"],
+        "--scenes",
+    );
+    fails_with(
+        &[
+            "experiment",
+            "ground-truth",
+            "--scenes",
+            "nope",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "unknown scene",
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// GPU options without `--backend vulkan` are input errors, not ignored; an unknown backend is
 /// a usage error.
 #[test]

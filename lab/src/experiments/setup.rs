@@ -35,6 +35,9 @@ pub struct Settings {
     /// Folder of cached references.
     pub cache: PathBuf,
     pub backend: Backend,
+    /// The scenes of an experiment that runs several ([`super::Experiment::takes_scenes`]);
+    /// empty: its own list.
+    pub scenes: Vec<String>,
 }
 
 /// What an experiment produced.

@@ -1,5 +1,5 @@
 //! Rendering methods by name (DESIGN §7): `pt[:spp]`, `restir:<preset>`, `random-walk[:spp]`,
-//! `pt-one-hit[:spp]`, `image-space[:spp]`, `adaptive[:options]`.
+//! `pt-one-hit[:spp]`, `single-scatter[:spp]`, `image-space[:spp]`, `adaptive[:options]`.
 //!
 //! A method renders the final frame of a scene's camera trajectory (or every frame of it) for
 //! one replica seed on a backend. Each family is one file implementing [`Estimator`] with its [`Entry`] (family,
@@ -13,6 +13,7 @@ pub mod pt;
 pub mod pt_one_hit;
 pub mod random_walk;
 pub mod restir;
+pub mod single_scatter;
 
 use std::fmt;
 
@@ -26,6 +27,7 @@ pub const REGISTRY: &[Entry] = &[
     restir::ENTRY,
     random_walk::ENTRY,
     pt_one_hit::ENTRY,
+    single_scatter::ENTRY,
     image_space::ENTRY,
     adaptive::ENTRY,
 ];

@@ -8,7 +8,7 @@
 use bytemuck::{Pod, Zeroable};
 use engine::PixelReservoir;
 use engine::candidates;
-use engine::reuse::{self, PassInput, Previous, ShiftCounts};
+use engine::reuse::{self, PassInput, Previous, Reused};
 use engine::vulkan::testing::{Tally, kernel_or_skip, rel_error, scaled_error};
 use engine::vulkan::{
     Buffer, Context, FrameParams, GpuPixel, GpuScene, Kernel, PassParams, SPATIAL, Shader,
@@ -21,7 +21,7 @@ use restir::rng::StreamKey;
 use restir::shift::Domain;
 use shifts::ShiftKind;
 use shifts::SssSample;
-use shifts::preset::{PassSpec, Preset, TEMPORAL_CAP};
+use shifts::preset::{PassSpec, Preset, Shade, TEMPORAL_CAP};
 use sss::scene::{GBuffer, Scene};
 
 /// `parity_reuse.glsl`: bindings 0–10 scene and pass inputs of the shift modes, 11 cases,
@@ -712,10 +712,14 @@ fn cpu_reuse(
 ) -> Vec<(PixelReservoir, [u32; 4])> {
     (0..input.gbuffer.pixels.len() as u32)
         .map(|pixel| {
-            let (r, c): (PixelReservoir, ShiftCounts) = reuse::pass(input, previous, pixel, spec)
+            let Reused {
+                reservoir,
+                shifts: c,
+                ..
+            } = reuse::pass(input, previous, pixel, spec, Shade::Selected)
                 .expect("only reuse passes are compared")
                 .unwrap();
-            (r, [c.shifted, c.failed, c.improved, 0])
+            (reservoir, [c.shifted, c.failed, c.improved, 0])
         })
         .collect()
 }

@@ -17,8 +17,9 @@ const SIDE: [u32; 2] = [24, 18];
 const SEED: u64 = 7;
 
 /// Modified presets pinned besides the registered ones: `hybrid/cap=20` is seed 001's temporal
-/// cap, whose hash is the one `restir:hybrid` had before the default cap became 3.
-const MODIFIED: &[&str] = &["hybrid/cap=20"];
+/// cap, whose hash is the one `restir:hybrid` had before the default cap became 3;
+/// `hybrid/shade=all` is Rao-Blackwellised shading.
+const MODIFIED: &[&str] = &["hybrid/cap=20", "hybrid/shade=all"];
 
 /// `(scene, method, FNV-1a of the output bits)`.
 const PINNED: &[(&str, &str, u64)] = &[
@@ -28,6 +29,7 @@ const PINNED: &[(&str, &str, u64)] = &[
     ("bumpy", "restir:sequential", 0x1089a4e4682c6b86),
     ("bumpy", "restir:sequential-exact", 0x1089a4e4682c6b86),
     ("bumpy", "restir:hybrid/cap=20", 0x07627e408d10b4fc),
+    ("bumpy", "restir:hybrid/shade=all", 0x3c29f6dee9e46858),
     ("bumpy", "pt:2", 0xfb2fad5cb68b7040),
     ("bumpy", "random-walk:2", 0xa192fbb86f2b56e0),
     ("half-shadow", "restir:reconnection", 0x68fa13b1d27d9221),
@@ -36,6 +38,7 @@ const PINNED: &[(&str, &str, u64)] = &[
     ("half-shadow", "restir:sequential", 0x0bf7acf84b6bb675),
     ("half-shadow", "restir:sequential-exact", 0x0bf7acf84b6bb675),
     ("half-shadow", "restir:hybrid/cap=20", 0x54ebc55d7201c6cd),
+    ("half-shadow", "restir:hybrid/shade=all", 0x361fe9ef53ee0b99),
     ("half-shadow", "pt:2", 0xb16ae63d8ee7d985),
     ("half-shadow", "random-walk:2", 0x9bdf417661ddd47f),
 ];

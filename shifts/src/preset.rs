@@ -63,11 +63,26 @@ impl PassSpec {
     }
 }
 
-/// A named list of passes run once per frame.
+/// What the shade step paints on a translucent pixel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Shade {
+    /// `f(Y)·W` of the final reservoir [001 Alg. 2].
+    #[default]
+    Selected,
+    /// The Rao-Blackwellised estimate of the last reuse pass that resampled the pixel,
+    /// `Σ_i f(y_i)·m_i·W_i·J_i` over all its inputs (`restir::resample::resample_observed`):
+    /// `E[f(Y)·W | inputs]`. Its luminance is `f(Y)·W`'s (`p̂ = luminance(f)`); it removes the
+    /// colour noise of the one selected sample. The stored reservoirs, and so later frames, are
+    /// unchanged. CPU backend only.
+    AllInputs,
+}
+
+/// A named list of passes run once per frame, and what the frame's shade step paints.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Preset {
     pub name: String,
     pub passes: Vec<PassSpec>,
+    pub shade: Shade,
 }
 
 /// Why a preset cannot run.
@@ -159,6 +174,7 @@ impl Preset {
         Preset {
             name: name.into(),
             passes: vec![candidates(), temporal(shift), spatial(shift, 4)],
+            shade: Shade::Selected,
         }
     }
 
@@ -179,6 +195,7 @@ impl Preset {
                 spatial(invert, 2),
                 spatial(ShiftKind::DelayedReconnection, 2),
             ],
+            shade: Shade::Selected,
         }
     }
 
@@ -334,6 +351,7 @@ mod tests {
                 bssrdf_samples: 0,
                 shared_light: false,
             }],
+            shade: Shade::Selected,
         };
         assert!(p.validate().is_err());
     }

@@ -1,12 +1,13 @@
-//! `restir:<preset>[/temporal=<shift>][/cap=<κ>]`: the ReSTIR SSS frame pipeline with a
-//! registered preset [001 §5.1] (DESIGN §6). Every frame of the trajectory is rendered (temporal
-//! reuse) and the last one is kept; `/temporal=<shift>` swaps the shift of the temporal pass
-//! [001 Fig. 10], `/cap=<κ>` sets its confidence cap.
+//! `restir:<preset>[/temporal=<shift>][/cap=<κ>][/shade=<selected|all>]`: the ReSTIR SSS frame
+//! pipeline with a registered preset [001 §5.1] (DESIGN §6). Every frame of the trajectory is
+//! rendered (temporal reuse) and the last one is kept; `/temporal=<shift>` swaps the shift of the
+//! temporal pass [001 Fig. 10], `/cap=<κ>` sets its confidence cap, `/shade=all` shades with
+//! all inputs of the last reuse pass (`Shade::AllInputs`).
 //!
 //! The only file of the lab that names presets and shift kinds: when presets move crates, the
 //! import below is the one to change.
 
-use engine::{Backend, PassSpec, PipelineError, Preset, RunConfig, ShiftKind};
+use engine::{Backend, PassSpec, PipelineError, Preset, RunConfig, Shade, ShiftKind};
 use shifts::preset::PRESET_NAMES;
 use sss::scene::Scene;
 
@@ -14,10 +15,12 @@ use super::estimator::{Entry, Estimator, Frame, Method};
 
 pub const ENTRY: Entry = Entry {
     family: "restir",
-    usage: "restir:<reconnection|delayed|hybrid|sequential|sequential-exact>[/temporal=<shift>][/cap=<κ>]",
+    usage: "restir:<reconnection|delayed|hybrid|sequential|sequential-exact>[/temporal=<shift>][/cap=<κ>][/shade=<selected|all>]",
     about: "ReSTIR SSS with spatiotemporal reuse and the preset's shift mapping [001 §5.1]; \
             `/temporal=<shift>` swaps the temporal pass's shift (001 Fig. 10); \
-            `/cap=<κ>` sets the temporal confidence cap (default 3; seed 001 uses 20)",
+            `/cap=<κ>` sets the temporal confidence cap (default 3; seed 001 uses 20); \
+            `/shade=all` paints the last reuse pass's Rao-Blackwellised value over all its inputs \
+            (CPU backend only)",
     build: |arg| Ok(Method::new(Restir(preset(arg)?))),
 };
 
@@ -26,8 +29,9 @@ pub const ENTRY: Entry = Entry {
 pub struct Restir(pub Preset);
 
 /// The preset of `restir:<preset>[/modifier=value]…`: a registered preset, optionally modified by
-/// `/temporal=<shift>` (the temporal pass's shift becomes the [`ShiftKind`] named `<shift>`) and
-/// `/cap=<κ>` (the temporal confidence cap, finite and > 0). A modified preset is named `arg`.
+/// `/temporal=<shift>` (the temporal pass's shift becomes the [`ShiftKind`] named `<shift>`),
+/// `/cap=<κ>` (the temporal confidence cap, finite and > 0) and `/shade=<selected|all>`
+/// ([`Shade`]). A modified preset is named `arg`.
 pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
     let arg = arg.ok_or("needs a preset, e.g. restir:hybrid")?;
     let mut parts = arg.split('/');
@@ -49,6 +53,14 @@ pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
                     .ok_or_else(|| format!("cap {value:?} is not a number > 0"))?;
                 preset.with_temporal_cap(cap)
             }
+            Some(("shade", "selected")) => Preset {
+                shade: Shade::Selected,
+                ..preset
+            },
+            Some(("shade", "all")) => Preset {
+                shade: Shade::AllInputs,
+                ..preset
+            },
             _ => {
                 return Err(format!("unknown modifier {modifier:?}; known: {MODIFIERS}"));
             }
@@ -59,7 +71,7 @@ pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
 }
 
 /// The modifiers [`preset`] knows, for its error message.
-const MODIFIERS: &str = "temporal=<shift>, cap=<κ>";
+const MODIFIERS: &str = "temporal=<shift>, cap=<κ>, shade=<selected|all>";
 
 /// `preset` with the shift of its temporal pass replaced by the [`ShiftKind`] named `wanted`.
 fn with_temporal_shift(mut preset: Preset, wanted: &str) -> Result<Preset, String> {
@@ -161,7 +173,15 @@ mod tests {
         );
         let both = preset(Some("sequential/temporal=delayed/cap=1.5")).unwrap();
         assert_eq!(both.passes, swapped.with_temporal_cap(1.5).passes);
+        let shaded = preset(Some("hybrid/shade=all/cap=20")).unwrap();
+        assert_eq!(shaded.shade, Shade::AllInputs);
+        assert_eq!(shaded.passes, seed_001.passes);
+        assert_eq!(
+            preset(Some("hybrid/shade=selected")).unwrap().shade,
+            Shade::Selected
+        );
         for bad in [
+            "restir:hybrid/shade=some",
             "restir:hybrid/cap=0",
             "restir:hybrid/cap=-1",
             "restir:hybrid/cap=nan",

@@ -7,7 +7,9 @@ use std::path::PathBuf;
 use clap::builder::PossibleValue;
 use clap::{Args, ValueEnum};
 use lab::experiments::{Experiment, Settings};
-use sss::{InputError, limits};
+use sss::InputError;
+
+use sss::limits;
 
 use super::common::{BackendArgs, Bars, CliResult, command_line, parse_resolution};
 
@@ -71,22 +73,19 @@ pub fn command(args: &ExperimentArgs) -> CliResult<()> {
     let defaults = args.name.0.defaults();
     if !args.scenes.is_empty() && !args.name.0.takes_scenes() {
         return Err(InputError::new(
-            command_line(),
+            "(command line)",
             "--scenes",
             args.scenes.join(","),
             format!("experiment {} runs its own scenes", args.name.0.name()),
         )
         .into());
     }
+    let replicas = args.replicas.unwrap_or(defaults.replicas);
+    limits::replicas(command_line(), "--replicas", replicas)?;
     let resolution = match &args.resolution {
         Some(text) => parse_resolution(text)?,
         None => defaults.resolution,
     };
-    let replicas = limits::replicas(
-        command_line(),
-        "--replicas",
-        args.replicas.unwrap_or(defaults.replicas),
-    )?;
     let settings = Settings {
         replicas,
         resolution,

@@ -18,7 +18,9 @@ use std::fmt::{self, Write as _};
 
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
-use restir::stats::{Equivalence, EquivalencePlan, Summary, Verdict, equivalence, holm};
+use restir::stats::{
+    Equivalence, EquivalencePlan, Summary, Verdict, equivalence, holm, replicas_for,
+};
 use sss::InputError;
 use sss::integrator::pt::{self, PtSettings};
 use sss::scene::{GBuffer, Scene};
@@ -349,31 +351,82 @@ pub fn overall(rows: &[BiasRow]) -> Verdict {
     }
 }
 
+/// Why [`replicas_needed`] has no answer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Unplannable {
+    /// The row's replicas are all equal or its mean is 0: its per-replica CV is unknown.
+    NoSpread { region: Region, channel: Channel },
+    /// The reference's own relative error in this row (its largest) leaves no room for ±δ
+    /// however many replicas run.
+    Reference {
+        region: Region,
+        channel: Channel,
+        rel_se: f64,
+    },
+}
+
+impl fmt::Display for Unplannable {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Unplannable::NoSpread { region, channel } => {
+                write!(f, "no per-replica CV in {region} {channel} (no spread)")
+            }
+            Unplannable::Reference {
+                region,
+                channel,
+                rel_se,
+            } => write!(
+                f,
+                "the reference's own error ({:.2}% in {region} {channel}) leaves no room; more reference samples",
+                100.0 * rel_se
+            ),
+        }
+    }
+}
+
 /// The replicas a run like this one would need for every row to be equivalent within ±δ with
 /// probability at least `power` if the method had no bias (Bonferroni over the rows), planned
-/// ([`EquivalencePlan`]) from each row's per-replica CV and the reference's largest relative
-/// standard error. `None` when no number does it: the reference's own error is too large, or a
-/// row has no spread or a zero mean (its CV is unknown).
-pub fn replicas_needed(rows: &[BiasRow], protocol: &Protocol, power: f64) -> Option<usize> {
+/// ([`replicas_for`]) from each row's per-replica CV and its reference's relative standard
+/// error.
+pub fn replicas_needed(
+    rows: &[BiasRow],
+    protocol: &Protocol,
+    power: f64,
+) -> Result<usize, Unplannable> {
     let relative = |s: &Summary, spread: f64| {
-        let cv = spread / s.mean.abs();
-        (cv.is_finite() && !s.no_spread()).then_some(cv)
+        let rel = spread / s.mean.abs();
+        (rel.is_finite() && !s.no_spread()).then_some(rel)
     };
-    let cvs: Vec<f64> = rows
-        .iter()
-        .map(|r| relative(&r.estimate, r.estimate.variance.sqrt()))
-        .collect::<Option<_>>()?;
-    let reference_rel_se = rows
-        .iter()
-        .map(|r| relative(&r.reference, r.reference.std_err))
-        .try_fold(0.0f64, |worst, rel| Some(worst.max(rel?)))?;
-    let plan = EquivalencePlan {
-        delta: protocol.delta,
-        alpha: protocol.alpha,
-        reference_rel_se,
-        reference_n: rows.iter().map(|r| r.reference.n).min()?,
+    let no_spread = |r: &BiasRow| Unplannable::NoSpread {
+        region: r.region,
+        channel: r.channel,
     };
-    plan.replicas_for(&cvs, power, 1 << 30)
+    let tests: Vec<(EquivalencePlan, f64)> = rows
+        .iter()
+        .map(|r| {
+            let cv = relative(&r.estimate, r.estimate.variance.sqrt()).ok_or(no_spread(r))?;
+            let plan = EquivalencePlan {
+                delta: protocol.delta,
+                alpha: protocol.alpha,
+                reference_rel_se: relative(&r.reference, r.reference.std_err)
+                    .ok_or(no_spread(r))?,
+                reference_n: r.reference.n,
+            };
+            Ok((plan, cv))
+        })
+        .collect::<Result<_, _>>()?;
+    replicas_for(&tests, power, 1 << 30).ok_or_else(|| {
+        let (row, (plan, _)) = rows
+            .iter()
+            .zip(&tests)
+            .max_by(|a, b| a.1.0.reference_rel_se.total_cmp(&b.1.0.reference_rel_se))
+            .expect("replicas_for has an answer for no rows");
+        Unplannable::Reference {
+            region: row.region,
+            channel: row.channel,
+            rel_se: plan.reference_rel_se,
+        }
+    })
 }
 
 /// The rows as a Markdown table (relative bias, CI and its half-width in percent; δ, the CI's
@@ -636,8 +689,8 @@ mod tests {
 
     /// The plan from a run's own rows: 64 replicas of the correct estimator (s.e. ≈ 0.4%)
     /// resolve ±3%, so fewer replicas suffice for power 0.9, and ±2% needs more than twice as
-    /// many. ±1% needs a better reference: its own error (≈ 0.2% in the shadowed band) leaves
-    /// no room, so no plan; nor for a black region, whose CV is unknown.
+    /// many. ±1% needs a better reference: its own error (≈ 0.2% in each band of 36 pixels)
+    /// leaves no room; nor is there a plan for a black region, whose CV is unknown.
     #[test]
     fn replicas_needed_follow_the_spread() {
         let good = rows("good", 2, 64, Defect::default());
@@ -648,14 +701,25 @@ mod tests {
         let at_3 = with_delta(0.03).expect("plannable");
         let at_2 = with_delta(0.02).expect("plannable");
         assert!(at_3 < 64 && at_2 > 2 * at_3, "{at_3} {at_2}");
-        assert_eq!(with_delta(0.01), None);
+        let Err(Unplannable::Reference { region, rel_se, .. }) = with_delta(0.01) else {
+            panic!("{:?}", with_delta(0.01))
+        };
+        assert_ne!(region, Region::Translucent, "the widest band has the least error");
+        assert!(rel_se > 0.0015 && rel_se < 0.003, "{rel_se}");
         let black = Defect {
             black_shadow: true,
             ..Defect::default()
         };
-        assert_eq!(
-            replicas_needed(&rows("black", 5, 64, black), &PROTOCOL, 0.9),
-            None
+        let black = replicas_needed(&rows("black", 5, 64, black), &PROTOCOL, 0.9);
+        assert!(
+            matches!(
+                black,
+                Err(Unplannable::NoSpread {
+                    region: Region::Shadowed,
+                    ..
+                })
+            ),
+            "{black:?}"
         );
     }
 

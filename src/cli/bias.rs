@@ -111,12 +111,13 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
         &summarize(&reference.rgb, &regions),
         &protocol,
     );
+    let planned = replicas_needed(&rows, &protocol, PLANNED_POWER);
     if args.json {
         let value = bias_json(
             args,
             &scene.name,
             &rows,
-            replicas_needed(&rows, &protocol, PLANNED_POWER),
+            planned.ok(),
             [nonfinite, reference.nonfinite],
             images.len(),
             stopped,
@@ -145,14 +146,14 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
             nonfinite,
             reference.nonfinite
         );
-        let planned = match replicas_needed(&rows, &protocol, PLANNED_POWER) {
-            Some(n) => format!("N = {n}"),
-            None => "no N (a row without spread, or the reference's own error)".into(),
-        };
-        println!(
-            "planned: {planned} for every row equivalent within ±{}% with probability ≥ {PLANNED_POWER} if the method had no bias (this run's per-replica CVs)",
+        let goal = format!(
+            "every row equivalent within ±{}% with probability ≥ {PLANNED_POWER} if the method had no bias",
             100.0 * args.delta
         );
+        match planned {
+            Ok(n) => println!("planned: N = {n} for {goal} (from this run's per-replica CVs)"),
+            Err(why) => println!("planned: no N for {goal}: {why}"),
+        }
     }
     if stopped {
         return Err(CliError(format!(

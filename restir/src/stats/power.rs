@@ -46,7 +46,8 @@ impl EquivalencePlan {
         let (variance, dof) = self.terms(cv, n, [scale, scale]);
         let s = variance.sqrt();
         let half = student_t_quantile(1.0 - 0.5 * self.alpha, dof) * s;
-        if !(half < self.delta) {
+        // A NaN half-width (no dof) cannot fit either.
+        if half.partial_cmp(&self.delta) != Some(std::cmp::Ordering::Less) {
             return 0.0;
         }
         if s == 0.0 {
@@ -66,36 +67,37 @@ impl EquivalencePlan {
         let q = student_t_quantile(1.0 - 0.5 * level, dof);
         normal_cdf(lambda - q) + normal_cdf(-lambda - q)
     }
+}
 
-    /// Lower bound on the probability that every test of a family (per-replica CVs `cvs`, no
-    /// bias) is called equivalent with N replicas each: Bonferroni's `1 − Σ(1 − Pᵢ)`, at least 0.
-    pub fn family_power(&self, cvs: &[f64], n: usize) -> f64 {
-        let misses: f64 = cvs
-            .iter()
-            .map(|&cv| 1.0 - self.equivalence_power(cv, n, 0.0))
-            .sum();
-        (1.0 - misses).max(0.0)
-    }
+/// Lower bound on the probability that every test of a family is called equivalent with N
+/// replicas each when nothing is biased: Bonferroni's `1 − Σ(1 − Pᵢ)`, at least 0. Each test is
+/// its plan and its per-replica CV.
+pub fn family_power(tests: &[(EquivalencePlan, f64)], n: usize) -> f64 {
+    let misses: f64 = tests
+        .iter()
+        .map(|(plan, cv)| 1.0 - plan.equivalence_power(*cv, n, 0.0))
+        .sum();
+    (1.0 - misses).max(0.0)
+}
 
-    /// The smallest N ≥ 2 with [`family_power`](Self::family_power)`(cvs, N) ≥ power`, or `None`
-    /// when no N ≤ `max_n` reaches it (the reference's own error alone may forbid it). The
-    /// family power grows with N, so the search brackets N by doubling and then bisects.
-    pub fn replicas_for(&self, cvs: &[f64], power: f64, max_n: usize) -> Option<usize> {
-        let enough = |n: usize| self.family_power(cvs, n) >= power;
-        if max_n < 2 || !enough(max_n) {
-            return None;
-        }
-        let (mut lo, mut hi) = (1, 2);
-        while !enough(hi) {
-            lo = hi;
-            hi = (2 * hi).min(max_n);
-        }
-        while hi - lo > 1 {
-            let mid = lo + (hi - lo) / 2;
-            if enough(mid) { hi = mid } else { lo = mid }
-        }
-        Some(hi)
+/// The smallest N ≥ 2 with [`family_power`]`(tests, N) ≥ power`, or `None` when no N ≤ `max_n`
+/// reaches it (a reference's own error alone may forbid it). The family power grows with N, so
+/// the search brackets N by doubling and then bisects.
+pub fn replicas_for(tests: &[(EquivalencePlan, f64)], power: f64, max_n: usize) -> Option<usize> {
+    let enough = |n: usize| family_power(tests, n) >= power;
+    if max_n < 2 || !enough(max_n) {
+        return None;
     }
+    let (mut lo, mut hi) = (1, 2);
+    while !enough(hi) {
+        lo = hi;
+        hi = (2 * hi).min(max_n);
+    }
+    while hi - lo > 1 {
+        let mid = lo + (hi - lo) / 2;
+        if enough(mid) { hi = mid } else { lo = mid }
+    }
+    Some(hi)
 }
 
 #[cfg(test)]
@@ -184,26 +186,26 @@ mod tests {
     /// fail (None), as does a `max_n` below the answer.
     #[test]
     fn replicas_for_is_the_smallest_sufficient_n() {
-        let cvs = [0.05, 0.08, CV];
-        let n = PLAN.replicas_for(&cvs, 0.95, 100_000).expect("reachable");
-        assert!(PLAN.family_power(&cvs, n) >= 0.95);
+        let family = |plan: EquivalencePlan, cvs: &[f64]| -> Vec<(EquivalencePlan, f64)> {
+            cvs.iter().map(|&cv| (plan, cv)).collect()
+        };
+        let tests = family(PLAN, &[0.05, 0.08, CV]);
+        let n = replicas_for(&tests, 0.95, 100_000).expect("reachable");
+        assert!(family_power(&tests, n) >= 0.95);
         assert!(
-            PLAN.family_power(&cvs, n - 1) < 0.95,
+            family_power(&tests, n - 1) < 0.95,
             "N = {n} is not the smallest"
         );
-        let wider = PLAN
-            .replicas_for(&[0.05, 0.08, 0.12], 0.95, 100_000)
-            .unwrap();
-        let more = PLAN
-            .replicas_for(&[0.05, 0.08, CV, CV], 0.95, 100_000)
-            .unwrap();
+        let wider = replicas_for(&family(PLAN, &[0.05, 0.08, 0.12]), 0.95, 100_000).unwrap();
+        let more = replicas_for(&family(PLAN, &[0.05, 0.08, CV, CV]), 0.95, 100_000).unwrap();
         assert!(wider > n && more > n, "{n} {wider} {more}");
-        assert_eq!(PLAN.replicas_for(&cvs, 0.95, n - 1), None);
+        assert_eq!(replicas_for(&tests, 0.95, n - 1), None);
         let noisy_reference = EquivalencePlan {
             reference_rel_se: 0.008,
             ..PLAN
         };
-        assert_eq!(noisy_reference.replicas_for(&cvs, 0.5, 1 << 40), None);
+        let noisy = [(PLAN, 0.05), (noisy_reference, 0.05)];
+        assert_eq!(replicas_for(&noisy, 0.5, 1 << 40), None);
         assert_eq!(noisy_reference.equivalence_power(0.0, 10, 0.0), 0.0);
     }
 

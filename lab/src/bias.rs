@@ -704,7 +704,11 @@ mod tests {
         let Err(Unplannable::Reference { region, rel_se, .. }) = with_delta(0.01) else {
             panic!("{:?}", with_delta(0.01))
         };
-        assert_ne!(region, Region::Translucent, "the widest band has the least error");
+        assert_ne!(
+            region,
+            Region::Translucent,
+            "the widest band has the least error"
+        );
         assert!(rel_se > 0.0015 && rel_se < 0.003, "{rel_se}");
         let black = Defect {
             black_shadow: true,

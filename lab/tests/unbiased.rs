@@ -16,7 +16,7 @@
 //!     pixels (a directional light casts no penumbra).
 //!
 //!   Every region is tested in at least one scene.
-//! * N per preset and scene: the smallest N for which [`EquivalencePlan::replicas_for`] plans a
+//! * N per preset and scene: the smallest N for which [`restir::stats::replicas_for`] plans a
 //!   probability ≥ [`FAMILY_POWER`] that the preset, were it unbiased, is equivalent in all 12
 //!   rows (Bonferroni over rows), from its per-replica CVs measured with N = 512
 //!   ([`Design::cv`], times [`CV_MARGIN`]) and the reference's own error (≤ 0.12%). Largest CV:
@@ -34,10 +34,10 @@
 //!   blue +2.8% … +3.1% Biased while the luminance, +0.2% … +0.4%, stays equivalent); far from
 //!   δ, delayed reconnection with J = 1 (bumpy), without its visibility test and a hybrid ignoring
 //!   its criterion (half-shadow). Each must be Biased in at least one row.
-//! * Not covered: chains of more than two temporal reuses (with 3 frames
-//!   `restir:sequential/temporal=reconnection` is already 2–3% too dark in green and blue on
-//!   bumpy, 4–11% with 8 frames; testing 8 frames at ±2% costs ≈ 5× more), and the shadowed
-//!   region of `bumpy`.
+//! * Not covered: chains of more than two temporal reuses (testing 8 frames at ±2% costs ≈ 5×
+//!   more; a biased chain grows with the frames: `restir:sequential/temporal=reconnection`,
+//!   now refused by `Preset::validate`, was 2–3% too dark in green and blue on bumpy with 3
+//!   frames, 4–11% with 8), and the shadowed region of `bumpy`.
 //! * Backends: the five presets run on the CPU backend on both scenes; reconnection, delayed,
 //!   hybrid and sequential-exact run again on the Vulkan backend (`vulkan_*`) on `bumpy` with the
 //!   same N, against the same CPU reference. Without Vulkan the `vulkan_*` tests print why and

@@ -26,4 +26,6 @@ shift_registry! {
     DelayedWithoutVisibility = "broken:delayed-without-visibility", broken::broken_delayed_without_visibility_shift, |_| broken::DelayedWithoutVisibility;
     /// Negative control: a hybrid whose offset path ignores the criterion.
     HybridIgnoringCriterion = "broken:hybrid-ignoring-criterion", broken::broken_hybrid_ignoring_criterion_shift, |_| broken::HybridIgnoringCriterion;
+    /// Negative control near δ, never for rendering: delayed reconnection with `J · 1.03`.
+    DelayedJacobianOff = "broken:delayed-jacobian-3pct-high", broken::broken_delayed_jacobian_off_shift, |_| broken::DelayedJacobianOff;
 }

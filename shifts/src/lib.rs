@@ -37,5 +37,5 @@ pub use distant::DistantReconnection;
 pub use domain::{LightPath, SssDomain};
 pub use hybrid::Hybrid;
 pub use inversion::{InvertingReconnection, resolve_deferred_index};
-pub use kind::ShiftKind;
+pub use kind::{ShiftKind, StoredNumbers};
 pub use reconnection::{Identity, Reconnection};

@@ -51,6 +51,7 @@ pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
             }
         }
         preset.name = arg.to_string();
+        preset.validate().map_err(|e| e.to_string())?;
     }
     Ok(preset)
 }
@@ -130,6 +131,7 @@ mod tests {
         for bad in [
             "restir:sequential/temporal=nope",
             "restir:nope/temporal=delayed",
+            "restir:sequential/temporal=reconnection",
         ] {
             assert_eq!(Method::parse(bad).expect_err(bad).spec, bad);
         }

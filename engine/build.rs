@@ -15,6 +15,10 @@
 //! `$OUT_DIR/spirv_table.rs` maps stems to it, and the cfg `reshift_glslc` tells the crate to
 //! embed it. Without `glslc` the build still succeeds (with a warning) and the backend reports
 //! what to install; a shader that fails to compile fails the build.
+//!
+//! Freshness: the script watches the `glslc` it runs, or, when there is none, every directory it
+//! looked in (`$PATH`, or the parent of an absolute `$GLSLC`), so installing `glslc` after a
+//! build without it rebuilds the backend with shaders (`tests/newcomer_order.rs`).
 
 use std::env;
 use std::path::{Path, PathBuf};
@@ -277,6 +281,30 @@ fn check_layouts(glslc: &std::ffi::OsStr, include: &Path, out_dir: &Path, items:
     }
 }
 
+/// Reruns this script when the `glslc` it would run changes, appears or disappears: watches the
+/// resolved executable when `found`, otherwise every existing directory it would be looked up in.
+fn watch_glslc(glslc: &Path, found: bool) {
+    println!("cargo::rerun-if-env-changed=PATH");
+    let candidates: Vec<PathBuf> = if glslc.components().count() > 1 {
+        vec![glslc.to_path_buf()]
+    } else {
+        env::split_paths(&env::var_os("PATH").unwrap_or_default())
+            .map(|dir| dir.join(glslc))
+            .collect()
+    };
+    let resolved = candidates.iter().find(|path| path.is_file());
+    match resolved {
+        Some(path) if found => println!("cargo::rerun-if-changed={}", path.display()),
+        _ => {
+            for dir in candidates.iter().filter_map(|path| path.parent()) {
+                if dir.is_dir() {
+                    println!("cargo::rerun-if-changed={}", dir.display());
+                }
+            }
+        }
+    }
+}
+
 fn main() {
     println!("cargo::rustc-check-cfg=cfg(reshift_glslc)");
     println!("cargo::rerun-if-env-changed=GLSLC");
@@ -292,10 +320,11 @@ fn main() {
         .arg("--version")
         .output()
         .is_ok_and(|o| o.status.success());
+    watch_glslc(Path::new(&glslc), found);
     if !found {
         println!(
             "cargo::warning=glslc was not found; the Vulkan backend is disabled \
-             (install it with `apt-get install glslc` and rebuild)"
+             (install it with `apt-get install glslc`; the next build picks it up)"
         );
         return;
     }

@@ -24,10 +24,13 @@
 //!   582, sequential and sequential-exact 1426; half-shadow 625–657. Planned power to detect a
 //!   +3% bias in any one row: ≥ 0.9995. `power_plan_detects_3pct_in_any_row` prints the plan;
 //!   each table prints the measured CVs beside the planned ones.
-//! * Cost: the CPU tests of this file took 328 s of CPU time (user + system, `/usr/bin/time`;
-//!   measured on a shared machine, wall times were meaningless), i.e. about 2¾ minutes on two
-//!   quiet cores; per replica 0.02 (reconnection) – 0.05 (sequential-exact) CPU-s on bumpy,
-//!   0.011–0.015 on half-shadow; each reference ≈ 12 CPU-s.
+//! * Cost: the CPU tests of this file took 328 s of CPU time before the exact index policy
+//!   re-traced at both ends, and at most 500 CPU-s after it (user + system, `/usr/bin/time`, a
+//!   run that also spent 5 wall-minutes in the first Vulkan test; measured on a shared machine,
+//!   wall times were meaningless), i.e. at most about 4 minutes on two quiet cores; per replica
+//!   0.02 (reconnection) – 0.05 (sequential-exact, before) CPU-s on bumpy, 0.011–0.015 on
+//!   half-shadow; each reference ≈ 12 CPU-s. The Vulkan tests' cost on lavapipe is not
+//!   measured here.
 //! * Negative controls, same protocol and N as the preset they break: near δ, delayed
 //!   reconnection with J · 1.03 (`broken::DelayedJacobianOff`: +4.8% … +6.1% on bumpy, the error
 //!   compounds over reuse passes) and the hybrid preset with its blue channel × 1.03 ([`tinted`]:

@@ -213,15 +213,14 @@ impl RegionSummary {
     }
 }
 
-/// Per-region summaries of independent per-pixel RGB images (one `Vec` per replica or batch,
-/// row-major like `regions`); empty regions are left out. An image of the wrong size counts as
-/// a NaN replica, which the tests reject as a defect.
-pub fn summarize(images: &[Vec<DVec3>], regions: &Regions) -> Vec<RegionSummary> {
+/// Per non-empty region, its pixel count and the region's mean in every image (one `Vec` per
+/// replica or batch, row-major like `regions`); an image of the wrong size gives a NaN mean.
+fn region_means(images: &[Vec<DVec3>], regions: &Regions) -> Vec<(Region, usize, Vec<DVec3>)> {
     Region::ALL
         .into_iter()
         .filter_map(|region| {
             let pixels = regions.pixels(region);
-            let means: Vec<DVec3> = images
+            let means = images
                 .iter()
                 .map(|image| {
                     let covers = image.len() == regions.len();
@@ -231,14 +230,27 @@ pub fn summarize(images: &[Vec<DVec3>], regions: &Regions) -> Vec<RegionSummary>
                         .unwrap_or(DVec3::NAN)
                 })
                 .collect();
-            (!pixels.is_empty()).then(|| RegionSummary {
-                region,
-                pixels: pixels.len(),
-                channels: Channel::ALL.map(|c| {
-                    let values: Vec<f64> = means.iter().map(|&m| c.of(m)).collect();
-                    Summary::from_samples(&values)
-                }),
-            })
+            (!pixels.is_empty()).then_some((region, pixels.len(), means))
+        })
+        .collect()
+}
+
+/// The summary of one channel of per-image region means.
+fn channel_summary(means: &[DVec3], channel: Channel) -> Summary {
+    let values: Vec<f64> = means.iter().map(|&m| channel.of(m)).collect();
+    Summary::from_samples(&values)
+}
+
+/// Per-region summaries of independent per-pixel RGB images (one `Vec` per replica or batch,
+/// row-major like `regions`); empty regions are left out. An image of the wrong size counts as
+/// a NaN replica, which the tests reject as a defect.
+pub fn summarize(images: &[Vec<DVec3>], regions: &Regions) -> Vec<RegionSummary> {
+    region_means(images, regions)
+        .into_iter()
+        .map(|(region, pixels, means)| RegionSummary {
+            region,
+            pixels,
+            channels: Channel::ALL.map(|c| channel_summary(&means, c)),
         })
         .collect()
 }
@@ -303,39 +315,99 @@ pub fn bias_rows(
     reference: &[RegionSummary],
     protocol: &Protocol,
 ) -> Vec<BiasRow> {
-    let pairs: Vec<(&RegionSummary, &RegionSummary, Channel)> = replicas
+    let tests = replicas
         .iter()
         .filter_map(|e| Some((e, reference.iter().find(|r| r.region == e.region)?)))
-        .flat_map(|(e, r)| Channel::ALL.map(|c| (e, r, c)))
-        .collect();
-    let tests: Vec<Equivalence> = pairs
-        .iter()
-        .map(|(e, r, c)| {
-            equivalence(
-                e.channel(*c),
-                r.channel(*c),
-                protocol.delta,
-                1.0 - protocol.alpha,
-            )
+        .flat_map(|(e, r)| {
+            Channel::ALL.map(|c| {
+                let (estimate, reference) = (*e.channel(c), *r.channel(c));
+                let test = equivalence(&estimate, &reference, protocol.delta, 1.0 - protocol.alpha);
+                (e.region, e.pixels, c, estimate, reference, test)
+            })
         })
         .collect();
-    let p_values: Vec<f64> = tests.iter().map(|t| t.p_zero_bias).collect();
+    holm_rows(method, tests, protocol)
+}
+
+/// The rows of a paired comparison: replica `i` of `images` against replica `i` of `baseline`
+/// (the same seed on another backend, say), per region and channel. The estimand is the
+/// relative difference of the expectations, `b = ḡ/c̄ − 1 = d̄/c̄` with `dᵢ = gᵢ − cᵢ`; its
+/// standard error is that of the linearised ratio (delta method), `sd(dᵢ − b·cᵢ)/(c̄·√N)`, so a
+/// shared seed's noise, common to both sides, cancels. The test is [`equivalence`] of the
+/// samples `1 + b + (dᵢ − b·cᵢ)/c̄` (mean `1 + b`) against the exact 1: its CI is
+/// `b ± t_{1−α/2, N−1}·se`, its p-value the one-sample t-test of `b = 0`; Holm runs across all
+/// rows. Unequal replica counts pair the surplus with NaN (a defect: Biased). Where the
+/// baseline's mean is 0 or not finite the rows fall back to the unpaired test, whose edge cases
+/// [`equivalence`] defines.
+pub fn paired_rows(
+    method: &str,
+    images: &[Vec<DVec3>],
+    baseline: &[Vec<DVec3>],
+    regions: &Regions,
+    protocol: &Protocol,
+) -> Vec<BiasRow> {
+    let n = images.len().max(baseline.len());
+    let padded = |set: &[Vec<DVec3>]| {
+        let mut means: Vec<Vec<DVec3>> = set.to_vec();
+        means.resize(n, Vec::new());
+        region_means(&means, regions)
+    };
+    let tests = padded(images)
+        .into_iter()
+        .zip(padded(baseline))
+        .flat_map(|((region, pixels, g), (_, _, c))| {
+            Channel::ALL.map(|channel| {
+                let estimate = channel_summary(&g, channel);
+                let reference = channel_summary(&c, channel);
+                let confidence = 1.0 - protocol.alpha;
+                let c_mean = reference.mean;
+                let test = if c_mean != 0.0 && c_mean.is_finite() {
+                    let b = (estimate.mean - c_mean) / c_mean;
+                    let linearised: Vec<f64> = g
+                        .iter()
+                        .zip(&c)
+                        .map(|(&gi, &ci)| {
+                            let (gi, ci) = (channel.of(gi), channel.of(ci));
+                            1.0 + b + (gi - ci - b * ci) / c_mean
+                        })
+                        .collect();
+                    let paired = Summary::from_samples(&linearised);
+                    equivalence(&paired, &Summary::exact(1.0), protocol.delta, confidence)
+                } else {
+                    equivalence(&estimate, &reference, protocol.delta, confidence)
+                };
+                (region, pixels, channel, estimate, reference, test)
+            })
+        })
+        .collect();
+    holm_rows(method, tests, protocol)
+}
+
+/// The rows of `tests` (region, pixels, channel, the two summaries and their test) with Holm's
+/// procedure across all of them at `protocol.alpha`.
+fn holm_rows(
+    method: &str,
+    tests: Vec<(Region, usize, Channel, Summary, Summary, Equivalence)>,
+    protocol: &Protocol,
+) -> Vec<BiasRow> {
+    let p_values: Vec<f64> = tests.iter().map(|t| t.5.p_zero_bias).collect();
     let rejected = holm(&p_values, protocol.alpha);
-    pairs
-        .iter()
-        .zip(tests)
+    tests
+        .into_iter()
         .zip(rejected)
-        .map(|(((e, r, channel), test), holm_rejected)| BiasRow {
-            method: method.to_string(),
-            region: e.region,
-            channel: *channel,
-            pixels: e.pixels,
-            estimate: *e.channel(*channel),
-            reference: *r.channel(*channel),
-            verdict: protocol.verdict(&test, holm_rejected),
-            equivalence: test,
-            holm_rejected,
-        })
+        .map(
+            |((region, pixels, channel, estimate, reference, test), holm_rejected)| BiasRow {
+                method: method.to_string(),
+                region,
+                channel,
+                pixels,
+                estimate,
+                reference,
+                verdict: protocol.verdict(&test, holm_rejected),
+                equivalence: test,
+                holm_rejected,
+            },
+        )
         .collect()
 }
 
@@ -655,6 +727,61 @@ mod tests {
             };
             assert_eq!(row.verdict, want, "{}", Table(&rows));
         }
+    }
+
+    /// Paired replicas: a second backend that reproduces each replica of the first up to a
+    /// relative noise of 1e-4 per pixel. δ = 0.5%, N = 16: paired, every row is equivalent,
+    /// although the replicas' own spread (3% common factor) leaves the unpaired CI wider than
+    /// ±0.5% (inconclusive); blue × 1.0075 (1.5δ) is Biased in every blue row and nowhere
+    /// else; a replica missing on one side is a NaN pair, Biased.
+    #[test]
+    fn paired_rows_cancel_the_shared_noise() {
+        let regions = regions();
+        let protocol = Protocol {
+            delta: 0.005,
+            ..PROTOCOL
+        };
+        let baseline = images(&regions, 6, 16, false, Defect::default());
+        let mut s = StreamKey::new(0, 0, 0xB1A5, 1).stream(7);
+        let twin = |factor: DVec3, s: &mut Stream| -> Vec<Vec<DVec3>> {
+            let jitter = |p: DVec3, s: &mut Stream| p * factor * (1.0 + 1e-4 * normal(s));
+            baseline
+                .iter()
+                .map(|image| image.iter().map(|&p| jitter(p, s)).collect())
+                .collect()
+        };
+        let same = twin(DVec3::ONE, &mut s);
+        let rows = paired_rows("twin", &same, &baseline, &regions, &protocol);
+        assert_eq!(rows.len(), 16);
+        assert_eq!(overall(&rows), Verdict::Equivalent, "{}", Table(&rows));
+        let unpaired = bias_rows(
+            "unpaired",
+            &summarize(&same, &regions),
+            &summarize(&baseline, &regions),
+            &protocol,
+        );
+        assert_eq!(
+            overall(&unpaired),
+            Verdict::Inconclusive,
+            "{}",
+            Table(&unpaired)
+        );
+        let blue = twin(DVec3::new(1.0, 1.0, 1.0075), &mut s);
+        let rows = paired_rows("twin, blue × 1.0075", &blue, &baseline, &regions, &protocol);
+        for row in &rows {
+            let want = match row.channel {
+                Channel::Blue => Verdict::Biased,
+                _ => Verdict::Equivalent,
+            };
+            assert_eq!(row.verdict, want, "{}", Table(&rows));
+            let b = row.equivalence.relative_bias;
+            assert!(
+                row.channel != Channel::Blue || (b - 0.0075).abs() < 1e-4,
+                "{b}"
+            );
+        }
+        let rows = paired_rows("short", &same[1..], &baseline, &regions, &protocol);
+        assert_eq!(overall(&rows), Verdict::Biased, "{}", Table(&rows));
     }
 
     /// A region black in every replica (as 1-spp path tracing leaves a dark region of a tiny

@@ -41,11 +41,47 @@
 //!   more; a biased chain grows with the frames: `restir:sequential/temporal=reconnection`,
 //!   now refused by `Preset::validate`, was 2–3% too dark in green and blue on bumpy with 3
 //!   frames, 4–11% with 8), and the shadowed region of `bumpy`.
-//! * Backends: the five presets run on the CPU backend on both scenes; reconnection, delayed,
-//!   hybrid and sequential-exact run again on the Vulkan backend (`vulkan_*`) on `bumpy` with the
-//!   same N, against the same CPU reference. Without Vulkan the `vulkan_*` tests print why and
-//!   pass, unless `RESHIFT_REQUIRE_VULKAN=1`, which makes them fail. The controls run on the CPU
-//!   only; their GPU twins agree with the CPU's shift for shift (`vulkan_reuse.rs`).
+//! * Backends: the five presets run on the CPU backend on both scenes. Reconnection, delayed,
+//!   hybrid and sequential-exact run again on the Vulkan backend (`vulkan_*`, lavapipe in CI) on
+//!   `bumpy`, compared **paired** with the CPU backend, not with the reference: replicas
+//!   `0..N` on both backends (the same seeds, hence the same random numbers), per region and
+//!   channel the relative difference of the expectations GPU − CPU, `b = d̄/c̄`, with the
+//!   standard error of the linearised ratio (`lab::bias::paired_rows`); "equivalent within
+//!   ±0.5% at 99%" per row, Holm across the 12 rows at α = 0.01 ([`PAIRED`]). The shared seed's
+//!   noise cancels: the per-replica CV of the difference is ≈ 1e-7 (float rounding of exp, log,
+//!   pow on lavapipe) where no sampling decision diverged, and at most 1.2e-3 (sequential-exact,
+//!   whose re-traced intersection index diverges in 8 of 64 replicas), measured once with 64
+//!   pairs ([`measure_paired_cv`], [`PAIRED_CV`]) against CVs of 0.04–0.15 against the
+//!   reference. N = 32 pairs: the power calculation ([`paired_replicas`], power ≥ 0.95 for the
+//!   12 rows, CVs × 2) asks for 2 (sequential-exact 9), raised to [`PAIRED_MIN_N`] so that
+//!   divergent replicas are in the sample; planned power to detect a 1.5δ difference in any row
+//!   ≥ 0.99
+//!   (`paired_plan_detects_one_and_a_half_delta_in_any_row`). Measured: every row's 99% CI lies
+//!   within ±0.12% (sequential-exact, lit red; the other presets ±0.0001%).
+//!
+//!   **What this bounds.** The GPU's relative bias is `(1 + β_CPU)(1 + b) − 1`: with the CPU
+//!   test's CI inside ±2% and the paired CI inside ±0.5%, the GPU's bias on `bumpy` lies within
+//!   ±(2% + 0.5% + 0.01%) = ±2.51% with confidence ≥ 98% (Bonferroni over the two 99%
+//!   statements), and within the sum of the two measured CIs, which is tighter (the paired CIs
+//!   add at most ±0.12%). `half-shadow` is not run on the GPU.
+//!
+//!   Negative control of the paired test near δ: the GPU's hybrid with its blue channel ×
+//!   1.0075 (1.5δ) is Biased in every blue row (+0.75% [+0.75%, +0.75%]) while its luminance
+//!   (+0.04%) stays equivalent. The reference controls run on the CPU only; their GPU twins
+//!   agree with the CPU's shift for shift (`vulkan_reuse.rs`).
+//!
+//!   Cost on lavapipe (`RESHIFT_REQUIRE_VULKAN=1 nice -n 10 cargo test --release -p lab --test
+//!   unbiased vulkan -- --test-threads=1`, `/usr/bin/time`, load average 10–13 on 2 cores
+//!   shared with other builds, so wall times are inflated ≈ 3×): the four tests and the control
+//!   together 149 s wall, 54 CPU-s. Each alone (wall / CPU-s; each opens the device, ≈ 14 s of
+//!   pipeline compilation under this load, and runs 32 CPU replicas, 2–5 s): reconnection
+//!   29 / 9.8, delayed 45 / 17.6, hybrid 43 / 14.6, sequential-exact 58 / 19.7, the control
+//!   40 / 15.5 (hybrid and the control share their pairs within a run). The tests are CPU-bound,
+//!   so on two idle cores each takes about its CPU time or less: under 20 s. Before this
+//!   design the Vulkan tests ran the CPU tests' 582–1426 replicas against the reference on
+//!   lavapipe (1.1–1.6 s per replica under this load; one ran over 20 minutes unfinished).
+//!   Without Vulkan the `vulkan_*` tests print why and pass, unless `RESHIFT_REQUIRE_VULKAN=1`,
+//!   which makes them fail.
 //!
 //! Run with `--nocapture` to see the plan and the tables (bias, CI, half-width, p-value, Holm,
 //! verdict per region and channel).
@@ -57,11 +93,11 @@ use engine::vulkan::testing::backend_or_skip;
 use engine::{Backend, Preset, ShiftKind};
 use glam::{DVec3, Vec3};
 use lab::bias::{
-    BiasRow, Channel, Images, Protocol, RegionSummary, Table, bias_rows, reference_images,
-    replica_images, summarize,
+    BiasRow, Channel, Images, Protocol, RegionSummary, Table, bias_rows, paired_rows,
+    reference_images, region_mean, replica_images, summarize,
 };
 use lab::regions::{Region, Regions};
-use restir::stats::{EquivalencePlan, Verdict, family_power, replicas_for};
+use restir::stats::{EquivalencePlan, Verdict, family_power, replicas_for, student_t_quantile};
 use sss::scene::{Camera, GBuffer, Scene};
 
 /// δ = 2% on the relative bias of each region mean in each channel; α = 0.01 (99% CIs, Holm
@@ -103,7 +139,8 @@ struct Design {
     reference_rel_se: f64,
     reference_batches: u32,
     spp_per_batch: u32,
-    setup: OnceLock<Setup>,
+    framing: OnceLock<Framing>,
+    reference: OnceLock<Reference>,
     /// The CPU replicas of `hybrid`, shared by its test and the tint control.
     hybrid: OnceLock<Images>,
 }
@@ -170,7 +207,8 @@ static BUMPY: Design = Design {
     reference_rel_se: 0.0012,
     reference_batches: 64,
     spp_per_batch: 128,
-    setup: OnceLock::new(),
+    framing: OnceLock::new(),
+    reference: OnceLock::new(),
     hybrid: OnceLock::new(),
 };
 
@@ -236,15 +274,20 @@ static HALF_SHADOW: Design = Design {
     reference_rel_se: 0.0012,
     reference_batches: 64,
     spp_per_batch: 256,
-    setup: OnceLock::new(),
+    framing: OnceLock::new(),
+    reference: OnceLock::new(),
     hybrid: OnceLock::new(),
 };
 
-/// What every test of a design shares.
-struct Setup {
+/// The scene of a design and its regions, computed once per run.
+struct Framing {
     scene: Scene,
     regions: Regions,
-    reference: Vec<RegionSummary>,
+}
+
+/// The reference of a design, computed once per run (the paired tests do not need it).
+struct Reference {
+    summaries: Vec<RegionSummary>,
     /// Non-finite reference samples.
     nonfinite: u64,
 }
@@ -278,17 +321,37 @@ impl Design {
         n.expect("the reference's own error leaves room for δ") as u64
     }
 
-    /// The scene, its regions and the reference, computed once (printed then). Checks the
-    /// plan's assumptions on the reference at every call: the planned regions and no other, no
-    /// non-finite sample, its error within the planned one.
-    fn setup(&self) -> &Setup {
-        let setup = self.setup.get_or_init(|| {
-            let start = Instant::now();
+    /// The scene and its regions, computed once; checks at every call that the framing shows
+    /// the planned regions and no other.
+    fn framing(&self) -> &Framing {
+        let framing = self.framing.get_or_init(|| {
             let scene = (self.scene)();
+            let gbuffer = GBuffer::render(&scene, FRAMES - 1);
+            let regions = Regions::classify(&scene, &gbuffer, REGIONS_SEED);
+            Framing { scene, regions }
+        });
+        let present: Vec<Region> = Region::ALL
+            .into_iter()
+            .filter(|&r| !framing.regions.pixels(r).is_empty())
+            .collect();
+        assert_eq!(
+            present, self.regions,
+            "{}: the framing's regions",
+            self.name
+        );
+        framing
+    }
+
+    /// The reference's region summaries, computed once (printed then). Checks the plan's
+    /// assumptions on the reference at every call: no non-finite sample, its error within the
+    /// planned one.
+    fn reference(&self) -> &[RegionSummary] {
+        let framing = self.framing();
+        let reference = self.reference.get_or_init(|| {
+            let start = Instant::now();
             let frame = FRAMES - 1;
-            let regions = Regions::classify(&scene, &GBuffer::render(&scene, frame), REGIONS_SEED);
             let reference = reference_images(
-                &scene,
+                &framing.scene,
                 frame,
                 self.reference_batches,
                 self.spp_per_batch,
@@ -302,7 +365,7 @@ impl Design {
                 self.spp_per_batch,
                 start.elapsed().as_secs_f64()
             );
-            let summaries = summarize(&reference.rgb, &regions);
+            let summaries = summarize(&reference.rgb, &framing.regions);
             for r in &summaries {
                 for c in Channel::ALL {
                     let s = r.channel(c);
@@ -317,25 +380,17 @@ impl Design {
                     );
                 }
             }
-            Setup {
-                scene,
-                regions,
-                reference: summaries,
+            Reference {
+                summaries,
                 nonfinite: reference.nonfinite,
             }
         });
         assert_eq!(
-            setup.nonfinite, 0,
+            reference.nonfinite, 0,
             "{}: non-finite reference samples",
             self.name
         );
-        let present: Vec<Region> = setup.reference.iter().map(|r| r.region).collect();
-        assert_eq!(
-            present, self.regions,
-            "{}: the framing's regions",
-            self.name
-        );
-        for r in &setup.reference {
+        for r in &reference.summaries {
             for c in Channel::ALL {
                 let rel = r.channel(c).std_err / r.channel(c).mean;
                 assert!(
@@ -347,15 +402,15 @@ impl Design {
                 );
             }
         }
-        setup
+        &reference.summaries
     }
 
     /// N replicas of `preset` on `backend`, N planned for the registered preset `planned`
     /// (the CPU replicas of `hybrid` are computed once).
     fn images(&self, backend: &Backend, preset: &Preset, planned: &str) -> Images {
-        let setup = self.setup();
+        let scene = &self.framing().scene;
         let n = self.replicas(planned);
-        let run = || replica_images(backend, &setup.scene, preset, n, FRAMES).expect("preset runs");
+        let run = || replica_images(backend, scene, preset, n, FRAMES).expect("preset runs");
         match backend {
             Backend::Cpu if preset.name == "hybrid" => self.hybrid.get_or_init(run).clone(),
             _ => run(),
@@ -365,10 +420,10 @@ impl Design {
     /// The bias rows of `images` (printed with the run's design) after checking that no value
     /// was non-finite; `planned` names the preset whose CVs planned N.
     fn rows(&self, label: &str, images: &Images, planned: &str) -> Vec<BiasRow> {
-        let setup = self.setup();
+        let reference = self.reference();
         assert_eq!(images.nonfinite, 0, "{label}: non-finite shaded values");
-        let estimate = summarize(&images.rgb, &setup.regions);
-        let rows = bias_rows(label, &estimate, &setup.reference, &PROTOCOL);
+        let estimate = summarize(&images.rgb, &self.framing().regions);
+        let rows = bias_rows(label, &estimate, reference, &PROTOCOL);
         println!(
             "{label} on {}: N = {}, {FRAMES} frames, δ = ±{}%, α = {}\n{}",
             self.name,
@@ -407,6 +462,12 @@ impl Design {
 fn assert_equivalent(backend: &Backend, design: &Design, name: &str) {
     let preset = Preset::named(name).expect("registered preset");
     let rows = design.measure(backend, &preset, name);
+    let what = format!("{name} on {backend}, {}", design.name);
+    assert_all_equivalent(&rows, &PROTOCOL, &what);
+}
+
+/// Every row of `what` "equivalent within ±δ at 1 − α".
+fn assert_all_equivalent(rows: &[BiasRow], protocol: &Protocol, what: &str) {
     let failing: Vec<String> = rows
         .iter()
         .filter(|r| r.verdict != Verdict::Equivalent)
@@ -414,10 +475,9 @@ fn assert_equivalent(backend: &Backend, design: &Design, name: &str) {
         .collect();
     assert!(
         failing.is_empty(),
-        "{name} on {backend}, {}: not {} in {failing:?}:\n{}",
-        design.name,
-        PROTOCOL.describe(Verdict::Equivalent),
-        Table(&rows)
+        "{what}: not {} in {failing:?}:\n{}",
+        protocol.describe(Verdict::Equivalent),
+        Table(rows)
     );
 }
 
@@ -452,6 +512,18 @@ fn tinted(images: &Images, factor: DVec3) -> Images {
     }
 }
 
+/// Every blue row Biased, every luminance row equivalent.
+fn assert_blue_only(rows: &[BiasRow]) {
+    for row in rows {
+        let want = match row.channel {
+            Channel::Blue => Verdict::Biased,
+            Channel::Luminance => Verdict::Equivalent,
+            Channel::Red | Channel::Green => continue,
+        };
+        assert_eq!(row.verdict, want, "{}", Table(rows));
+    }
+}
+
 /// The hybrid preset with its blue channel 3% too bright is Biased in every blue row, while
 /// every luminance row (blue weighs 7% of it: +0.2%) stays equivalent within ±2%: a test of
 /// the luminance alone passes this estimator.
@@ -463,13 +535,184 @@ fn assert_tint_detected(design: &Design) {
     );
     let rows = design.rows("hybrid, blue × 1.03", &images, "hybrid");
     assert_biased(&rows, "blue × 1.03");
+    assert_blue_only(&rows);
+}
+
+/// The paired comparison of the Vulkan backend with the CPU backend: δ = 0.5% on the relative
+/// difference GPU − CPU of each region mean in each channel, α = 0.01 (99% CIs, Holm across
+/// the 12 rows). The measured differences' 99% CIs lie within ±0.12% (N = 32), so ±0.5% costs
+/// no replica and keeps the GPU's bias bound (CPU ±2% + paired ±0.5%) near the CPU's.
+const PAIRED: Protocol = Protocol {
+    delta: 0.005,
+    alpha: 0.01,
+};
+/// Per preset, the largest per-replica CV of the paired difference over the 12 rows of `bumpy`
+/// (`sd(dᵢ − b·cᵢ)/c̄`, see [`lab::bias::paired_rows`]), measured by [`measure_paired_cv`] with
+/// [`PAIRED_MEASURE_N`] replicas.
+/// Float rounding alone (exp, log, pow differ in the last bits on lavapipe) leaves ≈ 1e-7; the
+/// rest comes from replicas whose sampling decisions diverged somewhere ([`DIVERGED`]): 1 of 64
+/// (reconnection, delayed), 0 (hybrid), 8 (sequential-exact).
+const PAIRED_CV: [(&str, f64); 4] = [
+    ("reconnection", 9.9e-6),
+    ("delayed", 3.8e-5),
+    ("hybrid", 1.3e-7),
+    ("sequential-exact", 1.2e-3),
+];
+/// Replicas (seeds 0..N) behind [`PAIRED_CV`].
+const PAIRED_MEASURE_N: u64 = 64;
+/// A region mean that differs by more than this between the backends marks a replica whose
+/// sampling decisions diverged (float rounding alone leaves ≈ 1e-7).
+const DIVERGED: f64 = 1e-5;
+/// Safety factor on [`PAIRED_CV`] (the divergent replicas make it a rare-event estimate).
+const PAIRED_CV_MARGIN: f64 = 2.0;
+/// The fewest pairs a paired test runs. The planned N (2; sequential-exact 9) would rest the
+/// spread on replicas whose decisions did not diverge: a t-interval reflects the divergent
+/// replicas' spread only when some are in the sample. With 32 pairs a divergence rate of 12.5%
+/// (sequential-exact) shows at least once with probability 1 − 0.875³² = 0.986, one of 10%
+/// with 0.966.
+const PAIRED_MIN_N: u64 = 32;
+
+/// The planned paired tests of `preset`: 12 rows, each with the largest measured CV times
+/// [`PAIRED_CV_MARGIN`], against an exact baseline (the pairing has no separate reference term).
+fn paired_planned(preset: &str) -> Vec<(EquivalencePlan, f64)> {
+    let (_, cv) = PAIRED_CV
+        .iter()
+        .find(|(name, _)| *name == preset)
+        .unwrap_or_else(|| panic!("no paired CV of {preset}"));
+    let plan = EquivalencePlan {
+        delta: PAIRED.delta,
+        alpha: PAIRED.alpha,
+        reference_rel_se: 0.0,
+        reference_n: 0,
+    };
+    vec![(plan, PAIRED_CV_MARGIN * cv); 4 * BUMPY.regions.len()]
+}
+
+/// N of the paired test of `preset`: the power calculation's, at least [`PAIRED_MIN_N`].
+fn paired_replicas(preset: &str) -> u64 {
+    let n = replicas_for(&paired_planned(preset), FAMILY_POWER, 1 << 20);
+    PAIRED_MIN_N.max(n.expect("an exact baseline leaves room for δ") as u64)
+}
+
+/// Replicas `0..n` of `preset` on `backend` and on the CPU, on `bumpy`.
+fn paired_images(backend: &Backend, preset: &Preset, n: u64) -> (Images, Images) {
+    let scene = &BUMPY.framing().scene;
+    let start = Instant::now();
+    let gpu = replica_images(backend, scene, preset, n, FRAMES).expect("preset runs");
+    let gpu_s = start.elapsed().as_secs_f64();
+    let cpu = replica_images(&Backend::Cpu, scene, preset, n, FRAMES).expect("preset runs");
+    println!(
+        "{} on bumpy, N = {n}: {backend} {gpu_s:.1} s, CPU {:.1} s",
+        preset.name,
+        start.elapsed().as_secs_f64() - gpu_s
+    );
+    (gpu, cpu)
+}
+
+/// The per-replica CV of a paired row, from its CI: `half-width / t_{1−α/2, N−1} · √N`.
+fn paired_cv(row: &BiasRow) -> f64 {
+    let n = row.equivalence.n as f64;
+    let t = student_t_quantile(1.0 - 0.5 * PAIRED.alpha, n - 1.0);
+    row.ci_half_width() / t * n.sqrt()
+}
+
+/// The paired rows of `gpu` against `cpu` (printed with the largest per-replica CV beside the
+/// planned one) after checking that no value was non-finite.
+fn paired_rows_checked(label: &str, gpu: &Images, cpu: &Images) -> Vec<BiasRow> {
+    assert_eq!(
+        gpu.nonfinite + cpu.nonfinite,
+        0,
+        "{label}: non-finite values"
+    );
+    let regions = &BUMPY.framing().regions;
+    let rows = paired_rows(label, &gpu.rgb, &cpu.rgb, regions, &PAIRED);
+    println!(
+        "{label}, GPU − CPU on bumpy: N = {} pairs, {FRAMES} frames, δ = ±{}%, α = {}\n{}",
+        gpu.rgb.len(),
+        100.0 * PAIRED.delta,
+        PAIRED.alpha,
+        Table(&rows)
+    );
     for row in &rows {
-        let want = match row.channel {
-            Channel::Blue => Verdict::Biased,
-            Channel::Luminance => Verdict::Equivalent,
-            Channel::Red | Channel::Green => continue,
-        };
-        assert_eq!(row.verdict, want, "{}", Table(&rows));
+        println!(
+            "  {label} {:<11} {:<9} paired per-replica CV {:.2e}",
+            row.region,
+            row.channel,
+            paired_cv(row)
+        );
+    }
+    let largest = rows.iter().map(paired_cv).fold(0.0, f64::max);
+    println!("  {label}: largest paired per-replica CV {largest:.2e}");
+    assert_eq!(rows.len(), 4 * BUMPY.regions.len(), "{}", Table(&rows));
+    rows
+}
+
+/// Every paired row of `name` "equivalent within ±0.5% at 99%", N planned.
+fn assert_gpu_equivalent_to_cpu(backend: &Backend, name: &str) {
+    let start = Instant::now();
+    let preset = Preset::named(name).expect("registered preset");
+    let n = paired_replicas(name);
+    let computed;
+    let (gpu, cpu) = if name == "hybrid" {
+        hybrid_pair(backend)
+    } else {
+        computed = paired_images(backend, &preset, n);
+        &computed
+    };
+    let rows = paired_rows_checked(name, gpu, cpu);
+    let largest = rows.iter().map(paired_cv).fold(0.0, f64::max);
+    let planned = paired_planned(name)[0].1;
+    println!(
+        "{name}: largest paired CV {largest:.2e}, planned {planned:.2e}; {:.1} s",
+        start.elapsed().as_secs_f64()
+    );
+    assert_all_equivalent(
+        &rows,
+        &PAIRED,
+        &format!("{name} on {backend} against the CPU"),
+    );
+}
+
+/// The paired replicas of `hybrid`, shared by its test and the tint control.
+fn hybrid_pair(backend: &Backend) -> &'static (Images, Images) {
+    static PAIR: OnceLock<(Images, Images)> = OnceLock::new();
+    PAIR.get_or_init(|| {
+        let hybrid = Preset::named("hybrid").expect("registered preset");
+        paired_images(backend, &hybrid, paired_replicas("hybrid"))
+    })
+}
+
+/// The GPU's hybrid with its blue channel × (1 + 1.5δ) differs from the CPU's in every blue
+/// row, while every luminance row (blue weighs 7% of it) stays equivalent within ±0.5%.
+fn assert_paired_tint_detected(backend: &Backend) {
+    let (gpu, cpu) = hybrid_pair(backend);
+    let factor = 1.0 + PAIRED_CONTROL_BIAS;
+    let tinted = tinted(gpu, DVec3::new(1.0, 1.0, factor));
+    let rows = paired_rows_checked(&format!("hybrid, GPU blue × {factor}"), &tinted, cpu);
+    assert_biased(&rows, "GPU blue × (1 + 1.5δ)");
+    assert_blue_only(&rows);
+}
+
+/// The bias of the near-δ control of the paired tests, 1.5δ.
+const PAIRED_CONTROL_BIAS: f64 = 1.5 * PAIRED.delta;
+
+/// The plan of the paired tests: N, the planned power for the 12 rows, and the power to detect
+/// a difference of 1.5δ in any one row (at least 0.99).
+#[test]
+fn paired_plan_detects_one_and_a_half_delta_in_any_row() {
+    for (preset, _) in PAIRED_CV {
+        let n = paired_replicas(preset) as usize;
+        let tests = paired_planned(preset);
+        let planned = replicas_for(&tests, FAMILY_POWER, 1 << 20).expect("plannable");
+        let level = PAIRED.alpha / tests.len() as f64;
+        let (plan, cv) = tests[0];
+        let detect = plan.rejection_power(cv, n, PAIRED_CONTROL_BIAS, level);
+        let power = family_power(&tests, n);
+        println!(
+            "  {preset:<16} paired N = {n:>3} (power calculation: {planned}): planned CV {cv:.2e}, P(equivalent in every row | no difference) ≥ {power:.3}, P(Holm rejects a row | +1.5δ) ≥ {detect:.4}"
+        );
+        assert!(power >= FAMILY_POWER);
+        assert!(detect >= 0.99, "{preset} detects +1.5δ with {detect}");
     }
 }
 
@@ -525,13 +768,14 @@ macro_rules! cpu_tests {
     };
 }
 
-/// `$test` runs preset `$name` on the Vulkan backend on `bumpy` (or skips).
+/// `$test` compares preset `$name` on the Vulkan backend with the CPU backend on `bumpy`,
+/// replica by replica (or skips).
 macro_rules! vulkan_test {
     ($name:literal, $test:ident) => {
         #[test]
         fn $test() {
             if let Some(backend) = backend_or_skip(stringify!($test)) {
-                assert_equivalent(&backend, &BUMPY, $name);
+                assert_gpu_equivalent_to_cpu(&backend, $name);
             }
         }
     };
@@ -564,14 +808,58 @@ cpu_tests!(
 );
 vulkan_test!(
     "reconnection",
-    vulkan_reconnection_is_equivalent_within_2pct_on_bumpy
+    vulkan_reconnection_is_equivalent_to_cpu_within_half_pct_on_bumpy
 );
-vulkan_test!("delayed", vulkan_delayed_is_equivalent_within_2pct_on_bumpy);
-vulkan_test!("hybrid", vulkan_hybrid_is_equivalent_within_2pct_on_bumpy);
+vulkan_test!(
+    "delayed",
+    vulkan_delayed_is_equivalent_to_cpu_within_half_pct_on_bumpy
+);
+vulkan_test!(
+    "hybrid",
+    vulkan_hybrid_is_equivalent_to_cpu_within_half_pct_on_bumpy
+);
 vulkan_test!(
     "sequential-exact",
-    vulkan_sequential_exact_is_equivalent_within_2pct_on_bumpy
+    vulkan_sequential_exact_is_equivalent_to_cpu_within_half_pct_on_bumpy
 );
+
+#[test]
+fn control_vulkan_blue_high_differs_from_cpu_on_bumpy() {
+    if let Some(backend) = backend_or_skip("control_vulkan_blue_high_differs_from_cpu_on_bumpy") {
+        assert_paired_tint_detected(&backend);
+    }
+}
+
+/// Measures the per-replica CVs of the paired differences that [`PAIRED_CV`] records:
+/// `RESHIFT_REQUIRE_VULKAN=1 cargo test --release -p lab --test unbiased measure_paired_cv --
+/// --ignored --nocapture`.
+#[test]
+#[ignore = "a measurement, run by hand"]
+fn measure_paired_cv() {
+    let backend = backend_or_skip("measure_paired_cv").expect("Vulkan");
+    for (name, _) in PAIRED_CV {
+        let preset = Preset::named(name).expect("registered preset");
+        let (gpu, cpu) = paired_images(&backend, &preset, PAIRED_MEASURE_N);
+        paired_rows_checked(name, &gpu, &cpu);
+        let regions = &BUMPY.framing().regions;
+        let diverged = |(g, c): (&Vec<DVec3>, &Vec<DVec3>)| {
+            BUMPY.regions.iter().any(|&r| {
+                let (g, c) = (region_mean(g, regions, r), region_mean(c, regions, r));
+                let (g, c) = (g.expect("region"), c.expect("region"));
+                ((g - c).abs() / c).max_element() > DIVERGED
+            })
+        };
+        let count = gpu
+            .rgb
+            .iter()
+            .zip(&cpu.rgb)
+            .filter(|&p| diverged(p))
+            .count();
+        println!(
+            "  {name}: {count} of {PAIRED_MEASURE_N} replicas differ by more than {DIVERGED} in a region mean"
+        );
+    }
+}
 
 #[test]
 fn control_delayed_jacobian_3pct_high_is_biased_on_bumpy() {

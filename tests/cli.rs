@@ -2,7 +2,7 @@
 //! panic), `compare` and `bias` on every built-in scene with JSON validated against
 //! docs/results-schema.md, the reference cache, and sharded references merged bit for bit.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use serde_json::Value;
@@ -36,13 +36,33 @@ fn ok(o: &Output) -> String {
     stdout(o)
 }
 
-/// Exit status 1 and exactly one stderr line `reshift: …` containing `needle`, no panic.
+/// Writes a complete 8×6 reference of `bumpy` (2 batches of 2 spp) to `path`.
+fn small_reference(path: &Path) {
+    ok(&reshift(&[
+        "reference",
+        "--scene",
+        "bumpy",
+        "--resolution",
+        "8x6",
+        "--spp",
+        "4",
+        "--batch-spp",
+        "2",
+        "--out",
+        path.to_str().unwrap(),
+    ]));
+}
+
+/// Exit status 1 and exactly one stderr line `reshift: …` of at most 200 characters after the
+/// prefix, containing `needle`, no panic.
 fn fails_with(args: &[&str], needle: &str) {
     let o = reshift(args);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
     assert!(!err.contains("panicked"), "{args:?}: {err}");
     assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+    let message = err.trim_end().trim_start_matches("reshift: ");
+    assert!(message.chars().count() <= 200, "{args:?}: {err}");
     assert!(err.starts_with("reshift: "), "{args:?}: {err}");
     assert!(
         err.contains(needle),
@@ -152,19 +172,7 @@ fn bad_input_is_one_line_and_non_zero() {
     );
     // A reference of the wrong size.
     let reference = dir.join("small.rsref");
-    ok(&reshift(&[
-        "reference",
-        "--scene",
-        "bumpy",
-        "--resolution",
-        "8x6",
-        "--spp",
-        "4",
-        "--batch-spp",
-        "2",
-        "--out",
-        reference.to_str().unwrap(),
-    ]));
+    small_reference(&reference);
     fails_with(
         &[
             "compare",
@@ -233,6 +241,122 @@ fn render_writes_exr_png_and_timing() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// Sizes read from files are not trusted before allocating: a scene file of 100000×100000
+/// pixels and a checkpoint whose header claims 60000×60000 (or more pixels than its bytes hold)
+/// are one-line errors with exit status 1, not aborts; flags name their value.
+#[test]
+fn huge_sizes_in_files_are_one_line_errors() {
+    let dir = scratch("huge");
+    let path = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let scene = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/bumpy.toml"))
+        .unwrap()
+        .replace("resolution = [160, 120]", "resolution = [100000, 100000]");
+    std::fs::write(path("huge.toml"), scene).unwrap();
+    let out = path("out");
+    fails_with(
+        &[
+            "render",
+            "--scene",
+            &path("huge.toml"),
+            "--method",
+            "pt",
+            "--out",
+            &out,
+        ],
+        "huge.toml: field `camera.resolution` = 100000×100000",
+    );
+    small_reference(Path::new(&path("small.rsref")));
+    let bytes = std::fs::read(path("small.rsref")).unwrap();
+    let with_size = |width: u32, height: u32| {
+        let mut b = bytes.clone();
+        b[8..12].copy_from_slice(&width.to_le_bytes());
+        b[12..16].copy_from_slice(&height.to_le_bytes());
+        b
+    };
+    std::fs::write(path("huge.rsref"), with_size(60_000, 60_000)).unwrap();
+    std::fs::write(path("big.rsref"), with_size(4000, 4000)).unwrap();
+    let compare = |reference: &str| {
+        [
+            "compare",
+            "--resolution",
+            "8x6",
+            "--replicas",
+            "1",
+            "--frames",
+            "1",
+            "--methods",
+            "pt",
+            "--out",
+            &out,
+            "--reference",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .chain([path(reference)])
+        .collect::<Vec<_>>()
+    };
+    let args = compare("huge.rsref");
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    fails_with(&args, "huge.rsref: field `width×height` = 60000×60000");
+    fails_with(
+        &[
+            "merge",
+            &path("small.rsref"),
+            &path("big.rsref"),
+            "--out",
+            &path("m.rsref"),
+        ],
+        "big.rsref: field `pixels`",
+    );
+    fails_with(
+        &["compare", "--replicas", "0", "--out", &out],
+        "field `--replicas` = 0: must be in 1..=",
+    );
+    let bias = |flags: &[&str], needle: &str| {
+        let args = [&["bias", "--method", "pt"][..], flags].concat();
+        fails_with(&args, needle);
+    };
+    bias(
+        &["--replicas", "1"],
+        "field `--replicas` = 1: must be in 2..=65536",
+    );
+    bias(
+        &["--replicas", "4294967295"],
+        "field `--replicas` = 4294967295: must be in 2..=65536",
+    );
+    bias(
+        &["--reference-batches", "100000"],
+        "field `--reference-batches` = 100000: must be in 2..=65536",
+    );
+    bias(&["--frames", "0"], "field `--frames` = 0");
+    bias(
+        &["--replicas", "65536", "--resolution", "1024x1024"],
+        "field `--replicas` = 65536 replicas, 32 reference batches, 16 frames at 1024×1024: the \
+         bias test would need",
+    );
+    fails_with(
+        &[
+            "render", "--scene", "bumpy", "--method", "pt", "--frames", "0", "--out", &out,
+        ],
+        "field `--frames` = 0",
+    );
+    fails_with(
+        &[
+            "render",
+            "--scene",
+            "bumpy",
+            "--method",
+            "pt",
+            "--resolution",
+            "16384x16384",
+            "--out",
+            &out,
+        ],
+        "field `--resolution` = 16384×16384",
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// Sharded references merged equal the unsharded reference bit for bit; a shard alone, or a
 /// different seed (the negative control), does not.
 #[test]
@@ -274,7 +398,8 @@ fn sharded_reference_merges_bit_identically() {
     assert_eq!(bytes("whole.rsref.exr"), bytes("merged.rsref.exr"));
     assert_ne!(bytes("whole.rsref"), bytes("other-seed.rsref"));
     assert_ne!(bytes("whole.rsref").len(), 0);
-    // Merging an incomplete set of shards with a shard of another reference fails cleanly.
+    // Merging a shard with a shard of another reference fails cleanly, naming the file, the
+    // field that differs with both values, and the other file.
     fails_with(
         &[
             "merge",
@@ -283,7 +408,32 @@ fn sharded_reference_merges_bit_identically() {
             "--out",
             &path("bad.rsref"),
         ],
-        "merge",
+        "other-seed.rsref: field `seed` = 7: differs from",
+    );
+    let small = reshift(
+        &[
+            &base[..5],
+            &[
+                "--spp",
+                "4",
+                "--batch-spp",
+                "2",
+                "--out",
+                &path("small.rsref"),
+            ],
+        ]
+        .concat(),
+    );
+    ok(&small);
+    fails_with(
+        &[
+            "merge",
+            &path("s0.rsref"),
+            &path("small.rsref"),
+            "--out",
+            &path("bad.rsref"),
+        ],
+        "small.rsref: field `batches` = 2: differs from",
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }

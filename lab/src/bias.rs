@@ -23,6 +23,7 @@ use restir::stats::{
 };
 use sss::InputError;
 use sss::integrator::pt::{self, PtSettings};
+use sss::limits;
 use sss::scene::{GBuffer, Scene};
 
 use crate::regions::{Region, Regions};
@@ -88,6 +89,20 @@ pub struct Images {
     pub nonfinite: u64,
 }
 
+/// Bytes per pixel one replica keeps until the test: its linear RGB image.
+const REPLICA_BYTES_PER_PIXEL: u64 = size_of::<DVec3>() as u64;
+/// Bytes per pixel one reference batch holds: its path-traced RGB image.
+const BATCH_BYTES_PER_PIXEL: u64 = size_of::<DVec3>() as u64;
+
+/// Bytes a bias test at `pixels` holds: every replica's image, every reference batch and one
+/// run of `frames` frames (`sss::limits::run_bytes`); `None` on overflow.
+pub fn test_bytes(pixels: u64, replicas: u32, batches: u32, frames: u32) -> Option<u64> {
+    let kept = (replicas as u64 * REPLICA_BYTES_PER_PIXEL)
+        .checked_add(batches as u64 * BATCH_BYTES_PER_PIXEL)?
+        .checked_mul(pixels)?;
+    kept.checked_add(limits::run_bytes(pixels, frames)?)
+}
+
 /// The final frame (`frames − 1`) of replicas `0..replicas` of `preset` on `backend`; replica `i`
 /// runs with seed `i`. On the CPU replicas run in parallel; a Vulkan backend runs them one after
 /// another on its device. Each is a function of its seed alone.
@@ -140,6 +155,20 @@ pub fn reference_images(
     spp_per_batch: u32,
     seed: u64,
 ) -> Result<Images, InputError> {
+    let settings = PtSettings::default();
+    reference_images_with(&settings, scene, frame, batches, spp_per_batch, seed)
+}
+
+/// [`reference_images`] of the path tracer with `settings`: a method's own reference
+/// (`lab::methods::Method::reference`, e.g. the dipole profile of `image-space`).
+pub fn reference_images_with(
+    settings: &PtSettings,
+    scene: &Scene,
+    frame: u32,
+    batches: u32,
+    spp_per_batch: u32,
+    seed: u64,
+) -> Result<Images, InputError> {
     let bad = |field: &str, value: String, reason: &str| {
         Err(InputError::new("(bias reference)", field, value, reason))
     };
@@ -162,13 +191,12 @@ pub fn reference_images(
         );
     }
     let gbuffer = GBuffer::render(scene, frame);
-    let settings = PtSettings::default();
     let images: Vec<pt::Image> = (0..batches)
         .map(|b| {
             pt::render(
                 scene,
                 &gbuffer,
-                &settings,
+                settings,
                 seed,
                 b * spp_per_batch,
                 spp_per_batch,
@@ -558,6 +586,21 @@ mod tests {
 
     /// The colour of every true radiance (so the channels differ).
     const TINT: DVec3 = DVec3::new(1.0, 0.8, 0.5);
+
+    /// Each replica and each batch adds its RGB image; sizes past `u64` are `None`, not a
+    /// wrapped small number.
+    #[test]
+    fn test_bytes_counts_replicas_batches_and_the_run() {
+        let pixels = 64 * 48;
+        let base = test_bytes(pixels, 2, 2, 16).unwrap();
+        assert_eq!(test_bytes(pixels, 3, 2, 16), Some(base + pixels * 24));
+        assert_eq!(test_bytes(pixels, 2, 3, 16), Some(base + pixels * 24));
+        assert_eq!(
+            test_bytes(pixels, 2, 2, 17),
+            Some(base + pixels * limits::IMAGE_BYTES_PER_PIXEL)
+        );
+        assert_eq!(test_bytes(u64::MAX / 4, 2, 2, 1), None);
+    }
 
     /// 12 × 10 pixels: a row of non-translucent pixels, then lit, penumbra and shadowed bands.
     fn regions() -> Regions {

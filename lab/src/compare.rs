@@ -6,9 +6,10 @@
 //! them to [`MethodResult`]s and writes `table.md`, `table.csv`, `results.json` ([`Results`])
 //! and the images ([`crate::images`]) into the plan's folder.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use engine::Backend;
+use sss::limits::{self, IMAGE_BYTES_PER_PIXEL};
 use sss::scene::{GBuffer, Scene};
 
 use crate::error::Error;
@@ -70,17 +71,39 @@ pub fn parse_methods<S: AsRef<str>>(specs: &[S]) -> Result<Vec<(String, Method)>
 }
 
 impl Plan {
+    /// The plan's counts within [`sss::limits`], and the replicas' final frames (kept until the
+    /// table is made) and one run within the memory budget.
     fn check(&self) -> Result<(), Error> {
         let invalid = |reason: &str| Err(Error::Invalid(format!("comparison plan: {reason}")));
         if self.methods.is_empty() {
             return invalid("no method given");
         }
-        if self.replicas == 0 || self.frames == 0 {
-            return invalid("replicas and frames must be ≥ 1");
-        }
+        let origin = Path::new("(comparison plan)");
+        limits::replicas(origin, "replicas", self.replicas)?;
+        limits::frames(origin, "frames", self.frames)?;
         if self.equal_time.is_some_and(|t| !(t.is_finite() && t > 0.0)) {
             return invalid("the equal-time budget must be a positive number of seconds");
         }
+        let pixels = self.scene.camera.width() as u64 * self.scene.camera.height() as u64;
+        let kept = (self.methods.len() as u64)
+            .checked_mul(self.replicas as u64)
+            .and_then(|n| n.checked_mul(pixels * IMAGE_BYTES_PER_PIXEL));
+        let needed = kept.zip(limits::run_bytes(pixels, self.frames));
+        let value = format!(
+            "{} methods × {} replicas × {} frames at {}×{}",
+            self.methods.len(),
+            self.replicas,
+            self.frames,
+            self.scene.camera.width(),
+            self.scene.camera.height()
+        );
+        limits::memory(
+            origin,
+            "replicas",
+            &value,
+            needed.and_then(|(a, b)| a.checked_add(b)),
+            "the comparison",
+        )?;
         Ok(())
     }
 }

@@ -11,8 +11,12 @@ use crate::regions::Regions;
 pub struct MethodResult {
     /// The method as requested (`pt`, `restir:hybrid`).
     pub method: String,
-    /// Samples per pixel per frame actually used (after equal-time calibration).
+    /// Samples per pixel per frame actually used (after equal-time calibration); for a method
+    /// that chooses counts per pixel, the most a pixel may take.
     pub spp: u32,
+    /// Mean over replicas of the mean samples per pixel of the final frame
+    /// ([`Rendered::spp`]): `spp` unless the method chooses counts per pixel (`adaptive`).
+    pub mean_spp: f64,
     pub replicas: usize,
     /// Mean over replicas.
     pub seconds_per_frame: f64,
@@ -44,6 +48,7 @@ impl MethodResult {
         Some(MethodResult {
             method: method.to_string(),
             spp,
+            mean_spp: replicas.iter().map(|r| r.spp).sum::<f64>() / k,
             replicas: replicas.len(),
             seconds_per_frame: replicas.iter().map(|r| r.seconds_per_frame).sum::<f64>() / k,
             frames_rendered: replicas

@@ -70,6 +70,9 @@ pub struct AreaMetrics {
     pub pixels: usize,
     pub replicas: usize,
     pub mse: f64,
+    /// Half-width of the [`BIAS_CONFIDENCE`] Student-t CI of `mse` over the replicas' MSEs;
+    /// `None` with fewer than 2 replicas.
+    pub mse_ci: Option<f64>,
     pub rel_mse: f64,
     /// Mean luminance of the reference over the area.
     pub reference_mean: f64,
@@ -112,7 +115,8 @@ pub fn area_metrics(
                 .map(|&p| luminance(reference[p].as_vec3()))
                 .sum::<f64>()
                 / count;
-            let (mut mse, mut rel_mse, mut biases) = (0.0, 0.0, Vec::with_capacity(k));
+            let (mut mses, mut rel_mse, mut biases) =
+                (Vec::with_capacity(k), 0.0, Vec::with_capacity(k));
             for image in replicas {
                 let (mut se, mut rel, mut y) = (0.0, 0.0, 0.0);
                 for &p in &pixels {
@@ -122,13 +126,14 @@ pub fn area_metrics(
                     rel += (d2 / (r * r + DVec3::splat(REL_EPSILON))).element_sum();
                     y += luminance(image.pixels[p]);
                 }
-                mse += se / channels;
+                mses.push(se / channels);
                 rel_mse += rel / channels;
                 biases.push(y / count - reference_mean);
             }
-            let bias = Summary::from_samples(&biases);
+            let (mse, bias) = (Summary::from_samples(&mses), Summary::from_samples(&biases));
             let t = student_t_quantile(0.5 + 0.5 * BIAS_CONFIDENCE, (k - 1) as f64);
             let bias_ci = (k >= 2).then_some(t * bias.std_err);
+            let mse_ci = (k >= 2).then_some(t * mse.std_err);
             let variance = (k >= 2).then(|| pixel_variance(replicas, &pixels) / channels);
             let reference_mse = pixels
                 .iter()
@@ -139,7 +144,8 @@ pub fn area_metrics(
                 area,
                 pixels: pixels.len(),
                 replicas: k,
-                mse: mse / k as f64,
+                mse: mse.mean,
+                mse_ci,
                 rel_mse: rel_mse / k as f64,
                 reference_mean,
                 bias: bias.mean,
@@ -271,7 +277,21 @@ mod tests {
             assert!(a.bias.abs() < 1e-12, "{a:?}");
             assert!((a.variance.unwrap() - 0.5).abs() < 1e-12, "{a:?}");
             assert!((a.reference_mse - 0.01).abs() < 1e-12, "{a:?}");
+            assert_eq!(a.mse_ci, Some(0.0), "both replicas have MSE 0.25: {a:?}");
         }
+        // Replica MSEs {0.25, 0}: mean 0.125, s.e. 0.125, CI half-width t(0.995, 1) · 0.125.
+        let unequal = [
+            image(vec![Vec3::splat(0.5); 8]),
+            image(vec![Vec3::splat(1.0); 8]),
+        ];
+        let m = area_metrics(&unequal, &reference, &std_err, &regions).unwrap();
+        let t = student_t_quantile(0.5 + 0.5 * BIAS_CONFIDENCE, 1.0);
+        assert!((m[0].mse - 0.125).abs() < 1e-12, "{:?}", m[0]);
+        assert!(
+            (m[0].mse_ci.unwrap() - t * 0.125).abs() < 1e-9,
+            "{:?}",
+            m[0]
+        );
         let shifted: Vec<Vec3> = (0..8)
             .map(|p| Vec3::splat(if p < 4 { 1.0 } else { 1.5 }))
             .collect();
@@ -280,6 +300,7 @@ mod tests {
         assert!((get(Region::Shadowed).bias - 0.5).abs() < 1e-6);
         assert!(get(Region::Lit).bias.abs() < 1e-12);
         assert_eq!(get(Region::Lit).bias_ci, None, "one replica has no CI");
+        assert_eq!(get(Region::Lit).mse_ci, None, "one replica has no CI");
         assert!(area_metrics(&pair, &reference[1..], &std_err, &regions).is_none());
     }
 

@@ -5,6 +5,7 @@ use std::path::Path;
 
 use engine::hash::fnv1a;
 use sss::InputError;
+use sss::limits::{MAX_SCENE_FILE_BYTES, read_file};
 use sss::scene::Scene;
 
 /// A scene as named by the user, with its cache key.
@@ -25,8 +26,7 @@ pub fn load_scene(spec: &str) -> Result<LoadedScene, InputError> {
     }
     let path = Path::new(spec);
     if spec.ends_with(".toml") || spec.contains('/') || path.exists() {
-        let text = std::fs::read(path)
-            .map_err(|e| InputError::new(path, "(file)", format!("{spec:?}"), e.to_string()))?;
+        let text = read_file(path, MAX_SCENE_FILE_BYTES)?;
         let scene = Scene::load(path)?;
         let key = format!("file-{}-{:016x}", scene.name, fnv1a(&text));
         return Ok(LoadedScene { scene, key });

@@ -1,23 +1,26 @@
-//! `reshift bias`: N replicas of one method against independent path-traced reference batches;
-//! per region and colour channel (red, green, blue, luminance) the Welch test of zero bias (Holm
-//! across all of them) and the verdict "equivalent within ±δ at 1 − α", "biased" or
-//! "inconclusive" (`lab::bias`).
+//! `reshift bias`: N replicas of one method against independent path-traced reference batches
+//! (the path tracer with the method's reference settings, `Method::reference`: the dipole
+//! profile for `image-space`); per region and colour channel (red, green, blue, luminance) the
+//! Welch test of zero bias (Holm across all of them) and the verdict "equivalent within ±δ at
+//! 1 − α", "biased" or "inconclusive" (`lab::bias`).
 
 use clap::Args;
 use glam::DVec3;
 use lab::bias::{
-    BiasRow, Protocol, Table, bias_rows, overall, reference_images, replicas_needed, summarize,
+    BiasRow, Protocol, Table, bias_rows, overall, reference_images_with, replicas_needed,
+    summarize, test_bytes,
 };
 use lab::methods::Method;
 use lab::reference_cache::REFERENCE_SEED;
 use lab::regions::Regions;
 use restir::stats::Verdict;
 use serde_json::{Value, json};
+use sss::limits::{self, MAX_REPLICAS, MAX_SPP};
 use sss::scene::GBuffer;
 
 use super::common::{
-    BackendArgs, CliError, CliResult, interrupted, json_number, load_scene, parse_resolution,
-    progress, with_resolution,
+    BackendArgs, CliError, CliResult, command_line, interrupted, json_number, load_scene,
+    parse_resolution, progress, with_resolution,
 };
 
 /// The power for which `bias` plans the replicas a method needs.
@@ -68,17 +71,16 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
             args.delta, args.alpha
         )));
     }
-    if args.replicas < 2 || args.reference_batches < 2 || args.frames == 0 {
-        return Err(CliError(
-            "--replicas and --reference-batches must be ≥ 2, --frames ≥ 1".into(),
-        ));
-    }
+    let resolution = check_sizes(args)?;
     let backend = args.backend.open()?;
     let loaded = load_scene(&args.scene)?;
-    let scene = with_resolution(loaded.scene, Some(parse_resolution(&args.resolution)?));
+    let scene = with_resolution(loaded.scene, Some(resolution));
     let frame = args.frames - 1;
     let regions = Regions::classify(&scene, &GBuffer::render(&scene, frame), REFERENCE_SEED);
-    let reference = reference_images(
+    let reference_settings = method.reference();
+    let profile = reference_settings.profile.name();
+    let reference = reference_images_with(
+        &reference_settings,
         &scene,
         frame,
         args.reference_batches,
@@ -118,6 +120,7 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
             &scene.name,
             &rows,
             planned.ok(),
+            profile,
             [nonfinite, reference.nonfinite],
             images.len(),
             stopped,
@@ -128,7 +131,7 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
         );
     } else {
         println!(
-            "# bias of {} on {} ({}, frame {frame}): N = {} replicas vs {} reference batches × {} spp; per region and channel, δ = ±{}%, α = {} ({}% CIs, Holm across all rows)\n",
+            "# bias of {} on {} ({}, frame {frame}): N = {} replicas vs {} reference batches × {} spp ({profile} profile); per region and channel, δ = ±{}%, α = {} ({}% CIs, Holm across all rows)\n",
             method,
             scene.name,
             args.resolution,
@@ -165,6 +168,38 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
     Ok(())
 }
 
+/// The resolution, once every count is within `sss::limits` (at least two replicas and two
+/// reference batches, for their standard errors) and the test fits the memory budget.
+fn check_sizes(args: &BiasArgs) -> CliResult<(u32, u32)> {
+    let line = command_line();
+    let count = |flag: &str, n: u32, min: u32, max: u32| {
+        limits::count(line, flag, n as u64, min as u64, max as u64)
+    };
+    count("--replicas", args.replicas, 2, MAX_REPLICAS)?;
+    count(
+        "--reference-batches",
+        args.reference_batches,
+        2,
+        MAX_REPLICAS,
+    )?;
+    count(
+        "--reference-batch-spp",
+        args.reference_batch_spp,
+        1,
+        MAX_SPP,
+    )?;
+    limits::frames(line, "--frames", args.frames)?;
+    let (width, height) = parse_resolution(&args.resolution)?;
+    let value = format!(
+        "{} replicas, {} reference batches, {} frames at {width}×{height}",
+        args.replicas, args.reference_batches, args.frames
+    );
+    let pixels = width as u64 * height as u64;
+    let needed = test_bytes(pixels, args.replicas, args.reference_batches, args.frames);
+    limits::memory(line, "--replicas", &value, needed, "the bias test")?;
+    Ok((width, height))
+}
+
 /// The overall verdict in words: `equivalent within ±δ at 99% in every region and channel`,
 /// `biased (in k of n rows)` or `inconclusive (k of n rows not decided)`.
 fn verdict_line(rows: &[BiasRow], protocol: &Protocol) -> String {
@@ -189,6 +224,7 @@ fn bias_json(
     scene: &str,
     rows: &[BiasRow],
     planned: Option<usize>,
+    profile: &str,
     [replica_nonfinite, reference_nonfinite]: [u64; 2],
     replicas: usize,
     interrupted: bool,
@@ -229,6 +265,7 @@ fn bias_json(
         "reference": {
             "batches": args.reference_batches,
             "spp_per_batch": args.reference_batch_spp,
+            "profile": profile,
             "seed": REFERENCE_SEED,
         },
         "nonfinite": { "replicas": replica_nonfinite, "reference": reference_nonfinite },

@@ -9,9 +9,11 @@ use lab::compare::{self, DEFAULT_METHODS, Plan, parse_methods};
 use lab::reference_cache::ReferenceSource;
 use lab::report::file_stem;
 
+use sss::limits;
+
 use super::common::{
-    BackendArgs, Bars, CliError, CliResult, LoadedScene, load_scene, parse_resolution,
-    with_resolution,
+    BackendArgs, Bars, CliError, CliResult, LoadedScene, command_line, load_scene,
+    parse_resolution, with_resolution,
 };
 
 #[derive(Args, Clone, Debug)]
@@ -84,9 +86,8 @@ fn plan(args: &CompareArgs) -> CliResult<Plan> {
     if methods.is_empty() {
         return Err(CliError("--methods: no method given".into()));
     }
-    if args.replicas == 0 || args.frames == 0 {
-        return Err(CliError("--replicas and --frames must be ≥ 1".into()));
-    }
+    limits::replicas(command_line(), "--replicas", args.replicas)?;
+    limits::frames(command_line(), "--frames", args.frames)?;
     if let Some(t) = args.equal_time
         && !(t.is_finite() && t > 0.0)
     {

@@ -8,7 +8,9 @@ use clap::builder::PossibleValue;
 use clap::{Args, ValueEnum};
 use lab::experiments::{Experiment, Settings};
 
-use super::common::{BackendArgs, Bars, CliResult, parse_resolution};
+use sss::limits;
+
+use super::common::{BackendArgs, Bars, CliResult, command_line, parse_resolution};
 
 /// An experiment name on the command line; the names and their help are
 /// `lab::experiments::Experiment`'s.
@@ -62,6 +64,7 @@ pub struct ExperimentArgs {
 }
 
 pub fn command(args: &ExperimentArgs) -> CliResult<()> {
+    limits::replicas(command_line(), "--replicas", args.replicas)?;
     let settings = Settings {
         replicas: args.replicas,
         resolution: parse_resolution(&args.resolution)?,

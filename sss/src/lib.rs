@@ -6,6 +6,7 @@ pub mod bssrdf;
 pub mod error;
 pub mod geometry;
 pub mod integrator;
+pub mod limits;
 pub mod material;
 pub mod profile;
 pub mod random_walk;

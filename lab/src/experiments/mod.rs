@@ -80,6 +80,7 @@ impl Experiment {
 
     /// Runs the experiment, writing its tables, findings and images into its folder.
     pub fn run(self, settings: &Settings, progress: &mut dyn Progress) -> Result<Report, Error> {
+        settings.check()?;
         let name = self.name();
         match self {
             Experiment::ShiftComparison => shift_comparison::run(settings, "bumpy", name, progress),

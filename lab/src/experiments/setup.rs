@@ -5,6 +5,8 @@ use std::path::{Path, PathBuf};
 
 use engine::Backend;
 use serde_json::Value;
+use sss::InputError;
+use sss::limits;
 
 use crate::compare::{Outcome, Plan, parse_methods};
 use crate::error::Error;
@@ -48,6 +50,14 @@ pub struct Report {
 }
 
 impl Settings {
+    /// The replicas and the resolution within [`sss::limits`].
+    pub fn check(&self) -> Result<(), InputError> {
+        let origin = Path::new("(experiment settings)");
+        let (width, height) = self.resolution;
+        limits::replicas(origin, "replicas", self.replicas)?;
+        limits::resolution(origin, "resolution", width, height)
+    }
+
     /// The output folder of experiment `name`.
     pub fn out_dir(&self, name: &str) -> PathBuf {
         self.out

@@ -1,12 +1,14 @@
 //! Rendering methods by name (DESIGN §7): `pt[:spp]`, `restir:<preset>`, `random-walk[:spp]`,
-//! `pt-one-hit[:spp]`.
+//! `pt-one-hit[:spp]`, `image-space[:spp]`, `adaptive[:options]`.
 //!
 //! A method renders the final frame of a scene's camera trajectory for one replica seed on a
 //! backend. Each family is one file implementing [`Estimator`] with its [`Entry`] (family,
 //! usage, about, build); [`REGISTRY`] lists the entries, one line each. Adding a method is that
 //! file plus its `mod` line and its registry line (docs/adding-a-method.md).
 
+pub mod adaptive;
 mod estimator;
+pub mod image_space;
 pub mod pt;
 pub mod pt_one_hit;
 pub mod random_walk;
@@ -14,7 +16,7 @@ pub mod restir;
 
 use std::fmt;
 
-pub use estimator::{Entry, Estimator, Frame, Method, Rendered, parse_spp};
+pub use estimator::{Entry, Estimator, Frame, Method, Rendered, SampleCounts, cpu_only, parse_spp};
 
 /// Every method family the CLI knows, in the order `reshift methods` lists them.
 pub const REGISTRY: &[Entry] = &[
@@ -22,6 +24,8 @@ pub const REGISTRY: &[Entry] = &[
     restir::ENTRY,
     random_walk::ENTRY,
     pt_one_hit::ENTRY,
+    image_space::ENTRY,
+    adaptive::ENTRY,
 ];
 
 /// A method specification that could not be parsed.

@@ -6,7 +6,7 @@ use crate::method_result::MethodResult;
 use crate::metrics::{AreaMetrics, efficiency};
 
 /// Column names of [`csv`], in order.
-pub const CSV_HEADER: &str = "method,spp,replicas,area,pixels,ms_per_frame,mse,rel_mse,bias,bias_ci99,relative_bias,variance,reference_mse,efficiency,tonemapped_mse,tonemapped_rmse";
+pub const CSV_HEADER: &str = "method,spp,mean_spp,replicas,area,pixels,ms_per_frame,mse,mse_ci99,rel_mse,bias,bias_ci99,relative_bias,variance,reference_mse,efficiency,tonemapped_mse,tonemapped_rmse";
 
 /// `mse` relative to the row with the lowest `mse` in the same area, e.g. `×1.00` for the best.
 fn rank(results: &[MethodResult], row: &AreaMetrics) -> String {
@@ -37,7 +37,7 @@ fn opt(v: Option<f64>, digits: usize) -> String {
 pub fn markdown(results: &[MethodResult]) -> String {
     let mut out = String::new();
     out.push_str(
-        "| method | spp | area | px | MSE | vs best | relMSE | bias ± 99% CI | rel. bias | variance | ms/frame | efficiency | TM-8bit RMSE |\n\
+        "| method | spp | area | px | MSE ± 99% CI | vs best | relMSE | bias ± 99% CI | rel. bias | variance | ms/frame | efficiency | TM-8bit RMSE |\n\
          |---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     for r in results {
@@ -45,6 +45,10 @@ pub fn markdown(results: &[MethodResult]) -> String {
             let bias = match m.bias_ci {
                 Some(ci) => format!("{:+.2e} ± {ci:.1e}", m.bias),
                 None => format!("{:+.2e}", m.bias),
+            };
+            let mse = match m.mse_ci {
+                Some(ci) => format!("{:.3e} ± {ci:.1e}", m.mse),
+                None => format!("{:.3e}", m.mse),
             };
             let rel = relative_bias(m).map_or("-".into(), |b| format!("{:+.2}%", 100.0 * b));
             let tm = if m.area == crate::metrics::Area::Image {
@@ -54,12 +58,12 @@ pub fn markdown(results: &[MethodResult]) -> String {
             };
             let _ = writeln!(
                 out,
-                "| {} | {} | {} | {} | {:.3e} | {} | {:.3e} | {} | {} | {} | {:.1} | {} | {} |",
+                "| {} | {} | {} | {} | {} | {} | {:.3e} | {} | {} | {} | {:.1} | {} | {} |",
                 r.method,
-                r.spp,
+                spp_cell(r),
                 m.area.name(),
                 m.pixels,
-                m.mse,
+                mse,
                 rank(results, m),
                 m.rel_mse,
                 bias,
@@ -74,6 +78,16 @@ pub fn markdown(results: &[MethodResult]) -> String {
     out
 }
 
+/// The `spp` cell: the method's spp, or `mean ≤ max` for a method that chooses its counts per
+/// pixel.
+fn spp_cell(r: &MethodResult) -> String {
+    if r.mean_spp == r.spp as f64 {
+        r.spp.to_string()
+    } else {
+        format!("{:.1} ≤ {}", r.mean_spp, r.spp)
+    }
+}
+
 /// The same rows as CSV with [`CSV_HEADER`]; empty cells for values that do not exist.
 pub fn csv(results: &[MethodResult]) -> String {
     let mut out = format!("{CSV_HEADER}\n");
@@ -82,14 +96,16 @@ pub fn csv(results: &[MethodResult]) -> String {
         for m in &r.metrics {
             let _ = writeln!(
                 out,
-                "{},{},{},{},{},{},{:e},{:e},{:e},{},{},{},{:e},{},{:e},{:e}",
+                "{},{},{},{},{},{},{},{:e},{},{:e},{:e},{},{},{},{:e},{},{:e},{:e}",
                 r.method,
                 r.spp,
+                r.mean_spp,
                 r.replicas,
                 m.area.name(),
                 m.pixels,
                 1e3 * r.seconds_per_frame,
                 m.mse,
+                cell(m.mse_ci),
                 m.rel_mse,
                 m.bias,
                 cell(m.bias_ci),
@@ -117,6 +133,7 @@ mod tests {
             pixels: 10,
             replicas: 2,
             mse,
+            mse_ci: Some(0.1 * mse),
             rel_mse: mse,
             reference_mean: 0.5,
             bias: 0.01,
@@ -127,6 +144,7 @@ mod tests {
         MethodResult {
             method: method.into(),
             spp: 1,
+            mean_spp: 1.0,
             replicas: 2,
             seconds_per_frame: 0.5,
             frames_rendered: 16,
@@ -142,14 +160,23 @@ mod tests {
         let md = markdown(&results);
         assert_eq!(md.lines().count(), 2 + 4, "{md}");
         assert!(
-            md.contains("| restir:hybrid | 1 | shadowed | 10 | 1.000e-1 | ×1.00 |"),
+            md.contains("| restir:hybrid | 1 | shadowed | 10 | 1.000e-1 ± 1.0e-2 | ×1.00 |"),
             "{md}"
         );
         assert!(
-            md.contains("| pt:1 | 1 | image | 10 | 2.000e-1 | ×2.00 |"),
+            md.contains("| pt:1 | 1 | image | 10 | 2.000e-1 ± 2.0e-2 | ×2.00 |"),
             "{md}"
         );
         assert!(md.contains("+2.00%"), "relative bias 0.01/0.5: {md}");
+        let adaptive = MethodResult {
+            spp: 64,
+            mean_spp: 12.34,
+            ..result("adaptive", 0.1)
+        };
+        assert!(
+            markdown(&[adaptive]).contains("| adaptive | 12.3 ≤ 64 | image |"),
+            "a method that chooses its counts shows their mean and maximum"
+        );
         let csv = csv(&results);
         let columns = CSV_HEADER.split(',').count();
         assert_eq!(csv.lines().count(), 1 + 4);

@@ -89,11 +89,22 @@ impl Dipole {
         }
     }
 
-    fn depth(&self, pole: Pole) -> f32 {
+    /// The depth of `pole`: `z_r` below the surface or `z_v` above it.
+    pub fn depth(&self, pole: Pole) -> f32 {
         match pole {
             Pole::Real => self.z_r,
             Pole::Virtual => self.z_v,
         }
+    }
+
+    /// The reduced albedo `α′ = σs′/σt′`.
+    pub fn reduced_albedo(&self) -> f32 {
+        self.reduced_albedo
+    }
+
+    /// The effective transport coefficient `σ_tr = √(3 σa σt′)`.
+    pub fn sigma_tr(&self) -> f32 {
+        self.sigma_tr
     }
 
     /// `R_d(r) = α′/(4π) Σ_z z(1 + σ_tr s)e^{−σ_tr s}/s³` over both poles [002 Table 1].

@@ -15,6 +15,26 @@ pub use scale::{ScaleFit, scale_factor};
 pub use single_scattering::ScatteringOrders;
 pub use xie::Xie;
 
+/// Which diffusion profile a BSSRDF evaluates: Burley's normalized diffusion `A R̄_d` (DESIGN §9,
+/// every method's default) or the Jensen dipole of the same material
+/// ([`DipoleProfiles`](crate::material::DipoleProfiles)), the profile of seed 002.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum ProfileKind {
+    #[default]
+    Burley,
+    Dipole,
+}
+
+impl ProfileKind {
+    /// `burley` or `dipole`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ProfileKind::Burley => "burley",
+            ProfileKind::Dipole => "dipole",
+        }
+    }
+}
+
 /// Shared pieces of the sampling tests: keyed streams and binned expectations.
 #[cfg(test)]
 pub(crate) mod test_support {

@@ -54,13 +54,15 @@ mod kernels {
     include!("src/plan/kernels.rs");
 }
 
-/// The registry's `resolves_deferred_index` flag as a GLSL boolean.
+/// Whether a registry line's flags include `resolves_deferred_index`, as a GLSL boolean (the
+/// other flags, read by `shifts::ShiftKind` only, are checked there).
 macro_rules! registry_flag {
-    () => {
-        "false"
-    };
-    (resolves_deferred_index) => {
-        "true"
+    ($($flag:ident),*) => {
+        if [$(stringify!($flag)),*].contains(&"resolves_deferred_index") {
+            "true"
+        } else {
+            "false"
+        }
     };
 }
 
@@ -71,14 +73,14 @@ macro_rules! registry_flag {
 macro_rules! shift_registry {
     ($(
         $(#[doc = $doc:literal])*
-        $kind:ident = $name:literal, $file:ident :: $twin:ident, $cpu:expr $(, $flag:ident)? ;
+        $kind:ident = $name:literal, $file:ident :: $twin:ident, $cpu:expr $(, $flag:ident)* ;
     )*) => {
         /// The shift kinds and the GLSL files of their twins, in registry order.
         fn shift_registry() -> (twin::Item, Vec<&'static str>) {
             let variants = vec![$(twin::Variant {
                 name: stringify!($kind),
                 code: 0,
-                args: vec![stringify!($twin).to_string(), registry_flag!($($flag)?).to_string()],
+                args: vec![stringify!($twin).to_string(), registry_flag!($($flag),*).to_string()],
                 docs: vec![$(twin::doc_text(&format!("doc = {}", stringify!($doc))).unwrap_or_default()),*],
             }),*];
             let variants = variants

@@ -621,7 +621,7 @@ fn compare_runs_on_every_builtin_scene_and_validates() {
 }
 
 /// `bias` on every built-in scene (16×12, 2 frames, N = 3 replicas of `restir:hybrid`, 3
-/// reference batches × 8 spp, δ = 3%, α = 0.01): exits 0 and its JSON validates. The verdicts
+/// reference batches × 8 spp, δ = 2%, α = 0.01): exits 0 and its JSON validates. The verdicts
 /// at this N are not asserted (the statistical tests live in `lab::bias`).
 #[test]
 fn bias_runs_on_every_builtin_scene_and_validates() {

@@ -174,7 +174,10 @@ mod tests {
         assert!(material_sphere("marble").is_none());
         let e = load_scene("sphere-granite").err().unwrap().to_string();
         assert!(
-            e.contains("mfp-0.25, ") && e.contains("sphere-<preset>") && !e.contains(" … "),
+            e.contains("unknown scene: bumpy, ")
+                && e.contains("sphere-granite")
+                && e.contains("sphere-<preset>")
+                && !e.contains(" … "),
             "{e}"
         );
     }

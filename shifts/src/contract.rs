@@ -23,6 +23,11 @@ twin::contract! {
     /// units; the built-in scenes are about one unit across).
     pub const SHADOW_EPSILON: f32 = 1e-4;
 
+    /// The factor by which the negative control `broken::DelayedJacobianOff` scales the
+    /// Jacobian of delayed reconnection: 3% too large, just beyond the ±2% that the
+    /// unbiasedness tests resolve per region and channel.
+    pub const BROKEN_JACOBIAN_ERROR: f32 = 1.03;
+
     /// How the intersection index of an inverted sample is found (DESIGN §5).
     #[derive(Clone, Copy, Debug, PartialEq, Eq)]
     pub enum IndexPolicy in INDEX_POLICY {

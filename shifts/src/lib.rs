@@ -37,6 +37,6 @@ pub use distant::DistantReconnection;
 pub use domain::{LightPath, SssDomain};
 pub use hybrid::Hybrid;
 pub use inversion::{InvertingReconnection, resolve_deferred_index};
-pub use kind::ShiftKind;
+pub use kind::{ShiftKind, StoredNumbers};
 pub use reconnection::{Identity, Reconnection};
 pub use sss::contract::bssrdf::INDEX_UNKNOWN;

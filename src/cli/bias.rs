@@ -1,25 +1,28 @@
 //! `reshift bias`: N replicas of one method against independent path-traced reference batches
 //! (the path tracer with the method's reference settings, `Method::reference`: the dipole
-//! profile for `image-space`);
-//! per region the Welch test of zero bias (Holm across regions) and the equivalence verdict with
-//! tolerance δ (`lab::bias`).
+//! profile for `image-space`); per region and colour channel (red, green, blue, luminance) the
+//! Welch test of zero bias (Holm across all of them) and the verdict "equivalent within ±δ at
+//! 1 − α", "biased" or "inconclusive" (`lab::bias`).
 
 use clap::Args;
+use glam::DVec3;
 use lab::bias::{
-    BiasRow, Protocol, Table, bias_rows, luminance, reference_images_with, summarize, test_bytes,
+    Protocol, Table, bias_rows, reference_images_with, replicas_needed, summarize, test_bytes,
 };
 use lab::methods::Method;
 use lab::reference_cache::REFERENCE_SEED;
 use lab::regions::Regions;
-use restir::stats::Verdict;
-use serde_json::{Value, json};
 use sss::limits::{self, MAX_REPLICAS, MAX_SPP};
 use sss::scene::GBuffer;
 
+use super::bias_output::{bias_json, verdict_line};
 use super::common::{
-    BackendArgs, CliError, CliResult, command_line, interrupted, json_number, load_scene,
-    parse_resolution, progress, with_resolution,
+    BackendArgs, CliError, CliResult, command_line, interrupted, load_scene, parse_resolution,
+    progress, with_resolution,
 };
+
+/// The power for which `bias` plans the replicas a method needs.
+pub(super) const PLANNED_POWER: f64 = 0.9;
 
 #[derive(Args, Clone, Debug)]
 pub struct BiasArgs {
@@ -32,8 +35,8 @@ pub struct BiasArgs {
     /// Independent replicas (seeds 0..N).
     #[arg(long, default_value_t = 256)]
     pub replicas: u32,
-    /// Tolerance δ on the relative bias of a region mean.
-    #[arg(long, default_value_t = 0.03)]
+    /// Tolerance δ on the relative bias of a region's mean in each channel (0.02 = ±2%).
+    #[arg(long, default_value_t = 0.02)]
     pub delta: f64,
     /// Family-wise level α (each CI has confidence 1 − α).
     #[arg(long, default_value_t = 0.01)]
@@ -83,21 +86,14 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
         REFERENCE_SEED,
     )?;
     let bar = progress(args.replicas as u64, &method.name());
-    let (mut images, mut nonfinite) = (Vec::new(), 0);
+    let (mut images, mut nonfinite): (Vec<Vec<DVec3>>, u64) = (Vec::new(), 0);
     for seed in 0..args.replicas as u64 {
         if interrupted() {
             break;
         }
         let rendered = method.render_on(&backend, &scene, args.frames, seed)?;
         nonfinite += rendered.nonfinite;
-        images.push(
-            rendered
-                .image
-                .pixels
-                .iter()
-                .map(|&p| luminance(p))
-                .collect::<Vec<f64>>(),
-        );
+        images.push(rendered.image.pixels.iter().map(|p| p.as_dvec3()).collect());
         bar.inc(1);
     }
     bar.finish_and_clear();
@@ -112,14 +108,16 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
     let rows = bias_rows(
         &method.name(),
         &summarize(&images, &regions),
-        &summarize(&reference.luminance, &regions),
+        &summarize(&reference.rgb, &regions),
         &protocol,
     );
+    let planned = replicas_needed(&rows, &protocol, PLANNED_POWER);
     if args.json {
         let value = bias_json(
             args,
             &scene.name,
             &rows,
+            planned.ok(),
             profile,
             [nonfinite, reference.nonfinite],
             images.len(),
@@ -131,7 +129,7 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
         );
     } else {
         println!(
-            "# bias of {} on {} ({}, frame {frame}): N = {} replicas vs {} reference batches × {} spp ({profile} profile), δ = {}%, α = {}\n",
+            "# bias of {} on {} ({}, frame {frame}): N = {} replicas vs {} reference batches × {} spp ({profile} profile); per region and channel, δ = ±{}%, α = {} ({}% CIs, Holm across all rows)\n",
             method,
             scene.name,
             args.resolution,
@@ -139,15 +137,24 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
             args.reference_batches,
             args.reference_batch_spp,
             100.0 * args.delta,
-            args.alpha
+            args.alpha,
+            100.0 * (1.0 - args.alpha)
         );
         println!("{}", Table(&rows));
         println!(
-            "verdict: {} ({} non-finite values in replicas, {} in the reference)",
-            overall(&rows),
+            "verdict: {}; non-finite values: {} in replicas, {} in the reference",
+            verdict_line(&rows, &protocol),
             nonfinite,
             reference.nonfinite
         );
+        let goal = format!(
+            "every row equivalent within ±{}% with probability ≥ {PLANNED_POWER} if the method had no bias",
+            100.0 * args.delta
+        );
+        match planned {
+            Ok(n) => println!("planned: N = {n} for {goal} (from this run's per-replica CVs)"),
+            Err(why) => println!("planned: no N for {goal}: {why}"),
+        }
     }
     if stopped {
         return Err(CliError(format!(
@@ -189,76 +196,4 @@ fn check_sizes(args: &BiasArgs) -> CliResult<(u32, u32)> {
     let needed = test_bytes(pixels, args.replicas, args.reference_batches, args.frames);
     limits::memory(line, "--replicas", &value, needed, "the bias test")?;
     Ok((width, height))
-}
-
-/// Over regions: biased if any region is, unbiased if all are, else inconclusive.
-fn overall(rows: &[BiasRow]) -> &'static str {
-    if rows.iter().any(|r| r.verdict == Verdict::Biased) {
-        "biased"
-    } else if !rows.is_empty() && rows.iter().all(|r| r.verdict == Verdict::Unbiased) {
-        "unbiased"
-    } else {
-        "inconclusive"
-    }
-}
-
-fn verdict_name(v: Verdict) -> &'static str {
-    match v {
-        Verdict::Unbiased => "unbiased",
-        Verdict::Biased => "biased",
-        Verdict::Inconclusive => "inconclusive",
-    }
-}
-
-/// JSON of the bias test (schema `reshift-bias/1`, docs/results-schema.md).
-fn bias_json(
-    args: &BiasArgs,
-    scene: &str,
-    rows: &[BiasRow],
-    profile: &str,
-    [replica_nonfinite, reference_nonfinite]: [u64; 2],
-    replicas: usize,
-    interrupted: bool,
-) -> Value {
-    let verdict = overall(rows);
-    let rows: Vec<Value> = rows
-        .iter()
-        .map(|r| {
-            let e = &r.equivalence;
-            json!({
-                "region": r.region.name(),
-                "pixels": r.pixels,
-                "n": e.n,
-                "mean": json_number(r.estimate.mean),
-                "reference_mean": json_number(r.reference.mean),
-                "reference_std_err": json_number(r.reference.std_err),
-                "relative_bias": json_number(e.relative_bias),
-                "ci_low": json_number(e.ci_low),
-                "ci_high": json_number(e.ci_high),
-                "p_zero_bias": json_number(e.p_zero_bias),
-                "holm_rejected": r.holm_rejected,
-                "verdict": verdict_name(r.verdict),
-            })
-        })
-        .collect();
-    json!({
-        "schema": "reshift-bias/1",
-        "scene": scene,
-        "method": args.method,
-        "resolution": args.resolution,
-        "frames": args.frames,
-        "replicas": replicas,
-        "delta": args.delta,
-        "alpha": args.alpha,
-        "reference": {
-            "batches": args.reference_batches,
-            "spp_per_batch": args.reference_batch_spp,
-            "profile": profile,
-            "seed": REFERENCE_SEED,
-        },
-        "nonfinite": { "replicas": replica_nonfinite, "reference": reference_nonfinite },
-        "interrupted": interrupted,
-        "verdict": verdict,
-        "rows": rows,
-    })
 }

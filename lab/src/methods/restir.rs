@@ -67,6 +67,7 @@ pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
         };
     }
     preset.name = arg.to_string();
+    preset.validate().map_err(|e| e.to_string())?;
     Ok(preset)
 }
 
@@ -218,6 +219,7 @@ mod tests {
             "restir:hybrid/cap",
             "restir:sequential/temporal=nope",
             "restir:nope/temporal=delayed",
+            "restir:sequential/temporal=reconnection",
         ] {
             assert_eq!(Method::parse(bad).expect_err(bad).spec, bad);
         }

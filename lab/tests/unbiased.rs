@@ -549,6 +549,7 @@ const PAIRED: Protocol = Protocol {
 /// Per preset, the largest per-replica CV of the paired difference over the 12 rows of `bumpy`
 /// (`sd(dᵢ − b·cᵢ)/c̄`, see [`lab::bias::paired_rows`]), measured by [`measure_paired_cv`] with
 /// [`PAIRED_MEASURE_N`] replicas.
+///
 /// Float rounding alone (exp, log, pow differ in the last bits on lavapipe) leaves ≈ 1e-7; the
 /// rest comes from replicas whose sampling decisions diverged somewhere ([`DIVERGED`]): 1 of 64
 /// (reconnection, delayed), 0 (hybrid), 8 (sequential-exact).
@@ -616,8 +617,8 @@ fn paired_cv(row: &BiasRow) -> f64 {
     row.ci_half_width() / t * n.sqrt()
 }
 
-/// The paired rows of `gpu` against `cpu` (printed with the largest per-replica CV beside the
-/// planned one) after checking that no value was non-finite.
+/// The paired rows of `gpu` against `cpu` (printed, with each row's per-replica CV) after
+/// checking that no value was non-finite.
 fn paired_rows_checked(label: &str, gpu: &Images, cpu: &Images) -> Vec<BiasRow> {
     assert_eq!(
         gpu.nonfinite + cpu.nonfinite,

@@ -533,8 +533,9 @@ fn assert_schema_rejects_broken(schema: &Value, good: &Value) {
 }
 
 /// `compare` on every built-in scene at 16×12 (2 frames, 2 replicas, `pt` and two presets, a
-/// 2 × 8 spp reference): exits 0, writes every output, and its results.json validates against
-/// the schema. The second run on `bumpy` reuses the cached reference.
+/// 2 × 8 spp reference per frame, `pt:2` the baseline): exits 0, writes every output (figures
+/// and report.html included), measures both frames, and its results.json validates against the
+/// schema. The second run on `bumpy` reuses the cached references.
 #[test]
 fn compare_runs_on_every_builtin_scene_and_validates() {
     let dir = scratch("compare");
@@ -548,6 +549,8 @@ fn compare_runs_on_every_builtin_scene_and_validates() {
             name,
             "--methods",
             "pt:2,restir:hybrid,restir:sequential",
+            "--baseline",
+            "pt:2",
             "--replicas",
             "2",
             "--frames",
@@ -579,13 +582,36 @@ fn compare_runs_on_every_builtin_scene_and_validates() {
                 );
             }
         }
-        for file in ["table.md", "table.csv", "reference.exr", "reference.png"] {
+        for file in written["figures"].as_object().unwrap().values() {
+            assert!(out.join(file.as_str().unwrap()).is_file(), "{name}: {file}");
+        }
+        for file in [
+            "table.md",
+            "table.csv",
+            "convergence.csv",
+            "reference.exr",
+            "reference.png",
+        ] {
             assert!(out.join(file).is_file(), "{name}: {file}");
+        }
+        assert_eq!(written["baseline"], "pt:2", "{name}");
+        assert_eq!(written["frame_references"].as_array().unwrap().len(), 2);
+        for method in written["methods"].as_array().unwrap() {
+            let frames: Vec<&Value> = method["convergence"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|f| &f["frame"])
+                .collect();
+            assert_eq!(frames, [0, 1], "{name}");
         }
         if *name == "bumpy" {
             assert_schema_rejects_broken(schema, &written);
             let again: Value = serde_json::from_str(&ok(&reshift(&args))).unwrap();
             assert_eq!(again["reference"]["cached"], true);
+            for f in again["frame_references"].as_array().unwrap() {
+                assert_eq!(f["cached"], true);
+            }
             // Same reference and seeds → the same errors (timings, and so efficiency, differ).
             let mse = |v: &Value| v["methods"][0]["areas"][1]["mse"].clone();
             assert_eq!(mse(&again), mse(&written));
@@ -724,6 +750,101 @@ fn diagnostics_experiments_write_tables_and_findings() {
     fails_with(
         &["experiment", "hybrid-map", "--resolution", "0x18"],
         "--resolution",
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `ground-truth` at a tiny size on a built-in scene and a measured-material sphere: every
+/// registry family appears (restir with every preset), the outputs are written, the ground truth
+/// is cached and reused; `model-gap` writes its decomposition; `--scenes` is refused by an
+/// experiment with its own scenes.
+#[test]
+fn ground_truth_and_model_gap_run_small() {
+    let dir = scratch("ground-truth");
+    let (out, cache) = (dir.join("gt"), dir.join("cache"));
+    let args = [
+        "experiment",
+        "ground-truth",
+        "--resolution",
+        "8x6",
+        "--replicas",
+        "3",
+        "--reference-spp",
+        "32",
+        "--scenes",
+        "bumpy,sphere-skin1",
+        "--out",
+        out.to_str().unwrap(),
+        "--cache",
+        cache.to_str().unwrap(),
+    ];
+    let text = ok(&reshift(&args));
+    assert!(
+        text.contains("| scene | method | model error translucent"),
+        "{text}"
+    );
+    for method in [
+        "pt:4",
+        "restir:reconnection",
+        "restir:sequential-exact",
+        "random-walk:4",
+        "pt-one-hit:4",
+        "single-scatter:4",
+    ] {
+        for scene in ["bumpy", "sphere-skin1"] {
+            assert!(
+                text.contains(&format!("| {scene} | {method} |")),
+                "{scene} {method}: {text}"
+            );
+        }
+    }
+    for file in [
+        "table.md",
+        "table-full.md",
+        "table.csv",
+        "findings.md",
+        "results.json",
+    ] {
+        assert!(out.join(file).is_file(), "{file}");
+    }
+    let json = |o: &Output| -> Value { serde_json::from_str(&ok(o)).unwrap() };
+    let again = json(&reshift(&[&args[..], &["--json"]].concat()));
+    assert_eq!(again["schema"], "reshift-ground-truth/1");
+    assert_eq!(again["scenes"][1]["truth"]["cached"], true, "{again}");
+    assert_eq!(again["scenes"][1]["truth"]["spp_per_batch"], 2);
+
+    let gap = ok(&reshift(&[
+        "experiment",
+        "model-gap",
+        "--resolution",
+        "8x6",
+        "--replicas",
+        "2",
+        "--reference-spp",
+        "4",
+        "--scenes",
+        "slab",
+        "--out",
+        dir.join("gap").to_str().unwrap(),
+    ]));
+    assert!(
+        gap.contains("walk − BSSRDF") && gap.contains("| slab | index_matched |"),
+        "{gap}"
+    );
+    fails_with(
+        &["experiment", "hybrid-map", "--scenes", "bumpy"],
+        "--scenes",
+    );
+    fails_with(
+        &[
+            "experiment",
+            "ground-truth",
+            "--scenes",
+            "nope",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "unknown scene",
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }

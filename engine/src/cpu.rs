@@ -17,13 +17,13 @@ use sss::scene::{GBuffer, Scene};
 use restir::resample::ResampleError;
 use restir::reservoir::InvalidCandidate;
 use shifts::PixelReservoir;
-use shifts::preset::{PassSpec, Preset};
+use shifts::preset::{PassSpec, Preset, Shade};
 
 use crate::candidates::{self, ProbeCounts};
 use crate::diagnostics::{Counters, HybridChoice};
 use crate::image::Image;
 use crate::plan::{PassKernel, Plan, Resource, Role, Rotation, Slot, Step};
-use crate::reuse::{self, PassInput, Previous, ShiftCounts};
+use crate::reuse::{self, PassInput, Previous, Reused, ShiftCounts};
 use crate::{PassTiming, PipelineError, Run, RunConfig, purpose};
 
 /// Fills `out` (row-major, rows of `width`) with `kernel(pixel)` in parallel over rows; the
@@ -49,13 +49,15 @@ fn per_pixel<T: Send, E: Send>(
     errors.into_iter().flatten().next().map_or(Ok(()), Err)
 }
 
-/// One pixel's output of a pass: the reservoir and its diagnostics.
+/// One pixel's output of a pass: the reservoir, its diagnostics and the Rao-Blackwellised value
+/// ([`Shade::AllInputs`]).
 #[derive(Clone, Copy, Default)]
 struct Cell {
     reservoir: PixelReservoir,
     probes: ProbeCounts,
     hybrid: HybridChoice,
     shifts: ShiftCounts,
+    rao_blackwellised: Option<Vec3>,
 }
 
 /// Runs `preset` (already validated) for `config.frames` frames: its [`Plan`], step by step,
@@ -77,8 +79,10 @@ pub(crate) fn run(
     let mut frame_state = Frame {
         scene,
         config,
+        shade: preset.shade,
         width,
         cells: vec![Cell::default(); n],
+        rao_blackwellised: vec![None; n],
         reservoirs: std::array::from_fn(|_| vec![PixelReservoir::empty(); n]),
         rotation: Rotation::FIRST,
         gbuffer: None,
@@ -124,9 +128,13 @@ pub(crate) fn run(
 struct Frame<'a> {
     scene: &'a Scene,
     config: &'a RunConfig,
+    shade: Shade,
     width: u32,
     /// The output of the running pass per pixel (its reservoir and diagnostics).
     cells: Vec<Cell>,
+    /// Per pixel, the Rao-Blackwellised value of this frame's last reuse pass that resampled it
+    /// ([`Shade::AllInputs`]; `None` everywhere for [`Shade::Selected`]).
+    rao_blackwellised: Vec<Option<Vec3>>,
     reservoirs: [Vec<PixelReservoir>; 3],
     rotation: Rotation,
     gbuffer: Option<GBuffer>,
@@ -140,6 +148,7 @@ impl Frame<'_> {
         let scene = self.scene;
         if step.kernel == PassKernel::GBuffer {
             self.gbuffer = Some(GBuffer::render(scene, frame));
+            self.rao_blackwellised.fill(None);
             return Ok(None);
         }
         let gbuffer = self
@@ -154,7 +163,15 @@ impl Frame<'_> {
         let seed = self.config.seed;
         let Some(spec) = step.spec else {
             let reservoirs = bound(Role::ReservoirsIn);
-            return Ok(Some(shade(scene, gbuffer, reservoirs, step.pass, seed)));
+            let rao_blackwellised = &self.rao_blackwellised;
+            return Ok(Some(shade(
+                scene,
+                gbuffer,
+                reservoirs,
+                rao_blackwellised,
+                step.pass,
+                seed,
+            )));
         };
         let input = PassInput {
             scene,
@@ -169,12 +186,24 @@ impl Frame<'_> {
             reservoirs: bound(Role::PreviousReservoirs),
         });
         let cells = &mut self.cells;
-        run_pass(&input, previous.as_ref(), &spec, self.width, cells)
-            .map_err(|e| e.at(frame, step.pass as usize))?;
+        run_pass(
+            &input,
+            previous.as_ref(),
+            &spec,
+            self.shade,
+            self.width,
+            cells,
+        )
+        .map_err(|e| e.at(frame, step.pass as usize))?;
         if let Some(Resource::Reservoirs(slot)) = step.resource(Role::ReservoirsOut) {
             let out = &mut self.reservoirs[self.rotation.buffer(slot)];
             for (r, c) in out.iter_mut().zip(cells.iter()) {
                 *r = c.reservoir;
+            }
+        }
+        for (v, c) in self.rao_blackwellised.iter_mut().zip(cells.iter()) {
+            if c.rao_blackwellised.is_some() {
+                *v = c.rao_blackwellised;
             }
         }
         if let Some(counters) = &mut self.counters {
@@ -220,6 +249,7 @@ fn run_pass(
     input: &PassInput,
     previous: Option<&Previous>,
     spec: &PassSpec,
+    shade: Shade,
     width: u32,
     cells: &mut [Cell],
 ) -> Result<(), PixelError> {
@@ -248,11 +278,16 @@ fn run_pass(
         }),
         PassSpec::Temporal { .. } | PassSpec::Spatial { .. } => {
             per_pixel(cells, width, |pixel, cell| {
-                if let Some(result) = reuse::pass(input, previous, pixel, spec) {
-                    let (reservoir, shifts) = result.map_err(|e| PixelError::Resample(pixel, e))?;
+                if let Some(result) = reuse::pass(input, previous, pixel, spec, shade) {
+                    let Reused {
+                        reservoir,
+                        shifts,
+                        rao_blackwellised,
+                    } = result.map_err(|e| PixelError::Resample(pixel, e))?;
                     *cell = Cell {
                         reservoir,
                         shifts,
+                        rao_blackwellised,
                         ..Cell::default()
                     };
                 }
@@ -276,7 +311,8 @@ fn hybrid_choice(domain: &SssDomain, reservoir: &PixelReservoir) -> HybridChoice
     }
 }
 
-/// The frame's image: `f(Y)·W` on translucent pixels; other primary hits get one sample of the
+/// The frame's image: on translucent pixels `f(Y)·W`, or the Rao-Blackwellised value where
+/// `rao_blackwellised` has one ([`Shade::AllInputs`]); other primary hits get one sample of the
 /// path tracer's estimator (Lambert direct lighting by NEE), so a ReSTIR image and a
 /// path-traced one estimate the same radiance everywhere. Non-finite values are counted and
 /// written as 0.
@@ -284,6 +320,7 @@ fn shade(
     scene: &Scene,
     gbuffer: &GBuffer,
     reservoirs: &[PixelReservoir],
+    rao_blackwellised: &[Option<Vec3>],
     pass: u32,
     seed: u64,
 ) -> (Image, u64) {
@@ -303,7 +340,8 @@ fn shade(
             return Ok(());
         };
         let value = match input.domain(pixel) {
-            Some((domain, _)) => reuse::shade(&domain, &reservoirs[pixel as usize]),
+            Some((domain, _)) => rao_blackwellised[pixel as usize]
+                .unwrap_or_else(|| reuse::shade(&domain, &reservoirs[pixel as usize])),
             None => {
                 let mut rng =
                     StreamKey::new(pixel, gbuffer.frame, pass, purpose::OPAQUE).stream(seed);
@@ -370,7 +408,8 @@ mod tests {
     }
 
     /// Same seed → bit-identical frames and final reservoirs with 1 and 2 threads, for a preset
-    /// with every pass kind (sequential, deferred index) and the hybrid, diagnostics on.
+    /// with every pass kind (sequential, deferred index), the hybrid and the hybrid with
+    /// Rao-Blackwellised shading, diagnostics on.
     /// Control: another seed changes the output, so the comparison can see a difference.
     #[test]
     fn output_is_bit_identical_for_any_thread_count() {
@@ -380,8 +419,18 @@ mod tests {
             frames: 4,
             collect_diagnostics: true,
         };
-        for name in ["sequential", "hybrid"] {
-            let preset = Preset::named(name).unwrap();
+        let rao_blackwellised = Preset {
+            name: "hybrid/shade=all".into(),
+            shade: Shade::AllInputs,
+            ..Preset::named("hybrid").unwrap()
+        };
+        let presets = [
+            Preset::named("sequential").unwrap(),
+            Preset::named("hybrid").unwrap(),
+            rao_blackwellised,
+        ];
+        for preset in presets {
+            let name = &preset.name;
             let one = with_threads(1, || run(&scene, &preset, &config).unwrap());
             let two = with_threads(2, || run(&scene, &preset, &config).unwrap());
             assert_eq!(bits(&one), bits(&two), "{name}: 1 vs 2 threads");
@@ -393,6 +442,55 @@ mod tests {
                 bits(&one).0,
                 bits(&reseeded).0,
                 "{name}: control, another seed"
+            );
+        }
+    }
+
+    /// Rao-Blackwellised shading changes only the colour of the shaded value: for every preset,
+    /// the reservoirs are bit-identical to [`Shade::Selected`]'s (later frames are unaffected),
+    /// every pixel has the same luminance up to f32 rounding (`p̂ = luminance(f)`, so
+    /// `Σ_i p̂(y_i)·m_i·W_i·J_i = w_sum = p̂(Y)·W`), and the colours differ in more than 10% of
+    /// the pixels (control: the option does something).
+    #[test]
+    fn rao_blackwellised_shading_keeps_reservoirs_and_luminance() {
+        let scene = scene("bumpy", 24);
+        let config = RunConfig {
+            seed: 5,
+            frames: 3,
+            collect_diagnostics: false,
+        };
+        let luminance = |p: Vec3| 0.2126 * p.x as f64 + 0.7152 * p.y as f64 + 0.0722 * p.z as f64;
+        for preset in Preset::all() {
+            let rb = Preset {
+                shade: Shade::AllInputs,
+                ..preset.clone()
+            };
+            let (a, b) = (
+                run(&scene, &preset, &config).unwrap(),
+                run(&scene, &rb, &config).unwrap(),
+            );
+            assert_eq!(bits(&a).1, bits(&b).1, "{}: reservoirs", preset.name);
+            let (mut differing, mut compared) = (0, 0);
+            for (fa, fb) in a.frames.iter().zip(&b.frames) {
+                for (pa, pb) in fa.pixels.iter().zip(&fb.pixels) {
+                    let (la, lb) = (luminance(*pa), luminance(*pb));
+                    assert!(
+                        (la - lb).abs() <= 1e-4 * la.max(lb) + 1e-7,
+                        "{}: luminance {la} vs {lb}",
+                        preset.name
+                    );
+                    compared += 1;
+                    differing += (pa != pb) as u32;
+                }
+            }
+            println!(
+                "{}: {differing} of {compared} pixels change colour",
+                preset.name
+            );
+            assert!(
+                differing * 10 > compared,
+                "{}: only {differing} of {compared} changed",
+                preset.name
             );
         }
     }
@@ -468,6 +566,7 @@ mod tests {
         let bad = Preset {
             name: "bad".into(),
             passes: preset.passes[1..].to_vec(),
+            shade: preset.shade,
         };
         assert!(matches!(
             run(&scene, &bad, &RunConfig::default()),

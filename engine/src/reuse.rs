@@ -6,7 +6,7 @@
 
 use glam::{Vec2, Vec3};
 use restir::mis::MisScheme;
-use restir::resample::{ResampleError, Source, resample};
+use restir::resample::{ResampleError, Source, resample_observed};
 use restir::reservoir::{Reservoir, cap_confidence};
 use restir::rng::StreamKey;
 use restir::shift::{Domain, Shift};
@@ -16,7 +16,7 @@ use sss::scene::{GBuffer, GPixel, Scene};
 use crate::purpose;
 use shifts::PixelReservoir;
 use shifts::ShiftKind;
-use shifts::preset::PassSpec;
+use shifts::preset::{PassSpec, Shade};
 
 /// Reprojection checks of temporal reuse ([`GBuffer::reproject`]).
 pub use sss::scene::{
@@ -33,6 +33,27 @@ pub struct ShiftCounts {
     pub failed: u32,
     /// Of the successful ones, how many have `p̂_r(T(x)) > p̂_r(canonical)` [001 Fig. 5].
     pub improved: u32,
+}
+
+/// One pixel's output of a reuse pass.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Reused {
+    pub reservoir: PixelReservoir,
+    pub shifts: ShiftCounts,
+    /// For [`Shade::AllInputs`], the step's Rao-Blackwellised value `Σ_i f(y_i)·m_i·W_i·J_i`
+    /// over its inputs (`restir::resample::resample_observed`); `None` for [`Shade::Selected`]
+    /// and where the pass left the reservoir unchanged.
+    pub rao_blackwellised: Option<Vec3>,
+}
+
+impl Reused {
+    /// The reservoir passed on unchanged.
+    fn unchanged(reservoir: PixelReservoir) -> Reused {
+        Reused {
+            reservoir,
+            ..Reused::default()
+        }
+    }
 }
 
 /// The frame one reuse pass works on.
@@ -70,21 +91,31 @@ pub struct Previous<'a> {
     pub reservoirs: &'a [PixelReservoir],
 }
 
-/// A reuse step's shared tail: resample, resolve a deferred index, collect diagnostics.
+/// A reuse step's shared tail: resample, resolve a deferred index, collect diagnostics, sum the
+/// Rao-Blackwellised value for [`Shade::AllInputs`].
 struct Step<'d, 'a> {
     input: &'d PassInput<'a>,
     receiver: SssDomain<'a>,
     canonical: Reservoir<SssSample>,
     shift: ShiftKind,
     mis: &'d dyn MisScheme,
+    shade: Shade,
 }
 
 impl<'a> Step<'_, 'a> {
     fn run(
         &self,
         neighbours: &[(SssDomain<'a>, Reservoir<SssSample>)],
-    ) -> Result<(Reservoir<SssSample>, ShiftCounts), ResampleError> {
+    ) -> Result<Reused, ResampleError> {
         let receiver = &self.receiver;
+        let all_inputs = self.shade == Shade::AllInputs;
+        let mut sum = Vec3::ZERO;
+        // Σ_i f(y_i) · m_i W_i J_i = E[f(Y)·W | inputs]   [001 Eq. 6]
+        let mut observe = |y: &SssSample, factor: f32| {
+            if all_inputs {
+                sum += receiver.contribution(y) * factor;
+            }
+        };
         let sources: Vec<Source<'_, SssDomain<'a>>> = neighbours
             .iter()
             .map(|(domain, reservoir)| Source { domain, reservoir })
@@ -96,8 +127,8 @@ impl<'a> Step<'_, 'a> {
             purpose::SELECT,
         )
         .stream(self.input.seed);
-        self.shift.with_shift(receiver.material(), |shift| {
-            let mut out = resample(
+        let (out, shifts) = self.shift.with_shift(receiver.material(), |shift| {
+            let mut out = resample_observed(
                 Source {
                     domain: receiver,
                     reservoir: &self.canonical,
@@ -106,6 +137,7 @@ impl<'a> Step<'_, 'a> {
                 shift,
                 self.mis,
                 &mut rng,
+                &mut observe,
             )?;
             if self.shift.resolves_deferred_index()
                 && let Some(y) = &mut out.y
@@ -117,7 +149,12 @@ impl<'a> Step<'_, 'a> {
             } else {
                 ShiftCounts::default()
             };
-            Ok((out, counts))
+            Ok::<_, ResampleError>((out, counts))
+        })?;
+        Ok(Reused {
+            reservoir: PixelReservoir::from(&out),
+            shifts,
+            rao_blackwellised: all_inputs.then_some(sum),
         })
     }
 
@@ -154,10 +191,11 @@ pub fn temporal(
     shift: ShiftKind,
     mis: &dyn MisScheme,
     cap: f32,
-) -> Result<(PixelReservoir, ShiftCounts), ResampleError> {
+    shade: Shade,
+) -> Result<Reused, ResampleError> {
     let stored = input.reservoirs[pixel as usize];
     let Some((receiver, g)) = input.domain(pixel) else {
-        return Ok((stored, ShiftCounts::default()));
+        return Ok(Reused::unchanged(stored));
     };
     let canonical = stored.get();
     let history = previous.and_then(|prev| {
@@ -170,7 +208,7 @@ pub fn temporal(
         Some((domain, reservoir))
     });
     let Some(history) = history else {
-        return Ok((stored, ShiftCounts::default()));
+        return Ok(Reused::unchanged(stored));
     };
     let step = Step {
         input,
@@ -178,9 +216,9 @@ pub fn temporal(
         canonical,
         shift,
         mis,
+        shade,
     };
-    let (out, counts) = step.run(&[history])?;
-    Ok((PixelReservoir::from(&out), counts))
+    step.run(&[history])
 }
 
 /// Spatial reuse of `pixel`: `neighbours` pixels drawn uniformly in the disk of radius
@@ -195,10 +233,11 @@ pub fn spatial(
     mis: &dyn MisScheme,
     neighbours: u32,
     cap: Option<f32>,
-) -> Result<(PixelReservoir, ShiftCounts), ResampleError> {
+    shade: Shade,
+) -> Result<Reused, ResampleError> {
     let stored = input.reservoirs[pixel as usize];
     let Some((receiver, g)) = input.domain(pixel) else {
-        return Ok((stored, ShiftCounts::default()));
+        return Ok(Reused::unchanged(stored));
     };
     let canonical = stored.get();
     let (width, height) = (input.gbuffer.width, input.gbuffer.height);
@@ -238,9 +277,9 @@ pub fn spatial(
         canonical,
         shift,
         mis,
+        shade,
     };
-    let (out, counts) = step.run(&taken)?;
-    Ok((PixelReservoir::from(&out), counts))
+    step.run(&taken)
 }
 
 /// `max_c d_c` of the receiver's material.
@@ -256,20 +295,30 @@ pub fn sample_disk(radius: f32, u_radius: f32, u_angle: f32) -> Vec2 {
 }
 
 /// The reuse pass `spec` at `pixel`: [`temporal`] or [`spatial`] with the pass's shift, MIS
-/// scheme, neighbours and cap; `None` for candidate generation, which is not a reuse pass.
+/// scheme, neighbours and cap, and the preset's `shade`; `None` for candidate generation, which
+/// is not a reuse pass.
 pub fn pass(
     input: &PassInput,
     previous: Option<&Previous>,
     pixel: u32,
     spec: &PassSpec,
-) -> Option<Result<(PixelReservoir, ShiftCounts), ResampleError>> {
+    shade: Shade,
+) -> Option<Result<Reused, ResampleError>> {
     Some(match *spec {
         PassSpec::Candidates { .. } => return None,
         PassSpec::Temporal {
             shift,
             mis,
             confidence_cap,
-        } => temporal(input, previous, pixel, shift, mis.scheme(), confidence_cap),
+        } => temporal(
+            input,
+            previous,
+            pixel,
+            shift,
+            mis.scheme(),
+            confidence_cap,
+            shade,
+        ),
         PassSpec::Spatial {
             shift,
             mis,
@@ -282,6 +331,7 @@ pub fn pass(
             mis.scheme(),
             neighbours,
             confidence_cap,
+            shade,
         ),
     })
 }
@@ -350,15 +400,17 @@ mod tests {
             let Some((receiver, _)) = input.domain(pixel) else {
                 continue;
             };
-            let (out, _) = spatial(
+            let out = spatial(
                 &input,
                 pixel,
                 shift,
                 MisKind::DefensivePairwise.scheme(),
                 4,
                 None,
+                Shade::Selected,
             )
-            .unwrap();
+            .unwrap()
+            .reservoir;
             let Some(y) = out.get().y else { continue };
             if out.y == reservoirs[pixel as usize].y {
                 continue;

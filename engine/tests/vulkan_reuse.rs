@@ -8,7 +8,7 @@
 use bytemuck::{Pod, Zeroable};
 use engine::PixelReservoir;
 use engine::candidates;
-use engine::reuse::{self, PassInput, Previous, ShiftCounts};
+use engine::reuse::{self, PassInput, Previous, Reused};
 use engine::vulkan::testing::{Tally, kernel_or_skip, rel_error, scaled_error};
 use engine::vulkan::{
     Buffer, Context, FrameParams, GpuPixel, GpuScene, Kernel, PassParams, SPATIAL, Shader,
@@ -21,7 +21,7 @@ use restir::rng::StreamKey;
 use restir::shift::Domain;
 use shifts::ShiftKind;
 use shifts::SssSample;
-use shifts::preset::{PassSpec, Preset};
+use shifts::preset::{PassSpec, Preset, Shade, TEMPORAL_CAP};
 use sss::scene::{GBuffer, Scene};
 
 /// `parity_reuse.glsl`: bindings 0–10 scene and pass inputs of the shift modes, 11 cases,
@@ -666,11 +666,25 @@ struct PassCase {
     pass: u32,
 }
 
-/// The temporal and spatial passes of every registered preset (deduplicated): temporal GBH with
-/// cap 20 and spatial defensive pairwise without cap, over their shifts and neighbour counts.
+/// Seed 001's temporal confidence cap, run besides the presets' default
+/// (`shifts::preset::TEMPORAL_CAP`) so that the kernel is seen to take the cap from its
+/// parameters.
+const SEED_001_CAP: f32 = 20.0;
+
+/// Confidence of the previous frame's reservoirs in the pass comparison: between the default
+/// temporal cap and [`SEED_001_CAP`], so the cap binds under one and not under the other.
+const HISTORY_CONFIDENCE: f32 = 8.0;
+
+/// The temporal and spatial passes of every registered preset (deduplicated), with their
+/// temporal passes also at [`SEED_001_CAP`]: temporal GBH and spatial defensive pairwise without
+/// cap, over their shifts and neighbour counts.
 fn preset_pass_cases() -> Vec<PassCase> {
     let mut cases: Vec<PassCase> = Vec::new();
-    for preset in Preset::all() {
+    let presets = Preset::all().into_iter().flat_map(|p| {
+        let seed_001 = p.clone().with_temporal_cap(SEED_001_CAP);
+        [p, seed_001]
+    });
+    for preset in presets {
         for (pass, spec) in preset.passes.iter().enumerate() {
             if matches!(spec, PassSpec::Candidates { .. }) {
                 continue;
@@ -698,10 +712,14 @@ fn cpu_reuse(
 ) -> Vec<(PixelReservoir, [u32; 4])> {
     (0..input.gbuffer.pixels.len() as u32)
         .map(|pixel| {
-            let (r, c): (PixelReservoir, ShiftCounts) = reuse::pass(input, previous, pixel, spec)
+            let Reused {
+                reservoir,
+                shifts: c,
+                ..
+            } = reuse::pass(input, previous, pixel, spec, Shade::Selected)
                 .expect("only reuse passes are compared")
                 .unwrap();
-            (r, [c.shifted, c.failed, c.improved, 0])
+            (reservoir, [c.shifted, c.failed, c.improved, 0])
         })
         .collect()
 }
@@ -758,9 +776,10 @@ fn compare_pass(
 /// `reuse::spatial` for every reuse pass of the registered presets, on `bumpy` and
 /// `half-shadow` at 32×32. Inputs from the CPU: G-buffers of frames 0 and 1 and the candidates
 /// pass's reservoirs of both frames (temporal reuses frame 0's into frame 1; spatial runs on frame
-/// 1). Every pixel's reservoir and diag are compared. Negative controls: the GPU run with a wrong
-/// shift index and with another seed must differ in more than
-/// 2 × [`PASS_MISMATCH_FRACTION`] of the pixels where the CPU shifted a sample.
+/// 1), frame 0's with confidence [`HISTORY_CONFIDENCE`] so that the temporal cap binds. Every
+/// pixel's reservoir and diag are compared. Negative controls: the GPU run with a wrong shift
+/// index, with another seed, and (temporal passes) with the other temporal cap must differ in
+/// more than 2 × [`PASS_MISMATCH_FRACTION`] of the pixels where the CPU shifted a sample.
 #[test]
 fn reuse_passes_match_the_cpu() {
     let opened = kernel_or_skip("reuse pass parity", TEMPORAL).map(|(context, temporal)| {
@@ -786,7 +805,10 @@ fn reuse_passes_match_the_cpu() {
     for name in SCENES {
         let scene = scene(name);
         let (g0, g1) = (GBuffer::render(&scene, 0), GBuffer::render(&scene, 1));
-        let (r0, r1) = (canonical(&scene, &g0, SEED), canonical(&scene, &g1, SEED));
+        let (mut r0, r1) = (canonical(&scene, &g0, SEED), canonical(&scene, &g1, SEED));
+        for r in &mut r0 {
+            r.confidence = HISTORY_CONFIDENCE;
+        }
         let gpu_scene = GpuScene::upload(&context, &scene).unwrap();
         let p0 = Buffer::from_slice(&context, &gpu_pixels(&g0)).unwrap();
         let p1 = Buffer::from_slice(&context, &gpu_pixels(&g1)).unwrap();
@@ -801,7 +823,7 @@ fn reuse_passes_match_the_cpu() {
             };
             let cpu = cpu_reuse(&input, Some(&previous), &case.spec);
             let is_temporal = matches!(case.spec, PassSpec::Temporal { .. });
-            let mut run = |seed: u64, shift: Option<u32>| {
+            let mut run = |seed: u64, shift: Option<u32>, cap: Option<f32>| {
                 let frame = FrameParams::new(&scene, 1, Some(0), seed)
                     .buffer(&context)
                     .unwrap();
@@ -816,6 +838,9 @@ fn reuse_passes_match_the_cpu() {
                 let mut params = PassParams::new(case.pass, Some(&case.spec), true);
                 if let Some(shift) = shift {
                     params.shift = shift;
+                }
+                if let Some(cap) = cap {
+                    params.confidence_cap = cap;
                 }
                 let kernel = if is_temporal { &temporal } else { &spatial };
                 let timing = context
@@ -832,7 +857,7 @@ fn reuse_passes_match_the_cpu() {
                     timing.gpu_seconds,
                 )
             };
-            let (reservoirs, diag, seconds) = run(SEED, None);
+            let (reservoirs, diag, seconds) = run(SEED, None, None);
             let tally = compare_pass(&cpu, &reservoirs, &diag, false);
             let label = case.spec.label();
             let moved = cpu
@@ -870,11 +895,31 @@ fn reuse_passes_match_the_cpu() {
                 "{name} {label}: float errors beyond PASS_BOUNDS; worst {:?}",
                 tally.worst
             );
-            for (control, seed, shift) in [
-                ("wrong shift index", SEED, Some(wrong_shift(&case.spec))),
-                ("seed + 1", SEED + 1, None),
-            ] {
-                let (reservoirs, diag, _) = run(seed, shift);
+            // The other cap, for a temporal pass: the kernel must read its cap.
+            let wrong_cap = match case.spec {
+                PassSpec::Temporal { confidence_cap, .. } => {
+                    Some(if confidence_cap == SEED_001_CAP {
+                        TEMPORAL_CAP
+                    } else {
+                        SEED_001_CAP
+                    })
+                }
+                _ => None,
+            };
+            let mut controls = vec![
+                (
+                    "wrong shift index",
+                    SEED,
+                    Some(wrong_shift(&case.spec)),
+                    None,
+                ),
+                ("seed + 1", SEED + 1, None, None),
+            ];
+            if wrong_cap.is_some() {
+                controls.push(("other temporal cap", SEED, None, wrong_cap));
+            }
+            for (control, seed, shift, cap) in controls {
+                let (reservoirs, diag, _) = run(seed, shift, cap);
                 let rejected = compare_pass(&cpu, &reservoirs, &diag, true).rejected_fraction();
                 eprintln!(
                     "pass parity, {name} {label}: control ({control}) rejected {rejected:.3}"

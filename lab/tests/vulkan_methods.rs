@@ -140,6 +140,7 @@ fn sequential_run_matches_the_cpu_within_monte_carlo_noise() {
         let prefix = Preset {
             name: format!("sequential[..{k}]"),
             passes: preset.passes[..k].to_vec(),
+            shade: preset.shade,
         };
         let gpu = backend.run(&scene, &prefix, &config(1, 1)).unwrap();
         let cpu = engine::run(&scene, &prefix, &config(1, 1)).unwrap();
@@ -218,6 +219,27 @@ fn gpu_runs_are_deterministic() {
         )
         .unwrap();
     assert_ne!(bits(&one).0, bits(&other).0, "control: another seed");
+}
+
+/// Rao-Blackwellised shading has no Vulkan kernel: the backend refuses it with one line naming
+/// the preset, and the same preset with selected shading runs (control).
+#[test]
+fn rao_blackwellised_shading_is_refused_in_one_line() {
+    let Some(backend) = backend_or_skip("rao_blackwellised_shading_is_refused_in_one_line") else {
+        return;
+    };
+    let scene = scene("bumpy", 16, 12);
+    let rb = restir::preset(Some("hybrid/shade=all")).unwrap();
+    let line = backend
+        .run(&scene, &rb, &config(0, 2))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        !line.contains('\n') && line.contains("hybrid/shade=all") && line.contains("CPU"),
+        "{line}"
+    );
+    let selected = restir::preset(Some("hybrid/shade=selected")).unwrap();
+    backend.run(&scene, &selected, &config(0, 2)).unwrap();
 }
 
 /// A device name nobody has is a one-line [`VulkanError`], not a panic.

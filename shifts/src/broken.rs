@@ -3,7 +3,7 @@
 
 use restir::shift::{Fail, Shift, Shifted};
 
-use crate::contract::BROKEN_JACOBIAN_ERROR;
+use crate::contract::{BROKEN_JACOBIAN_ERROR, DELAYED_CHECK_JACOBIAN, DELAYED_CHECK_VISIBILITY};
 use crate::delayed::{Checks, replay};
 use crate::domain::SssDomain;
 use crate::hybrid::Hybrid;
@@ -21,16 +21,7 @@ impl Shift<SssDomain<'_>> for DelayedWithoutJacobian {
         src: &SssDomain,
         dst: &SssDomain,
     ) -> Result<Shifted<SssSample>, Fail> {
-        replay(
-            x,
-            src,
-            dst,
-            Checks {
-                jacobian: false,
-                ..Checks::ALL
-            },
-        )
-        .map(|(s, _)| s)
+        replay(x, src, dst, Checks::ALL.without(DELAYED_CHECK_JACOBIAN)).map(|(s, _)| s)
     }
 }
 
@@ -45,16 +36,7 @@ impl Shift<SssDomain<'_>> for DelayedWithoutVisibility {
         src: &SssDomain,
         dst: &SssDomain,
     ) -> Result<Shifted<SssSample>, Fail> {
-        replay(
-            x,
-            src,
-            dst,
-            Checks {
-                visibility: false,
-                ..Checks::ALL
-            },
-        )
-        .map(|(s, _)| s)
+        replay(x, src, dst, Checks::ALL.without(DELAYED_CHECK_VISIBILITY)).map(|(s, _)| s)
     }
 }
 

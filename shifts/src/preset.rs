@@ -63,11 +63,26 @@ impl PassSpec {
     }
 }
 
-/// A named list of passes run once per frame.
+/// What the shade step paints on a translucent pixel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Shade {
+    /// `f(Y)·W` of the final reservoir [001 Alg. 2].
+    #[default]
+    Selected,
+    /// The Rao-Blackwellised estimate of the last reuse pass that resampled the pixel,
+    /// `Σ_i f(y_i)·m_i·W_i·J_i` over all its inputs (`restir::resample::resample_observed`):
+    /// `E[f(Y)·W | inputs]`. Its luminance is `f(Y)·W`'s (`p̂ = luminance(f)`); it removes the
+    /// colour noise of the one selected sample. The stored reservoirs, and so later frames, are
+    /// unchanged. CPU backend only.
+    AllInputs,
+}
+
+/// A named list of passes run once per frame, and what the frame's shade step paints.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Preset {
     pub name: String,
     pub passes: Vec<PassSpec>,
+    pub shade: Shade,
 }
 
 /// Why a preset cannot run.
@@ -90,8 +105,16 @@ impl fmt::Display for PresetError {
 
 impl std::error::Error for PresetError {}
 
-/// Temporal confidence cap of seed 001 §5.1.
-pub const TEMPORAL_CAP: f32 = 20.0;
+/// Temporal confidence cap: `c_prev ≤ 3 · c_cur` (seed 001 §5.1 uses 20; `restir:<preset>/cap=20`).
+///
+/// With GBH the history's estimate enters the receiver's multiplied by the growth factor
+/// `a = κρ / (κ + ρ) ≤ κ` (`κ = c_prev / c_cur`, `ρ = p̂_cur(y)·J / p̂_prev(x)`). Between
+/// consecutive frames of a moving or jittered camera `ρ` scatters (`bumpy`, 128×96: `E[a²]` =
+/// 1.0–1.5 for the hybrid and 1.5–3.1 for reconnection at κ = 20), and with `E[a²] ≥ 1` the error
+/// grows with the length of the history (issue 10). κ = 3 gives `E[a²]` ≈ 0.55–0.75 and lowers
+/// the frame-15 translucent MSE of every preset (`docs/experiments.md`, "Temporal confidence
+/// cap"). A static, unjittered camera (`ρ = 1`) would favour a larger κ.
+pub const TEMPORAL_CAP: f32 = 3.0;
 
 fn candidates() -> PassSpec {
     PassSpec::Candidates {
@@ -151,6 +174,7 @@ impl Preset {
         Preset {
             name: name.into(),
             passes: vec![candidates(), temporal(shift), spatial(shift, 4)],
+            shade: Shade::Selected,
         }
     }
 
@@ -171,7 +195,19 @@ impl Preset {
                 spatial(invert, 2),
                 spatial(ShiftKind::DelayedReconnection, 2),
             ],
+            shade: Shade::Selected,
         }
+    }
+
+    /// The preset with every temporal pass's confidence cap set to `cap` (validated by
+    /// [`Preset::validate`]).
+    pub fn with_temporal_cap(mut self, cap: f32) -> Preset {
+        for pass in &mut self.passes {
+            if let PassSpec::Temporal { confidence_cap, .. } = pass {
+                *confidence_cap = cap;
+            }
+        }
+        self
     }
 
     /// The registered preset `name` ([`PRESETS`]), or `None`.
@@ -295,10 +331,19 @@ mod tests {
             hybrid.passes[1],
             PassSpec::Temporal {
                 mis: MisKind::Gbh,
+                confidence_cap: 3.0,
+                ..
+            }
+        ));
+        let seed_001 = hybrid.clone().with_temporal_cap(20.0);
+        assert!(matches!(
+            seed_001.passes[1],
+            PassSpec::Temporal {
                 confidence_cap: 20.0,
                 ..
             }
         ));
+        assert_eq!(seed_001.passes[2], hybrid.passes[2]);
         let seq = Preset::named("sequential").unwrap();
         let labels: Vec<String> = seq.passes.iter().map(PassSpec::label).collect();
         assert_eq!(
@@ -330,12 +375,15 @@ mod tests {
             confidence_cap: f32::NAN,
         };
         assert_eq!(p.validate().unwrap_err().pass, 1);
+        let p = Preset::named("hybrid").unwrap().with_temporal_cap(0.0);
+        assert_eq!(p.validate().unwrap_err().pass, 1);
         let p = Preset {
             name: "m0".into(),
             passes: vec![PassSpec::Candidates {
                 bssrdf_samples: 0,
                 shared_light: false,
             }],
+            shade: Shade::Selected,
         };
         assert!(p.validate().is_err());
     }

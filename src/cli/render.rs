@@ -1,12 +1,13 @@
 //! `reshift render`: one method, one scene → the final frame as linear EXR and tonemapped PNG,
 //! and its timing; for a method that chooses its sample counts per pixel (`adaptive`), its mean
-//! samples per pixel and the count map as a false-colour PNG (0 … the most a pixel may take).
+//! samples per pixel and the count map as a false-colour PNG with a labelled colour bar (0 … the
+//! most a pixel may take).
 
 use std::path::PathBuf;
 
 use clap::Args;
-use lab::images::write_false_colour;
 use lab::methods::Method;
+use lab::report::plots::false_colour_map;
 use lab::report::{file_stem, output_dir};
 use serde_json::json;
 
@@ -68,7 +69,8 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
         Some(c) => {
             let path = out.join(format!("{stem}-samples.png"));
             let values: Vec<f64> = c.counts.iter().map(|&n| n as f64).collect();
-            write_false_colour(&values, c.width, c.height, c.max as f64, &path)?;
+            let title = format!("{}: samples per pixel", method.name());
+            false_colour_map(&path, &values, (c.width, c.height), c.max as f64, &title)?;
             Some(path)
         }
         None => None,

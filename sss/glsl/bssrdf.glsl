@@ -27,23 +27,15 @@
 #include "burley.glsl"
 #include "xie.glsl"
 #include "dipole.glsl"
+// BSSRDF_TECHNIQUE_COUNT, BSSRDF_INDEX_UNKNOWN, the axes BSSRDF_AXIS_*, the InvertFail codes
+// BSSRDF_INVERT_* and the radius samplers BSSRDF_RADIUS_* (sss/src/contract.rs).
+#include "contract/sss.glsl"
 
-const uint BSSRDF_TECHNIQUE_COUNT = 9u;
-const uint BSSRDF_AXIS_NORMAL = 0u;
-const uint BSSRDF_AXIS_TANGENT = 1u;
-const uint BSSRDF_AXIS_BITANGENT = 2u;
-// BssrdfSample::index == None (equal to shifts' INDEX_UNKNOWN).
-const uint BSSRDF_INDEX_UNKNOWN = 0xFFFFFFFFu;
 // std::f32::consts::TAU and FRAC_1_PI, as f32.
 const float BSSRDF_TAU = 6.28318548202514648;
 const float BSSRDF_FRAC_1_PI = 0.318309873342514038;
 // 1.0f32 / 3.0 (Rust rounds the quotient once to f32).
 const float BSSRDF_ONE_THIRD = 0.333333343267440796;
-
-// InvertFail codes (0 = Ok).
-const uint BSSRDF_INVERT_OK = 0u;
-const uint BSSRDF_INVERT_OUT_OF_SUPPORT = 1u;
-const uint BSSRDF_INVERT_INDEX_NOT_FOUND = 2u;
 
 // ---------------------------------------------------------------- glam arithmetic
 
@@ -129,10 +121,6 @@ uint bssrdf_selection_sample(TechniqueSelection s, float u) {
     }
     return last;
 }
-
-// RadiusSampling in declaration order.
-const uint BSSRDF_RADIUS_EXACT = 0u;
-const uint BSSRDF_RADIUS_XIE = 1u;
 
 // RadiusSampling::sample_radius: the disk radius for u under the Burley profile of `d`.
 float bssrdf_radius_sample_radius(uint radius, float d, float u) {

@@ -21,11 +21,8 @@ const float DIPOLE_PI = 3.14159265358979323846;
 const float DIPOLE_F32_EPSILON = 1.1920928955078125e-7;
 // ONE_MINUS_EPSILON: the largest f32 below 1.
 const float DIPOLE_ONE_MINUS_EPSILON = 0.999999940395355225;
-// NEWTON_ITERATIONS.
-const int DIPOLE_NEWTON_ITERATIONS = 32;
-// Pole in declaration order.
-const uint DIPOLE_POLE_REAL = 0u;
-const uint DIPOLE_POLE_VIRTUAL = 1u;
+// DIPOLE_NEWTON_ITERATIONS and the poles DIPOLE_POLE_* (sss/src/contract.rs).
+#include "contract/sss.glsl"
 
 // std430, 24 bytes (Rust twin to be added beside GpuMaterial): Dipole's fields plus
 // pole_probability(Real) and total_reflectance() from the host.

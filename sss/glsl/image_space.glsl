@@ -25,16 +25,12 @@
 #include "rng.glsl"
 #include "pt.glsl"
 
-// PURPOSE_IRRADIANCE ("ISIR") and PURPOSE_GATHER ("ISGA").
-const uint IMAGE_SPACE_PURPOSE_IRRADIANCE = 0x49534952u;
-const uint IMAGE_SPACE_PURPOSE_GATHER = 0x49534741u;
+// IMAGE_SPACE_PURPOSE_IRRADIANCE, IMAGE_SPACE_PURPOSE_GATHER and the lookups IMAGE_SPACE_ENTRY,
+// IMAGE_SPACE_OFF_SCREEN, IMAGE_SPACE_OCCLUDED (sss/src/contract.rs).
+#include "contract/sss.glsl"
 // std::f32::consts::PI and TAU.
 const float IMAGE_SPACE_PI = 3.14159274101257324;
 const float IMAGE_SPACE_TAU = 6.28318548202514648;
-// Lookup in declaration order (Entry, OffScreen, Occluded).
-const uint IMAGE_SPACE_ENTRY = 0u;
-const uint IMAGE_SPACE_OFF_SCREEN = 1u;
-const uint IMAGE_SPACE_OCCLUDED = 2u;
 
 GPixel image_space_fetch_pixel(uint pixel);
 vec3 image_space_fetch_irradiance(uint pixel);

@@ -4,7 +4,7 @@
 // lighting by NEE.
 //
 // The including shader enables GL_EXT_shader_explicit_arithmetic_types_int64 and defines
-// SCENE_BINDING (and BVH_MAX_HITS, if not 8) before the first include; this file includes
+// SCENE_BINDING (and BVH_MAX_HITS, if not BVH_DEFAULT_MAX_HITS) before the first include; this file includes
 // bssrdf.glsl, hence scene.glsl. Hits of a probe beyond BVH_MAX_HITS are not evaluated on the GPU
 // (the CPU has no cap): pt_estimate counts such probes in pt_hit_overflow so a caller can tell a
 // capped estimate from a faithful one.
@@ -15,15 +15,11 @@
 #include "rng.glsl"
 #include "bssrdf.glsl"
 
-// PURPOSE_PT: purpose of the per-sample streams of the baseline.
-const uint PT_PURPOSE_PT = 0x50540001u;
-// SHADOW_EPSILON: shadow-ray origin offset along the normal and shortening at the light.
-const float PT_SHADOW_EPSILON = 1e-4;
+// PT_PURPOSE_PT, PT_SHADOW_EPSILON and the profiles PT_PROFILE_* (PtSettings::profile; no buffer
+// carries it yet) (sss/src/contract.rs).
+#include "contract/sss.glsl"
 // PtParams::hits: PT_HITS_UNIFORM_ONE, PT_HITS_ALL (engine/src/contract.rs).
 #include "contract/engine.glsl"
-// ProfileKind in declaration order (PtSettings::profile; no buffer carries it yet).
-const uint PT_PROFILE_BURLEY = 0u;
-const uint PT_PROFILE_DIPOLE = 1u;
 // std::f32::consts::FRAC_1_PI.
 const float PT_FRAC_1_PI = 0.31830987;
 

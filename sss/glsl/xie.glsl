@@ -10,8 +10,8 @@
 
 // XIE_C: the damping constant c of [004 Eq. 21].
 const float XIE_C = 2.5715;
-// INVERSE_ITERATIONS of the bracketed Newton solve.
-const int XIE_INVERSE_ITERATIONS = 12;
+// XIE_INVERSE_ITERATIONS of the bracketed Newton solve (sss/src/contract.rs).
+#include "contract/sss.glsl"
 
 // approximate_inverse: g(xi | c) = d ((2 - c) xi - 2) ln(1 - xi) for xi in (0, 1).
 float xie_approximate_inverse(float d, float c, float xi) {

@@ -21,7 +21,7 @@ use crate::hash::Fnv1a;
 use crate::image::Image;
 use crate::plan::Plan;
 use crate::{PipelineError, Run, RunConfig};
-use shifts::preset::Preset;
+use shifts::preset::{Preset, Shade};
 
 /// A Vulkan device with its kernels and the last uploaded scene, reused across runs.
 pub struct Renderer {
@@ -166,13 +166,20 @@ impl Renderer {
 
     /// Renders `config.frames` frames of `scene` with `preset` (validated by the caller) on
     /// the device: the GPU twin of [`crate::run`]. `Run::timings` are GPU seconds from the
-    /// timestamps; they are empty on a queue that writes no timestamps.
+    /// timestamps; they are empty on a queue that writes no timestamps. [`Shade::AllInputs`] has
+    /// no kernel: a one-line configuration error.
     pub fn run(
         &mut self,
         scene: &Scene,
         preset: &Preset,
         config: &RunConfig,
     ) -> Result<Run, PipelineError> {
+        if preset.shade != Shade::Selected {
+            return Err(PipelineError::Config(format!(
+                "preset `{}`: {:?} shading has no Vulkan kernel; use the CPU backend",
+                preset.name, preset.shade
+            )));
+        }
         let plan = Plan::lower(preset);
         let shaders: Vec<Shader> = plan.steps.iter().map(|s| Shader::of(s.kernel)).collect();
         self.prepare(&shaders)?;

@@ -64,6 +64,34 @@ pub trait Estimator: fmt::Debug + Send + Sync + 'static {
     fn reference(&self) -> PtSettings {
         PtSettings::default()
     }
+
+    /// Renders replica `seed` like [`Estimator::render`] and returns every frame `0..frames`,
+    /// with the sample counts of the last (as [`Estimator::render_counted`]). The default
+    /// renders each frame `f` on its own (`render_counted` of `f + 1` frames): right and cheap
+    /// for a memoryless estimator. An estimator with memory across frames overrides it with
+    /// one run of the trajectory.
+    fn render_trajectory(
+        &self,
+        backend: &Backend,
+        scene: &Scene,
+        frames: u32,
+        seed: u64,
+    ) -> Result<Trajectory, PipelineError> {
+        let mut trajectory = Trajectory {
+            frames: Vec::with_capacity(frames as usize),
+            frames_rendered: 0,
+            nonfinite: 0,
+            counts: None,
+        };
+        for f in 1..=frames {
+            let (frame, counts) = self.render_counted(backend, scene, f, seed)?;
+            trajectory.frames.push(frame.image);
+            trajectory.frames_rendered += frame.frames_rendered;
+            trajectory.nonfinite += frame.nonfinite;
+            trajectory.counts = counts;
+        }
+        Ok(trajectory)
+    }
 }
 
 /// The samples each pixel of a frame took, for a method that chooses them per pixel.
@@ -102,6 +130,19 @@ pub struct Frame {
     pub frames_rendered: u32,
     /// Shaded values that were NaN or infinite (written as 0 or left out of the mean).
     pub nonfinite: u64,
+}
+
+/// The output of [`Estimator::render_trajectory`].
+#[derive(Clone, Debug)]
+pub struct Trajectory {
+    /// Linear RGB of frames `0..frames`.
+    pub frames: Vec<Image>,
+    /// Frames rendered to produce them.
+    pub frames_rendered: u32,
+    /// Shaded values that were NaN or infinite, over all frames.
+    pub nonfinite: u64,
+    /// Per-pixel sample counts of the last frame (`None`: [`Estimator::spp`] everywhere).
+    pub counts: Option<SampleCounts>,
 }
 
 /// The final frame of one replica of a method, and what it cost.
@@ -193,6 +234,25 @@ impl Method {
                 .map_or(self.spp() as f64, SampleCounts::mean),
             counts,
         })
+    }
+
+    /// [`Estimator::render_trajectory`] of replica `seed` on `backend`, timed like
+    /// [`Method::render_on`]: the returned `seconds_per_frame` is the wall-clock time of the
+    /// whole trajectory per rendered frame.
+    pub fn render_trajectory_on(
+        &self,
+        backend: &Backend,
+        scene: &Scene,
+        frames: u32,
+        seed: u64,
+    ) -> Result<(Trajectory, f64), PipelineError> {
+        if frames == 0 {
+            return Err(PipelineError::Config("frames = 0; need at least 1".into()));
+        }
+        let start = Instant::now();
+        let trajectory = self.0.render_trajectory(backend, scene, frames, seed)?;
+        let seconds = start.elapsed().as_secs_f64() / trajectory.frames_rendered.max(1) as f64;
+        Ok((trajectory, seconds))
     }
 }
 

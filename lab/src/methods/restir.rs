@@ -1,21 +1,26 @@
-//! `restir:<preset>[/temporal=<shift>]`: the ReSTIR SSS frame pipeline with a registered preset
-//! [001 §5.1] (DESIGN §6). Every frame of the trajectory is rendered (temporal reuse) and the
-//! last one is kept; `/temporal=<shift>` swaps the shift of the temporal pass [001 Fig. 10].
+//! `restir:<preset>[/temporal=<shift>][/cap=<κ>][/shade=<selected|all>]`: the ReSTIR SSS frame
+//! pipeline with a registered preset [001 §5.1] (DESIGN §6). Every frame of the trajectory is
+//! rendered (temporal reuse) and the last one is kept; `/temporal=<shift>` swaps the shift of the
+//! temporal pass [001 Fig. 10], `/cap=<κ>` sets its confidence cap, `/shade=all` shades with
+//! all inputs of the last reuse pass (`Shade::AllInputs`).
 //!
 //! The only file of the lab that names presets and shift kinds: when presets move crates, the
 //! import below is the one to change.
 
-use engine::{Backend, PassSpec, PipelineError, Preset, RunConfig, ShiftKind};
+use engine::{Backend, PassSpec, PipelineError, Preset, RunConfig, Shade, ShiftKind};
 use shifts::preset::PRESET_NAMES;
 use sss::scene::Scene;
 
-use super::estimator::{Entry, Estimator, Frame, Method};
+use super::estimator::{Entry, Estimator, Frame, Method, Trajectory};
 
 pub const ENTRY: Entry = Entry {
     family: "restir",
-    usage: "restir:<reconnection|delayed|hybrid|sequential|sequential-exact>[/temporal=<shift>]",
+    usage: "restir:<reconnection|delayed|hybrid|sequential|sequential-exact>[/temporal=<shift>][/cap=<κ>][/shade=<selected|all>]",
     about: "ReSTIR SSS with spatiotemporal reuse and the preset's shift mapping [001 §5.1]; \
-            `/temporal=<shift>` swaps the temporal pass's shift (001 Fig. 10)",
+            `/temporal=<shift>` swaps the temporal pass's shift (001 Fig. 10); \
+            `/cap=<κ>` sets the temporal confidence cap (default 3; seed 001 uses 20); \
+            `/shade=all` paints the last reuse pass's Rao-Blackwellised value over all its inputs \
+            (CPU backend only)",
     build: |arg| Ok(Method::new(Restir(preset(arg)?))),
 };
 
@@ -23,35 +28,65 @@ pub const ENTRY: Entry = Entry {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Restir(pub Preset);
 
-/// The preset of `restir:<arg>`: a registered preset, optionally with the shift of its temporal
-/// pass replaced by the [`ShiftKind`] named after `/temporal=` (the preset is then named `arg`).
+/// The preset of `restir:<preset>[/modifier=value]…`: a registered preset, optionally modified by
+/// `/temporal=<shift>` (the temporal pass's shift becomes the [`ShiftKind`] named `<shift>`),
+/// `/cap=<κ>` (the temporal confidence cap, finite and > 0) and `/shade=<selected|all>`
+/// ([`Shade`]). A modified preset is named `arg`.
 pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
     let arg = arg.ok_or("needs a preset, e.g. restir:hybrid")?;
-    let (name, temporal) = match arg.split_once("/temporal=") {
-        Some((name, shift)) => (name, Some(shift)),
-        None => (arg, None),
-    };
+    let mut parts = arg.split('/');
+    let name = parts.next().unwrap_or_default();
     let mut preset = Preset::named(name).ok_or_else(|| {
         format!(
             "unknown preset {name:?}; known: {}",
             PRESET_NAMES.join(", ")
         )
     })?;
-    if let Some(wanted) = temporal {
-        let kind = ShiftKind::ALL
-            .into_iter()
-            .find(|k| k.name() == wanted)
-            .ok_or_else(|| {
-                let known: Vec<&str> = ShiftKind::ALL.iter().map(|k| k.name()).collect();
-                format!("unknown shift {wanted:?}; known: {}", known.join(", "))
-            })?;
-        for pass in &mut preset.passes {
-            if let PassSpec::Temporal { shift, .. } = pass {
-                *shift = kind;
+    for modifier in parts {
+        preset = match modifier.split_once('=') {
+            Some(("temporal", wanted)) => with_temporal_shift(preset, wanted)?,
+            Some(("cap", value)) => {
+                let cap = value
+                    .parse::<f32>()
+                    .ok()
+                    .filter(|c| c.is_finite() && *c > 0.0)
+                    .ok_or_else(|| format!("cap {value:?} is not a number > 0"))?;
+                preset.with_temporal_cap(cap)
             }
+            Some(("shade", "selected")) => Preset {
+                shade: Shade::Selected,
+                ..preset
+            },
+            Some(("shade", "all")) => Preset {
+                shade: Shade::AllInputs,
+                ..preset
+            },
+            _ => {
+                return Err(format!("unknown modifier {modifier:?}; known: {MODIFIERS}"));
+            }
+        };
+    }
+    preset.name = arg.to_string();
+    preset.validate().map_err(|e| e.to_string())?;
+    Ok(preset)
+}
+
+/// The modifiers [`preset`] knows, for its error message.
+const MODIFIERS: &str = "temporal=<shift>, cap=<κ>, shade=<selected|all>";
+
+/// `preset` with the shift of its temporal pass replaced by the [`ShiftKind`] named `wanted`.
+fn with_temporal_shift(mut preset: Preset, wanted: &str) -> Result<Preset, String> {
+    let kind = ShiftKind::ALL
+        .into_iter()
+        .find(|k| k.name() == wanted)
+        .ok_or_else(|| {
+            let known: Vec<&str> = ShiftKind::ALL.iter().map(|k| k.name()).collect();
+            format!("unknown shift {wanted:?}; known: {}", known.join(", "))
+        })?;
+    for pass in &mut preset.passes {
+        if let PassSpec::Temporal { shift, .. } = pass {
+            *shift = kind;
         }
-        preset.name = arg.to_string();
-        preset.validate().map_err(|e| e.to_string())?;
     }
     Ok(preset)
 }
@@ -101,6 +136,34 @@ impl Estimator for Restir {
             nonfinite: result.nan_count,
         })
     }
+
+    /// One run of the trajectory: `engine::Run::frames` holds every frame.
+    fn render_trajectory(
+        &self,
+        backend: &Backend,
+        scene: &Scene,
+        frames: u32,
+        seed: u64,
+    ) -> Result<Trajectory, PipelineError> {
+        let config = RunConfig {
+            seed,
+            frames,
+            collect_diagnostics: false,
+        };
+        let result = backend.run(scene, &self.0, &config)?;
+        if result.frames.len() != frames as usize {
+            return Err(PipelineError::Config(format!(
+                "the run returned {} frames, not {frames}",
+                result.frames.len()
+            )));
+        }
+        Ok(Trajectory {
+            frames: result.frames,
+            frames_rendered: frames,
+            nonfinite: result.nan_count,
+            counts: None,
+        })
+    }
 }
 
 #[cfg(test)]
@@ -108,7 +171,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn every_preset_parses_and_the_temporal_shift_swaps() {
+    fn every_preset_parses_and_the_modifiers_apply() {
         for name in PRESET_NAMES {
             let method = Method::parse(&format!("restir:{name}")).unwrap();
             assert_eq!(method.name(), format!("restir:{name}"));
@@ -128,7 +191,32 @@ mod tests {
         assert_eq!(temporal, [ShiftKind::DelayedReconnection]);
         let parsed = Method::parse("restir:sequential/temporal=delayed").unwrap();
         assert_eq!(parsed.name(), "restir:sequential/temporal=delayed");
+        let seed_001 = preset(Some("hybrid/cap=20")).unwrap();
+        assert_eq!(seed_001.name, "hybrid/cap=20");
+        assert_eq!(
+            seed_001.passes,
+            Preset::named("hybrid")
+                .unwrap()
+                .with_temporal_cap(20.0)
+                .passes
+        );
+        let both = preset(Some("sequential/temporal=delayed/cap=1.5")).unwrap();
+        assert_eq!(both.passes, swapped.with_temporal_cap(1.5).passes);
+        let shaded = preset(Some("hybrid/shade=all/cap=20")).unwrap();
+        assert_eq!(shaded.shade, Shade::AllInputs);
+        assert_eq!(shaded.passes, seed_001.passes);
+        assert_eq!(
+            preset(Some("hybrid/shade=selected")).unwrap().shade,
+            Shade::Selected
+        );
         for bad in [
+            "restir:hybrid/shade=some",
+            "restir:hybrid/cap=0",
+            "restir:hybrid/cap=-1",
+            "restir:hybrid/cap=nan",
+            "restir:hybrid/cap=inf",
+            "restir:hybrid/nope=1",
+            "restir:hybrid/cap",
             "restir:sequential/temporal=nope",
             "restir:nope/temporal=delayed",
             "restir:sequential/temporal=reconnection",

@@ -3,19 +3,12 @@
 
 use crate::profile::{Burley, Xie};
 
-/// Projection axis of the probe ray, in the frame of x1's geometric normal (DESIGN §9).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Axis {
-    Normal,
-    Tangent,
-    Bitangent,
-}
+pub use crate::contract::bssrdf::Axis;
+use crate::contract::bssrdf::TECHNIQUE_COUNT;
 
 impl Axis {
-    pub const ALL: [Axis; 3] = [Axis::Normal, Axis::Tangent, Axis::Bitangent];
-
     pub const fn index(self) -> usize {
-        self as usize
+        self.code() as usize
     }
 }
 
@@ -29,16 +22,16 @@ pub struct Technique {
 }
 
 impl Technique {
-    pub const COUNT: usize = 9;
+    pub const COUNT: usize = TECHNIQUE_COUNT;
 
     /// All techniques in index order (`axis · 3 + channel`).
-    pub const ALL: [Technique; 9] = {
+    pub const ALL: [Technique; TECHNIQUE_COUNT] = {
         let mut all = [Technique {
             axis: Axis::Normal,
             channel: 0,
-        }; 9];
+        }; TECHNIQUE_COUNT];
         let mut i = 0;
-        while i < 9 {
+        while i < TECHNIQUE_COUNT {
             all[i] = Technique {
                 axis: Axis::ALL[i / 3],
                 channel: i % 3,
@@ -122,17 +115,7 @@ impl TechniqueSelection {
     }
 }
 
-/// How every technique draws its disk radius from its channel's Burley profile (DESIGN §4
-/// "Radius sampling"). The density of the result enters `p_disk`, so both choices are unbiased.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum RadiusSampling {
-    /// The exact inverse of the radius CDF ([`Burley::sample_radius`]); density `R̄_d`.
-    #[default]
-    Exact,
-    /// Xie et al.'s approximate inverse `g(ξ)` [004 Eq. 21] weighted by the density of `g(U)`
-    /// itself ([`Xie::pdf_disk`]), not by `R̄_d`.
-    Xie,
-}
+pub use crate::contract::bssrdf::RadiusSampling;
 
 impl RadiusSampling {
     /// The disk radius for the uniform number `u` under `profile`.

@@ -55,10 +55,7 @@ use crate::geometry::{Frame, Hit};
 use crate::material::{DipoleProfiles, FresnelTransmission, Material, Translucent};
 use crate::scene::{GBuffer, GPixel, Scene};
 
-/// `purpose` of the irradiance streams (ASCII "ISIR").
-pub const PURPOSE_IRRADIANCE: u32 = 0x4953_4952;
-/// `purpose` of the gather streams (ASCII "ISGA").
-pub const PURPOSE_GATHER: u32 = 0x4953_4741;
+pub use crate::contract::image_space::{LookupKind, PURPOSE_GATHER, PURPOSE_IRRADIANCE};
 
 /// Sample counts of one pass.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -245,6 +242,17 @@ pub enum Lookup {
     OffScreen,
     /// Another object or no hit.
     Occluded,
+}
+
+impl Lookup {
+    /// The lookup without its entry point: the code a GPU lookup returns.
+    pub fn kind(&self) -> LookupKind {
+        match self {
+            Lookup::Entry { .. } => LookupKind::Entry,
+            Lookup::OffScreen => LookupKind::OffScreen,
+            Lookup::Occluded => LookupKind::Occluded,
+        }
+    }
 }
 
 /// `|dA_x / dA_p′|` for the central projection from `eye` of the plane through `p_prime` with unit
@@ -1244,5 +1252,17 @@ irradiance = [1.0, 1.0, 1.0]
             one.entries
         );
         assert_ne!(one, render(&scene, &gbuffer, &settings, 6, 2));
+    }
+
+    /// The codes a GPU lookup returns (`IMAGE_SPACE_ENTRY`, … of the contract), in order.
+    #[test]
+    fn lookups_have_their_kinds() {
+        let entry = Lookup::Entry {
+            position: Vec3::ZERO,
+            normal: Vec3::Z,
+            irradiance: Vec3::ONE,
+        };
+        let kinds = [entry, Lookup::OffScreen, Lookup::Occluded].map(|l| l.kind());
+        assert_eq!(kinds, LookupKind::ALL);
     }
 }

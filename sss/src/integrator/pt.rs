@@ -33,13 +33,7 @@ use crate::material::{DipoleProfiles, Lambert, Material, Translucent};
 use crate::profile::ProfileKind;
 use crate::scene::{GBuffer, GPixel, Scene};
 
-/// `purpose` of the per-sample streams of the baseline (and of the reference, which is the same
-/// estimator with more samples).
-pub const PURPOSE_PT: u32 = 0x5054_0001;
-
-/// Offset of shadow-ray origins along the geometric normal and their shortening at the light, in
-/// scene units (scenes are about 1 unit across; the BVH ignores hits closer than 1e-4 anyway).
-pub const SHADOW_EPSILON: f32 = 1e-4;
+pub use crate::contract::pt::{PURPOSE_PT, SHADOW_EPSILON};
 
 /// Which probe hits become entry points x2.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -15,15 +15,7 @@ pub use scale::{ScaleFit, scale_factor};
 pub use single_scattering::ScatteringOrders;
 pub use xie::Xie;
 
-/// Which diffusion profile a BSSRDF evaluates: Burley's normalized diffusion `A R̄_d` (DESIGN §9,
-/// every method's default) or the Jensen dipole of the same material
-/// ([`DipoleProfiles`](crate::material::DipoleProfiles)), the profile of seed 002.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum ProfileKind {
-    #[default]
-    Burley,
-    Dipole,
-}
+pub use crate::contract::pt::ProfileKind;
 
 impl ProfileKind {
     /// `burley` or `dipole`.

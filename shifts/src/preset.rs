@@ -434,6 +434,7 @@ mod tests {
         let spatial_only = |shifts: [ShiftKind; 2]| Preset {
             name: "spatial-only".into(),
             passes: vec![candidates(), spatial(shifts[0], 2), spatial(shifts[1], 2)],
+            shade: Shade::Selected,
         };
         use ShiftKind::{DelayedReconnection as D, Reconnection as R};
         spatial_only([D, R]).validate().unwrap();

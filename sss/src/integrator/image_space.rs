@@ -792,7 +792,7 @@ mod tests {
                     );
                     assert_eq!(
                         e.verdict,
-                        Verdict::Unbiased,
+                        Verdict::Equivalent,
                         "mix {mix} ({importance} + {uniform}), receiver a = {a}, channel {c}: \
                          want {want}, {e:?}"
                     );
@@ -926,7 +926,7 @@ mod tests {
                 "lit slab, channel {c}: relative bias {:+.4} [{:+.4}, {:+.4}]",
                 e.relative_bias, e.ci_low, e.ci_high
             );
-            assert_eq!(e.verdict, Verdict::Unbiased, "channel {c}: {e:?}");
+            assert_eq!(e.verdict, Verdict::Equivalent, "channel {c}: {e:?}");
         }
 
         // Counting: near the image border (off screen) and beyond the slab's edge (nothing).
@@ -1059,7 +1059,7 @@ mod tests {
                  Burley control {:+.4}",
                 e.relative_bias, e.ci_low, e.ci_high, control.relative_bias
             );
-            assert_eq!(e.verdict, Verdict::Unbiased, "channel {c}: {e:?}");
+            assert_eq!(e.verdict, Verdict::Equivalent, "channel {c}: {e:?}");
             if c == 0 {
                 assert_eq!(control.verdict, Verdict::Biased, "control: {control:?}");
             }
@@ -1151,7 +1151,7 @@ mod tests {
                 Summary::from_samples(&runs.iter().map(|b| b[c]).collect::<Vec<_>>())
             };
             let e = equivalence(&summary(&planes), &Summary::exact(want), DELTA, 0.99);
-            assert_eq!(e.verdict, Verdict::Unbiased, "channel {c}: {e:?}");
+            assert_eq!(e.verdict, Verdict::Equivalent, "channel {c}: {e:?}");
             let control = equivalence(&summary(&depths), &Summary::exact(want), DELTA, 0.99);
             eprintln!(
                 "oblique slab, channel {c}: bias {:+.4}; depth-only control {:+.4}",

@@ -83,6 +83,10 @@
 //!   Without Vulkan the `vulkan_*` tests print why and pass, unless `RESHIFT_REQUIRE_VULKAN=1`,
 //!   which makes them fail.
 //!
+//! * Rao-Blackwellised shading (`Shade::AllInputs`, CPU backend): per region and channel,
+//!   paired against the selected shading of the same replicas ([`RB_PAIRED`]), with its own
+//!   negative control.
+//!
 //! Run with `--nocapture` to see the plan and the tables (bias, CI, half-width, p-value, Holm,
 //! verdict per region and channel).
 
@@ -90,7 +94,7 @@ use std::sync::OnceLock;
 use std::time::Instant;
 
 use engine::vulkan::testing::backend_or_skip;
-use engine::{Backend, Preset, ShiftKind};
+use engine::{Backend, Preset, Shade, ShiftKind};
 use glam::{DVec3, Vec3};
 use lab::bias::{
     BiasRow, Channel, Images, Protocol, RegionSummary, Table, bias_rows, paired_rows,
@@ -549,6 +553,7 @@ const PAIRED: Protocol = Protocol {
 /// Per preset, the largest per-replica CV of the paired difference over the 12 rows of `bumpy`
 /// (`sd(dᵢ − b·cᵢ)/c̄`, see [`lab::bias::paired_rows`]), measured by [`measure_paired_cv`] with
 /// [`PAIRED_MEASURE_N`] replicas.
+///
 /// Float rounding alone (exp, log, pow differ in the last bits on lavapipe) leaves ≈ 1e-7; the
 /// rest comes from replicas whose sampling decisions diverged somewhere ([`DIVERGED`]): 1 of 64
 /// (reconnection, delayed), 0 (hybrid), 8 (sequential-exact).
@@ -616,8 +621,8 @@ fn paired_cv(row: &BiasRow) -> f64 {
     row.ci_half_width() / t * n.sqrt()
 }
 
-/// The paired rows of `gpu` against `cpu` (printed with the largest per-replica CV beside the
-/// planned one) after checking that no value was non-finite.
+/// The paired rows of `gpu` against `cpu` (printed, with each row's per-replica CV) after
+/// checking that no value was non-finite.
 fn paired_rows_checked(label: &str, gpu: &Images, cpu: &Images) -> Vec<BiasRow> {
     assert_eq!(
         gpu.nonfinite + cpu.nonfinite,
@@ -889,4 +894,87 @@ fn control_delayed_without_visibility_is_biased_on_half_shadow() {
 #[test]
 fn control_hybrid_ignoring_criterion_is_biased_on_half_shadow() {
     assert_shift_detected(&HALF_SHADOW, ShiftKind::HybridIgnoringCriterion, "hybrid");
+}
+
+/// The paired test of Rao-Blackwellised shading below (main's design at 16 frames ported to
+/// [`BUMPY`] at [`FRAMES`]): δ = 5% on the relative difference RB − selected of each region mean
+/// in each channel, α = 0.01 (99% CIs, Holm across the 12 rows), N = [`RB_REPLICAS`] pairs.
+///
+/// Power: pairing removes the noise both shadings share (same seeds, same reservoirs), so the
+/// difference's spread is the selection's colour noise alone. At 16 frames on main's framing,
+/// N = 192 left the widest 99% CI half-width at 2.2% (a shadowed blue mean of 0.0032); `BUMPY`
+/// has no shadowed region, so δ = 5% is more than twice the widest half-width, and the control
+/// below (+1.5δ = +7.5% on blue) lies beyond δ with its whole CI. Each run prints its rows.
+const RB_PAIRED: Protocol = Protocol {
+    delta: 0.05,
+    alpha: 0.01,
+};
+/// Pairs of the Rao-Blackwellised shading test.
+const RB_REPLICAS: u64 = 192;
+
+/// Rao-Blackwellised shading (`restir:<name>/shade=all`) has, given the inputs of the last reuse
+/// pass, the expectation of `f(Y)·W`, keeps the reservoirs (so every frame's inputs) and the
+/// luminance (exactly: `engine` `cpu.rs`), and re-distributes the colour. So its test is per
+/// channel and paired: replicas `0..N` of the preset shaded both ways on the CPU share their
+/// seeds and reservoirs; per region and channel the 99% CI of the relative difference of the
+/// means ([`paired_rows`]) must lie inside ±[`RB_PAIRED`]`.delta`. Negative control: the RB
+/// images with blue scaled by `1 + 1.5δ` are Biased in every blue row.
+fn assert_rao_blackwellised_matches_selected(name: &str) {
+    let start = Instant::now();
+    let selected = Preset::named(name).expect("registered preset");
+    let rb = Preset {
+        shade: Shade::AllInputs,
+        ..selected.clone()
+    };
+    let method = format!("{name}/shade=all");
+    let framing = BUMPY.framing();
+    let run = |preset: &Preset| {
+        let images = replica_images(&Backend::Cpu, &framing.scene, preset, RB_REPLICAS, FRAMES)
+            .expect("preset runs");
+        assert_eq!(images.nonfinite, 0, "{}: non-finite values", preset.name);
+        images
+    };
+    let (rb_images, selected_images) = (run(&rb), run(&selected));
+    let rows = paired_rows(
+        &format!("{method} − selected"),
+        &rb_images.rgb,
+        &selected_images.rgb,
+        &framing.regions,
+        &RB_PAIRED,
+    );
+    println!(
+        "{method} on bumpy ({:.1} s), N = {RB_REPLICAS} pairs, {FRAMES} frames, δ = ±{}%, α = {}:\n{}",
+        start.elapsed().as_secs_f64(),
+        100.0 * RB_PAIRED.delta,
+        RB_PAIRED.alpha,
+        Table(&rows)
+    );
+    assert_eq!(rows.len(), 4 * BUMPY.regions.len(), "{}", Table(&rows));
+    assert_all_equivalent(&rows, &RB_PAIRED, &format!("{method} against selected"));
+    let factor = 1.0 + 1.5 * RB_PAIRED.delta;
+    let control = paired_rows(
+        &format!("{method} blue × {factor} − selected"),
+        &tinted(&rb_images, DVec3::new(1.0, 1.0, factor)).rgb,
+        &selected_images.rgb,
+        &framing.regions,
+        &RB_PAIRED,
+    );
+    println!("negative control, blue × (1 + 1.5δ):\n{}", Table(&control));
+    assert_biased(&control, "RB blue × (1 + 1.5δ)");
+    assert_blue_only(&control);
+}
+
+#[test]
+fn hybrid_rao_blackwellised_matches_selected_per_channel() {
+    assert_rao_blackwellised_matches_selected("hybrid");
+}
+
+#[test]
+fn reconnection_rao_blackwellised_matches_selected_per_channel() {
+    assert_rao_blackwellised_matches_selected("reconnection");
+}
+
+#[test]
+fn sequential_exact_rao_blackwellised_matches_selected_per_channel() {
+    assert_rao_blackwellised_matches_selected("sequential-exact");
 }

@@ -2,12 +2,12 @@
 //! shaders to SPIR-V with `glslc` (DESIGN §6, docs/gpu-backend.md).
 //!
 //! Contract: the crates declare what their GLSL twins share with them in `twin::contract!`
-//! files (`restir/src/contract.rs`, `shifts/src/contract.rs`, `src/contract.rs`,
-//! `src/purpose.rs`) and register shifts in `shifts/src/registry.rs`. This script includes the
-//! same files, so the items it renders are the ones the crates compile, and writes
-//! `$OUT_DIR/glsl/contract/`: `restir.glsl`, `shifts.glsl` (with the shift kinds and their
-//! dispatch list), `engine.glsl`, one header per push-constant block, and `shift_twins.glsl`
-//! (the includes of the registered shifts' GLSL twins).
+//! files (`restir/src/contract.rs`, `sss/src/contract.rs`, `shifts/src/contract.rs`,
+//! `src/contract.rs`, `src/purpose.rs`) and register shifts in `shifts/src/registry.rs`. This
+//! script includes the same files, so the items it renders are the ones the crates compile, and
+//! writes `$OUT_DIR/glsl/contract/`: `restir.glsl`, `sss.glsl`, `shifts.glsl` (with the shift
+//! kinds and their dispatch list), `engine.glsl`, one header per push-constant block, and
+//! `shift_twins.glsl` (the includes of the registered shifts' GLSL twins).
 //!
 //! Shaders: every `glsl/*.glsl` is one compute entry point; the GLSL twins it includes live
 //! beside their Rust modules (`restir/glsl/`, `sss/glsl/`, `shifts/glsl/`) and are found through
@@ -30,6 +30,11 @@ mod restir_contract {
 }
 
 #[allow(dead_code)]
+mod sss_contract {
+    include!("../sss/src/contract.rs");
+}
+
+#[allow(dead_code)]
 mod shifts_contract {
     include!("../shifts/src/contract.rs");
 }
@@ -49,13 +54,15 @@ mod kernels {
     include!("src/plan/kernels.rs");
 }
 
-/// The registry's `resolves_deferred_index` flag as a GLSL boolean.
+/// Whether a registry line's flags include `resolves_deferred_index`, as a GLSL boolean (the
+/// other flags, read by `shifts::ShiftKind` only, are checked there).
 macro_rules! registry_flag {
-    () => {
-        "false"
-    };
-    (resolves_deferred_index) => {
-        "true"
+    ($($flag:ident),*) => {
+        if [$(stringify!($flag)),*].contains(&"resolves_deferred_index") {
+            "true"
+        } else {
+            "false"
+        }
     };
 }
 
@@ -66,14 +73,14 @@ macro_rules! registry_flag {
 macro_rules! shift_registry {
     ($(
         $(#[doc = $doc:literal])*
-        $kind:ident = $name:literal, $file:ident :: $twin:ident, $cpu:expr $(, $flag:ident)? ;
+        $kind:ident = $name:literal, $file:ident :: $twin:ident, $cpu:expr $(, $flag:ident)* ;
     )*) => {
         /// The shift kinds and the GLSL files of their twins, in registry order.
         fn shift_registry() -> (twin::Item, Vec<&'static str>) {
             let variants = vec![$(twin::Variant {
                 name: stringify!($kind),
                 code: 0,
-                args: vec![stringify!($twin).to_string(), registry_flag!($($flag)?).to_string()],
+                args: vec![stringify!($twin).to_string(), registry_flag!($($flag),*).to_string()],
                 docs: vec![$(twin::doc_text(&format!("doc = {}", stringify!($doc))).unwrap_or_default()),*],
             }),*];
             let variants = variants
@@ -100,8 +107,9 @@ macro_rules! shift_registry {
 include!("../shifts/src/registry.rs");
 
 /// The contract files this script includes, relative to this crate.
-const CONTRACTS: [&str; 6] = [
+const CONTRACTS: [&str; 7] = [
     "../restir/src/contract.rs",
+    "../sss/src/contract.rs",
     "../shifts/src/contract.rs",
     "../shifts/src/registry.rs",
     "src/contract.rs",
@@ -127,6 +135,11 @@ fn write_contract(dir: &Path) -> Vec<twin::Item> {
             "restir/src/contract.rs",
             &restir_contract::glsl_items(),
         ),
+    );
+    let sss = sss_contract::glsl_items();
+    write(
+        "sss.glsl",
+        twin::header("CONTRACT_SSS_GLSL", "sss/src/contract.rs", &sss),
     );
     let (kinds, files) = shift_registry();
     let mut shifts = shifts_contract::glsl_items();
@@ -170,6 +183,7 @@ fn write_contract(dir: &Path) -> Vec<twin::Item> {
         );
     }
     let mut items = restir_contract::glsl_items();
+    items.extend(sss);
     items.extend(shifts);
     items.extend(engine);
     items
@@ -205,8 +219,9 @@ fn check_layouts(glslc: &std::ffi::OsStr, include: &Path, out_dir: &Path, items:
     let mut probes = vec![(
         "layout_probe".to_string(),
         String::from(
-            "#version 460\n#include \"contract/restir.glsl\"\n#include \"contract/shifts.glsl\"\n\
-             #include \"contract/engine.glsl\"\nlayout(local_size_x = 1) in;\n",
+            "#version 460\n#include \"contract/restir.glsl\"\n#include \"contract/sss.glsl\"\n\
+             #include \"contract/shifts.glsl\"\n#include \"contract/engine.glsl\"\n\
+             layout(local_size_x = 1) in;\n",
         ),
     )];
     for (binding, item) in items.iter().enumerate() {

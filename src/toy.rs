@@ -125,7 +125,7 @@ pub fn run() -> Result<(), ResampleError> {
             .unwrap_or(f64::NAN);
         let verdict = match e.verdict {
             _ if holm > 0.0 => "**biased** (pixels)",
-            Verdict::Unbiased => "unbiased",
+            Verdict::Equivalent => "equivalent",
             Verdict::Biased => "**biased**",
             Verdict::Inconclusive => "inconclusive",
         };

@@ -2,7 +2,7 @@
 //! panic), `compare` and `bias` on every built-in scene with JSON validated against
 //! docs/results-schema.md, the reference cache, and sharded references merged bit for bit.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use serde_json::Value;
@@ -36,13 +36,33 @@ fn ok(o: &Output) -> String {
     stdout(o)
 }
 
-/// Exit status 1 and exactly one stderr line `reshift: …` containing `needle`, no panic.
+/// Writes a complete 8×6 reference of `bumpy` (2 batches of 2 spp) to `path`.
+fn small_reference(path: &Path) {
+    ok(&reshift(&[
+        "reference",
+        "--scene",
+        "bumpy",
+        "--resolution",
+        "8x6",
+        "--spp",
+        "4",
+        "--batch-spp",
+        "2",
+        "--out",
+        path.to_str().unwrap(),
+    ]));
+}
+
+/// Exit status 1 and exactly one stderr line `reshift: …` of at most 200 characters after the
+/// prefix, containing `needle`, no panic.
 fn fails_with(args: &[&str], needle: &str) {
     let o = reshift(args);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
     assert!(!err.contains("panicked"), "{args:?}: {err}");
     assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+    let message = err.trim_end().trim_start_matches("reshift: ");
+    assert!(message.chars().count() <= 200, "{args:?}: {err}");
     assert!(err.starts_with("reshift: "), "{args:?}: {err}");
     assert!(
         err.contains(needle),
@@ -152,19 +172,7 @@ fn bad_input_is_one_line_and_non_zero() {
     );
     // A reference of the wrong size.
     let reference = dir.join("small.rsref");
-    ok(&reshift(&[
-        "reference",
-        "--scene",
-        "bumpy",
-        "--resolution",
-        "8x6",
-        "--spp",
-        "4",
-        "--batch-spp",
-        "2",
-        "--out",
-        reference.to_str().unwrap(),
-    ]));
+    small_reference(&reference);
     fails_with(
         &[
             "compare",
@@ -233,6 +241,122 @@ fn render_writes_exr_png_and_timing() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// Sizes read from files are not trusted before allocating: a scene file of 100000×100000
+/// pixels and a checkpoint whose header claims 60000×60000 (or more pixels than its bytes hold)
+/// are one-line errors with exit status 1, not aborts; flags name their value.
+#[test]
+fn huge_sizes_in_files_are_one_line_errors() {
+    let dir = scratch("huge");
+    let path = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let scene = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/bumpy.toml"))
+        .unwrap()
+        .replace("resolution = [160, 120]", "resolution = [100000, 100000]");
+    std::fs::write(path("huge.toml"), scene).unwrap();
+    let out = path("out");
+    fails_with(
+        &[
+            "render",
+            "--scene",
+            &path("huge.toml"),
+            "--method",
+            "pt",
+            "--out",
+            &out,
+        ],
+        "huge.toml: field `camera.resolution` = 100000×100000",
+    );
+    small_reference(Path::new(&path("small.rsref")));
+    let bytes = std::fs::read(path("small.rsref")).unwrap();
+    let with_size = |width: u32, height: u32| {
+        let mut b = bytes.clone();
+        b[8..12].copy_from_slice(&width.to_le_bytes());
+        b[12..16].copy_from_slice(&height.to_le_bytes());
+        b
+    };
+    std::fs::write(path("huge.rsref"), with_size(60_000, 60_000)).unwrap();
+    std::fs::write(path("big.rsref"), with_size(4000, 4000)).unwrap();
+    let compare = |reference: &str| {
+        [
+            "compare",
+            "--resolution",
+            "8x6",
+            "--replicas",
+            "1",
+            "--frames",
+            "1",
+            "--methods",
+            "pt",
+            "--out",
+            &out,
+            "--reference",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .chain([path(reference)])
+        .collect::<Vec<_>>()
+    };
+    let args = compare("huge.rsref");
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    fails_with(&args, "huge.rsref: field `width×height` = 60000×60000");
+    fails_with(
+        &[
+            "merge",
+            &path("small.rsref"),
+            &path("big.rsref"),
+            "--out",
+            &path("m.rsref"),
+        ],
+        "big.rsref: field `pixels`",
+    );
+    fails_with(
+        &["compare", "--replicas", "0", "--out", &out],
+        "field `--replicas` = 0: must be in 1..=",
+    );
+    let bias = |flags: &[&str], needle: &str| {
+        let args = [&["bias", "--method", "pt"][..], flags].concat();
+        fails_with(&args, needle);
+    };
+    bias(
+        &["--replicas", "1"],
+        "field `--replicas` = 1: must be in 2..=65536",
+    );
+    bias(
+        &["--replicas", "4294967295"],
+        "field `--replicas` = 4294967295: must be in 2..=65536",
+    );
+    bias(
+        &["--reference-batches", "100000"],
+        "field `--reference-batches` = 100000: must be in 2..=65536",
+    );
+    bias(&["--frames", "0"], "field `--frames` = 0");
+    bias(
+        &["--replicas", "65536", "--resolution", "1024x1024"],
+        "field `--replicas` = 65536 replicas, 32 reference batches, 16 frames at 1024×1024: the \
+         bias test would need",
+    );
+    fails_with(
+        &[
+            "render", "--scene", "bumpy", "--method", "pt", "--frames", "0", "--out", &out,
+        ],
+        "field `--frames` = 0",
+    );
+    fails_with(
+        &[
+            "render",
+            "--scene",
+            "bumpy",
+            "--method",
+            "pt",
+            "--resolution",
+            "16384x16384",
+            "--out",
+            &out,
+        ],
+        "field `--resolution` = 16384×16384",
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// Sharded references merged equal the unsharded reference bit for bit; a shard alone, or a
 /// different seed (the negative control), does not.
 #[test]
@@ -274,7 +398,8 @@ fn sharded_reference_merges_bit_identically() {
     assert_eq!(bytes("whole.rsref.exr"), bytes("merged.rsref.exr"));
     assert_ne!(bytes("whole.rsref"), bytes("other-seed.rsref"));
     assert_ne!(bytes("whole.rsref").len(), 0);
-    // Merging an incomplete set of shards with a shard of another reference fails cleanly.
+    // Merging a shard with a shard of another reference fails cleanly, naming the file, the
+    // field that differs with both values, and the other file.
     fails_with(
         &[
             "merge",
@@ -283,7 +408,32 @@ fn sharded_reference_merges_bit_identically() {
             "--out",
             &path("bad.rsref"),
         ],
-        "merge",
+        "other-seed.rsref: field `seed` = 7: differs from",
+    );
+    let small = reshift(
+        &[
+            &base[..5],
+            &[
+                "--spp",
+                "4",
+                "--batch-spp",
+                "2",
+                "--out",
+                &path("small.rsref"),
+            ],
+        ]
+        .concat(),
+    );
+    ok(&small);
+    fails_with(
+        &[
+            "merge",
+            &path("s0.rsref"),
+            &path("small.rsref"),
+            "--out",
+            &path("bad.rsref"),
+        ],
+        "small.rsref: field `batches` = 2: differs from",
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -383,8 +533,9 @@ fn assert_schema_rejects_broken(schema: &Value, good: &Value) {
 }
 
 /// `compare` on every built-in scene at 16×12 (2 frames, 2 replicas, `pt` and two presets, a
-/// 2 × 8 spp reference): exits 0, writes every output, and its results.json validates against
-/// the schema. The second run on `bumpy` reuses the cached reference.
+/// 2 × 8 spp reference per frame, `pt:2` the baseline): exits 0, writes every output (figures
+/// and report.html included), measures both frames, and its results.json validates against the
+/// schema. The second run on `bumpy` reuses the cached references.
 #[test]
 fn compare_runs_on_every_builtin_scene_and_validates() {
     let dir = scratch("compare");
@@ -398,6 +549,8 @@ fn compare_runs_on_every_builtin_scene_and_validates() {
             name,
             "--methods",
             "pt:2,restir:hybrid,restir:sequential",
+            "--baseline",
+            "pt:2",
             "--replicas",
             "2",
             "--frames",
@@ -429,13 +582,36 @@ fn compare_runs_on_every_builtin_scene_and_validates() {
                 );
             }
         }
-        for file in ["table.md", "table.csv", "reference.exr", "reference.png"] {
+        for file in written["figures"].as_object().unwrap().values() {
+            assert!(out.join(file.as_str().unwrap()).is_file(), "{name}: {file}");
+        }
+        for file in [
+            "table.md",
+            "table.csv",
+            "convergence.csv",
+            "reference.exr",
+            "reference.png",
+        ] {
             assert!(out.join(file).is_file(), "{name}: {file}");
+        }
+        assert_eq!(written["baseline"], "pt:2", "{name}");
+        assert_eq!(written["frame_references"].as_array().unwrap().len(), 2);
+        for method in written["methods"].as_array().unwrap() {
+            let frames: Vec<&Value> = method["convergence"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|f| &f["frame"])
+                .collect();
+            assert_eq!(frames, [0, 1], "{name}");
         }
         if *name == "bumpy" {
             assert_schema_rejects_broken(schema, &written);
             let again: Value = serde_json::from_str(&ok(&reshift(&args))).unwrap();
             assert_eq!(again["reference"]["cached"], true);
+            for f in again["frame_references"].as_array().unwrap() {
+                assert_eq!(f["cached"], true);
+            }
             // Same reference and seeds → the same errors (timings, and so efficiency, differ).
             let mse = |v: &Value| v["methods"][0]["areas"][1]["mse"].clone();
             assert_eq!(mse(&again), mse(&written));
@@ -445,7 +621,7 @@ fn compare_runs_on_every_builtin_scene_and_validates() {
 }
 
 /// `bias` on every built-in scene (16×12, 2 frames, N = 3 replicas of `restir:hybrid`, 3
-/// reference batches × 8 spp, δ = 3%, α = 0.01): exits 0 and its JSON validates. The verdicts
+/// reference batches × 8 spp, δ = 2%, α = 0.01): exits 0 and its JSON validates. The verdicts
 /// at this N are not asserted (the statistical tests live in `lab::bias`).
 #[test]
 fn bias_runs_on_every_builtin_scene_and_validates() {
@@ -574,6 +750,101 @@ fn diagnostics_experiments_write_tables_and_findings() {
     fails_with(
         &["experiment", "hybrid-map", "--resolution", "0x18"],
         "--resolution",
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `ground-truth` at a tiny size on a built-in scene and a measured-material sphere: every
+/// registry family appears (restir with every preset), the outputs are written, the ground truth
+/// is cached and reused; `model-gap` writes its decomposition; `--scenes` is refused by an
+/// experiment with its own scenes.
+#[test]
+fn ground_truth_and_model_gap_run_small() {
+    let dir = scratch("ground-truth");
+    let (out, cache) = (dir.join("gt"), dir.join("cache"));
+    let args = [
+        "experiment",
+        "ground-truth",
+        "--resolution",
+        "8x6",
+        "--replicas",
+        "3",
+        "--reference-spp",
+        "32",
+        "--scenes",
+        "bumpy,sphere-skin1",
+        "--out",
+        out.to_str().unwrap(),
+        "--cache",
+        cache.to_str().unwrap(),
+    ];
+    let text = ok(&reshift(&args));
+    assert!(
+        text.contains("| scene | method | model error translucent"),
+        "{text}"
+    );
+    for method in [
+        "pt:4",
+        "restir:reconnection",
+        "restir:sequential-exact",
+        "random-walk:4",
+        "pt-one-hit:4",
+        "single-scatter:4",
+    ] {
+        for scene in ["bumpy", "sphere-skin1"] {
+            assert!(
+                text.contains(&format!("| {scene} | {method} |")),
+                "{scene} {method}: {text}"
+            );
+        }
+    }
+    for file in [
+        "table.md",
+        "table-full.md",
+        "table.csv",
+        "findings.md",
+        "results.json",
+    ] {
+        assert!(out.join(file).is_file(), "{file}");
+    }
+    let json = |o: &Output| -> Value { serde_json::from_str(&ok(o)).unwrap() };
+    let again = json(&reshift(&[&args[..], &["--json"]].concat()));
+    assert_eq!(again["schema"], "reshift-ground-truth/1");
+    assert_eq!(again["scenes"][1]["truth"]["cached"], true, "{again}");
+    assert_eq!(again["scenes"][1]["truth"]["spp_per_batch"], 2);
+
+    let gap = ok(&reshift(&[
+        "experiment",
+        "model-gap",
+        "--resolution",
+        "8x6",
+        "--replicas",
+        "2",
+        "--reference-spp",
+        "4",
+        "--scenes",
+        "slab",
+        "--out",
+        dir.join("gap").to_str().unwrap(),
+    ]));
+    assert!(
+        gap.contains("walk − BSSRDF") && gap.contains("| slab | index_matched |"),
+        "{gap}"
+    );
+    fails_with(
+        &["experiment", "hybrid-map", "--scenes", "bumpy"],
+        "--scenes",
+    );
+    fails_with(
+        &[
+            "experiment",
+            "ground-truth",
+            "--scenes",
+            "nope",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "unknown scene",
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }

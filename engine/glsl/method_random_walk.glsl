@@ -242,7 +242,7 @@ void main() {
                                                 position, n1, view, true, stream, value, exit);
         state.walk = stream;
         state.selection = scene_lighting_selection;
-        if (end == RANDOM_WALK_EXITED) {
+        if (end == RANDOM_WALK_END_EXITED) {
             tally.exited++;
             precise vec3 weight_sum =
                 vec3(tally.weight_sum[0], tally.weight_sum[1], tally.weight_sum[2]) + exit.weight;
@@ -250,7 +250,7 @@ void main() {
             vec3 deviation = abs(exit.weight - vec3(1.0));
             tally.max_weight_deviation =
                 rust_max(tally.max_weight_deviation, random_walk_max_element(deviation));
-        } else if (end == RANDOM_WALK_TERMINATED) {
+        } else if (end == RANDOM_WALK_END_TERMINATED) {
             tally.terminated++;
         } else {
             tally.truncated++;

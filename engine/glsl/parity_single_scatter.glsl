@@ -19,8 +19,9 @@ layout(push_constant) uniform Params {
 } params;
 
 #define SCENE_BINDING 0
-// As method_pt.glsl: every probe hit of the built-in scenes is kept.
-#define BVH_MAX_HITS 16
+// As method_pt.glsl: every probe hit of the built-in scenes is kept (KEPT_HITS of the contract).
+#include "contract/engine.glsl"
+#define BVH_MAX_HITS KEPT_HITS
 #include "scene.glsl"
 #include "pt.glsl"
 #include "random_walk.glsl"

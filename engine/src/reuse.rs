@@ -18,10 +18,11 @@ use shifts::PixelReservoir;
 use shifts::ShiftKind;
 use shifts::preset::{PassSpec, Shade};
 
-/// Reprojection checks of temporal reuse: the previous pixel must show the same object at a view
-/// depth within this relative tolerance of x1's, with geometric normals at least this aligned.
-pub const TEMPORAL_DEPTH_TOLERANCE: f32 = 0.1;
-pub const TEMPORAL_NORMAL_COSINE: f32 = 0.9;
+/// Reprojection checks of temporal reuse ([`GBuffer::reproject`]).
+pub use sss::scene::{
+    REPROJECTION_DEPTH_TOLERANCE as TEMPORAL_DEPTH_TOLERANCE,
+    REPROJECTION_NORMAL_COSINE as TEMPORAL_NORMAL_COSINE,
+};
 
 /// Counters of one pixel in one reuse pass (the shift diagnostics, only when collected).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -198,7 +199,7 @@ pub fn temporal(
     };
     let canonical = stored.get();
     let history = previous.and_then(|prev| {
-        let q = reproject(input.scene, prev.gbuffer, g)?;
+        let q = prev.gbuffer.reproject(&input.scene.camera, g)?;
         let g_prev = prev.gbuffer.pixels[q as usize].as_ref()?;
         let frame = prev.gbuffer.frame;
         let domain = SssDomain::new(input.scene, g_prev, q, frame, input.pass, input.seed)?;
@@ -218,19 +219,6 @@ pub fn temporal(
         shade,
     };
     step.run(&[history])
-}
-
-/// The previous frame's pixel that shows x1, if it passes the reprojection checks.
-fn reproject(scene: &Scene, prev: &GBuffer, g: &GPixel) -> Option<u32> {
-    let c = scene.camera.project(prev.frame, g.position)?;
-    let (qx, qy) = (c.x as u32, c.y as u32);
-    let q = qy * prev.width + qx;
-    let g_prev = prev.get(qx, qy)?;
-    let depth = (g.position - scene.camera.eye(prev.frame)).length();
-    let same_surface = g_prev.object == g.object
-        && (g_prev.depth - depth).abs() <= TEMPORAL_DEPTH_TOLERANCE * depth
-        && g_prev.geometric_normal.dot(g.geometric_normal) >= TEMPORAL_NORMAL_COSINE;
-    same_surface.then_some(q)
 }
 
 /// Spatial reuse of `pixel`: `neighbours` pixels drawn uniformly in the disk of radius
@@ -468,7 +456,7 @@ mod tests {
                 continue;
             }
             translucent += 1;
-            let Some(q) = reproject(&scene, &before, g) else {
+            let Some(q) = before.reproject(&scene.camera, g) else {
                 continue;
             };
             accepted += 1;

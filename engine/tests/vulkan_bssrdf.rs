@@ -29,9 +29,11 @@ use restir::rng::StreamKey;
 use restir::shift::Domain;
 use shifts::{Hybrid, SssDomain, SssSample};
 use sss::bssrdf::{
-    BssrdfSample, EntryPoint, InvertFail, Probe, Technique, TechniqueSelection, invert,
-    invert_technique, pick_hit,
+    BssrdfSample, EntryPoint, Probe, Technique, TechniqueSelection, invert, invert_technique,
+    pick_hit,
 };
+use sss::contract::bssrdf::INDEX_UNKNOWN;
+use sss::contract::bvh::NO_HIT;
 use sss::geometry::Hit;
 use sss::scene::{GBuffer, GPixel, Scene};
 
@@ -102,14 +104,6 @@ struct BssrdfResult {
     invert_p_disk: f32,
 }
 
-/// `bssrdf.glsl`'s InvertFail codes.
-fn invert_code(fail: InvertFail) -> u32 {
-    match fail {
-        InvertFail::OutOfSupport => 1,
-        InvertFail::IndexNotFound => 2,
-    }
-}
-
 /// What `parity_bssrdf.glsl` computes, on the CPU: the same calls in the same order.
 fn cpu_result(
     scene: &Scene,
@@ -119,7 +113,7 @@ fn cpu_result(
     seed: u64,
 ) -> BssrdfResult {
     let mut r = BssrdfResult {
-        hit_prims: [u32::MAX; BVH_MAX_HITS],
+        hit_prims: [NO_HIT; BVH_MAX_HITS],
         ..BssrdfResult::default()
     };
     let Some(domain) = gpixel.and_then(|g| SssDomain::new(scene, g, q.pixel, 0, pass, seed)) else {
@@ -162,12 +156,12 @@ fn cpu_result(
         Ok(s) => {
             r.invert_technique = s.technique.index() as u32;
             (r.invert_u_radius, r.invert_u_angle) = (s.u_radius, s.u_angle);
-            r.invert_index = s.index.unwrap_or(u32::MAX);
+            r.invert_index = s.index.unwrap_or(INDEX_UNKNOWN);
             r.invert_p_disk = s.p_disk;
         }
         Err(fail) => {
-            r.invert_code = invert_code(fail);
-            r.invert_index = u32::MAX;
+            r.invert_code = fail.code();
+            r.invert_index = INDEX_UNKNOWN;
         }
     }
     if let Some(light) = scene.lights.sample(x2.position, q.u_light) {
@@ -715,13 +709,14 @@ fn candidates_pass_matches_the_cpu() {
     }
 }
 
-/// The candidates pass keeps 16 hits per probe (`BVH_MAX_HITS` in `pass_candidates.glsl`,
-/// bvh.glsl's default is 8); a probe with more would lose candidates the CPU streams. Over 64
-/// probes of every translucent pixel of every built-in scene (48×48, seed 1) the largest count
-/// stays within 16. Control: the measurement must see multi-hit probes at all (largest > 2).
+/// The candidates pass keeps `KEPT_HITS` (16) hits per probe (its `BVH_MAX_HITS`; bvh.glsl's
+/// default is `BVH_DEFAULT_MAX_HITS`, 8); a probe with more would lose candidates the CPU
+/// streams. Over 64 probes of every translucent pixel of every built-in scene (48×48, seed 1)
+/// the largest count stays within it. Control: the measurement must see multi-hit probes at all
+/// (largest > 2).
 #[test]
 fn probe_hit_counts_stay_within_the_pass_capacity() {
-    const PASS_MAX_HITS: usize = 16;
+    const PASS_MAX_HITS: usize = engine::contract::KEPT_HITS;
     let mut hits = Vec::new();
     let mut largest = 0;
     for (name, _) in Scene::BUILTIN {

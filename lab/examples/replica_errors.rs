@@ -21,7 +21,7 @@ use engine::Backend;
 use lab::methods::{Method, Rendered};
 use lab::metrics::{Area, area_metrics};
 use lab::progress::Silent;
-use lab::reference_cache::{self, REFERENCE_SEED, ReferenceSource};
+use lab::reference_cache::{self, FrameReference, REFERENCE_SEED, ReferenceSource};
 use lab::regions::{Region, Regions};
 use lab::scenes::{load_scene, with_resolution};
 use restir::rng::StreamKey;
@@ -68,7 +68,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         batch_spp: 128,
     };
     let reference = reference_cache::obtain(&source, &scene, &loaded.key, frame, &mut Silent)?;
-    let (mean, std_err) = (reference.reference.mean(), reference.reference.std_err());
+    let frame_reference = FrameReference::new(&reference.reference);
     let regions = Regions::classify(&scene, &GBuffer::render(&scene, frame), REFERENCE_SEED);
     let mut errors: Errors = vec![Vec::new(); methods.len()];
     for seed in 0..replicas {
@@ -80,12 +80,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 ..
             } = method.render_on(&Backend::Cpu, &scene, FRAMES, seed)?;
             assert_eq!(nonfinite, 0, "{method}: non-finite values");
-            let metrics = area_metrics(&[image], &mean, &std_err, &regions).ok_or("image size")?;
+            let metrics = area_metrics(&[image], &frame_reference, &regions).ok_or("image size")?;
             let mse = AREAS.map(|r| {
                 metrics
                     .iter()
                     .find(|m| m.area == Area::Region(r))
-                    .map_or(f64::NAN, |m| m.mse - m.reference_mse)
+                    .map_or(f64::NAN, |m| m.mse.value)
             });
             eprintln!("replica {seed} {method}: {mse:?}, {seconds_per_frame:.4} s/frame");
             out.push((mse, seconds_per_frame));

@@ -1,26 +1,30 @@
 //! A comparison (DESIGN §7): K replicas of several methods on one scene against one reference,
-//! measured per region; the job of `reshift compare` and of the experiments built on it.
+//! measured per region at every frame of the camera trajectory; the job of `reshift compare` and
+//! of the experiments built on it.
 //!
-//! [`run`] takes a [`Plan`], obtains the reference ([`crate::reference_cache`]), renders the
-//! replicas (seeds `0..K`; with an equal-time budget a bare `pt` is first calibrated), reduces
-//! them to [`MethodResult`]s and writes `table.md`, `table.csv`, `results.json` ([`Results`])
-//! and the images ([`crate::images`]) into the plan's folder.
+//! [`run`] takes a [`Plan`], obtains the references ([`crate::reference_cache`]: the plan's at
+//! the last frame, and cheaper ones at the earlier frames for the convergence record), renders
+//! the replicas (seeds `0..K`; with an equal-time budget a bare `pt` is first calibrated), reduces
+//! them to [`MethodResult`]s and writes `table.md`, `table.csv`, `results.json` ([`Results`]),
+//! the images ([`crate::images`]), the figures ([`crate::report::plots`]) and `report.html`
+//! ([`crate::report::html`]) into the plan's folder.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use engine::Backend;
+use sss::limits::{self, IMAGE_BYTES_PER_PIXEL};
 use sss::scene::{GBuffer, Scene};
 
 use crate::error::Error;
 use crate::images::write_comparison_images;
-use crate::method_result::MethodResult;
+use crate::method_result::{MethodResult, Replica};
 use crate::methods::pt::Pt;
-use crate::methods::{Method, MethodError, Rendered};
+use crate::methods::{Method, MethodError, SampleCounts};
 use crate::progress::Progress;
-use crate::reference_cache::{self, REFERENCE_SEED, ReferenceSource};
+use crate::reference_cache::{self, FrameReference, Obtained, REFERENCE_SEED, ReferenceSource};
 use crate::regions::Regions;
-use crate::report::results::{MethodEntry, ReferenceEntry, Results, RunEntry};
-use crate::report::{output_dir, tables, write_text};
+use crate::report::results::{FrameReferenceEntry, MethodEntry, ReferenceEntry, Results, RunEntry};
+use crate::report::{html, output_dir, plots, tables, write_text};
 
 /// The default method list: the path tracer and the four main presets [001 §5.1].
 pub const DEFAULT_METHODS: &str =
@@ -28,6 +32,9 @@ pub const DEFAULT_METHODS: &str =
 
 /// The method whose samples per pixel an equal-time budget sets: the bare path tracer.
 pub const EQUAL_TIME_SPEC: &str = "pt";
+
+/// The default method that efficiency ratios are taken against.
+pub const DEFAULT_BASELINE: &str = "pt";
 
 /// What to compare, where, and against what.
 pub struct Plan {
@@ -37,14 +44,22 @@ pub struct Plan {
     pub scene_key: String,
     /// `(spec as requested, method)`; the spec names the method's rows and files.
     pub methods: Vec<(String, Method)>,
+    /// The spec of the method efficiency ratios are taken against; no ratios when it is not
+    /// among `methods`.
+    pub baseline: String,
     /// Independent replicas per method (seeds `0..replicas`).
     pub replicas: u32,
-    /// Frames of the camera trajectory; errors are measured on the last one.
+    /// Frames of the camera trajectory; the tables measure the last one.
     pub frames: u32,
     /// `Some(seconds)`: equal time, [`EQUAL_TIME_SPEC`] is scaled to `seconds` per frame and
     /// every other method keeps its cost; `None`: every method at its own spp.
     pub equal_time: Option<f64>,
+    /// The reference of the last frame.
     pub reference: ReferenceSource,
+    /// `Some(spp)`: the convergence record measures every frame, against cached references of
+    /// `spp` samples per pixel at the earlier frames (a multiple ≥ 2× of the reference's batch;
+    /// [`frame_reference_spp`]); `None`, or a reference from a file: the last frame only.
+    pub frame_reference_spp: Option<u32>,
     /// The output folder.
     pub out: PathBuf,
     pub backend: Backend,
@@ -69,75 +84,158 @@ pub fn parse_methods<S: AsRef<str>>(specs: &[S]) -> Result<Vec<(String, Method)>
         .collect()
 }
 
+/// Samples per pixel of the references at frames before the last: 1/32 of the last frame's
+/// `spp`, rounded down to whole batches of `batch_spp`, at least 2 batches (their standard
+/// error needs 2). Their variance is subtracted from each frame's MSE ([`crate::metrics`]), so
+/// they need not be converged, only cheap: 15 of them cost about half the last frame's.
+pub fn frame_reference_spp(spp: u32, batch_spp: u32) -> u32 {
+    let batch = batch_spp.max(1);
+    (spp / 32 / batch * batch).max(2 * batch)
+}
+
 impl Plan {
+    /// The plan's counts within [`sss::limits`], and the replicas' final frames (kept until the
+    /// table is made) and one run within the memory budget.
     fn check(&self) -> Result<(), Error> {
         let invalid = |reason: &str| Err(Error::Invalid(format!("comparison plan: {reason}")));
         if self.methods.is_empty() {
             return invalid("no method given");
         }
-        if self.replicas == 0 || self.frames == 0 {
-            return invalid("replicas and frames must be ≥ 1");
-        }
+        let origin = Path::new("(comparison plan)");
+        limits::replicas(origin, "replicas", self.replicas)?;
+        limits::frames(origin, "frames", self.frames)?;
         if self.equal_time.is_some_and(|t| !(t.is_finite() && t > 0.0)) {
             return invalid("the equal-time budget must be a positive number of seconds");
         }
+        let pixels = self.scene.camera.width() as u64 * self.scene.camera.height() as u64;
+        let kept = (self.methods.len() as u64)
+            .checked_mul(self.replicas as u64)
+            .and_then(|n| n.checked_mul(pixels * IMAGE_BYTES_PER_PIXEL));
+        let needed = kept.zip(limits::run_bytes(pixels, self.frames));
+        let value = format!(
+            "{} methods × {} replicas × {} frames at {}×{}",
+            self.methods.len(),
+            self.replicas,
+            self.frames,
+            self.scene.camera.width(),
+            self.scene.camera.height()
+        );
+        limits::memory(
+            origin,
+            "replicas",
+            &value,
+            needed.and_then(|(a, b)| a.checked_add(b)),
+            "the comparison",
+        )?;
         Ok(())
+    }
+
+    /// The reference source of `frame`: the plan's for the last frame; for an earlier one, the
+    /// cache at [`Plan::frame_reference_spp`] (`None` without a cache or a convergence record).
+    fn reference_of(&self, frame: u32) -> Option<ReferenceSource> {
+        if frame + 1 == self.frames {
+            return Some(self.reference.clone());
+        }
+        match (&self.reference, self.frame_reference_spp) {
+            (ReferenceSource::Cache { dir, batch_spp, .. }, Some(spp)) => {
+                Some(ReferenceSource::Cache {
+                    dir: dir.clone(),
+                    spp,
+                    batch_spp: *batch_spp,
+                })
+            }
+            _ => None,
+        }
     }
 }
 
-/// Runs the comparison of `plan`, reporting to `progress` (phases `reference` and `replicas`).
-/// A stop request ends it after the current replica with the replicas rendered so far
-/// (`results.interrupted`), or, while the reference renders, with [`Error::Interrupted`].
+/// Runs the comparison of `plan`, reporting to `progress` (phases `reference frame F` and
+/// `replicas`). A stop request ends it after the current replica with the replicas rendered so
+/// far (`results.interrupted`), or, while a reference renders, with [`Error::Interrupted`].
 pub fn run(plan: &Plan, progress: &mut dyn Progress) -> Result<Outcome, Error> {
     plan.check()?;
     let out = output_dir(&plan.out)?;
-    let frame = plan.frames - 1;
     let scene = &plan.scene;
-    let reference =
-        reference_cache::obtain(&plan.reference, scene, &plan.scene_key, frame, progress)?;
-    let regions = Regions::classify(scene, &GBuffer::render(scene, frame), REFERENCE_SEED);
-    let runs = render_replicas(plan, progress)?;
+    // The last frame's reference first: it is the one that matters most, and an interrupted
+    // comparison leaves its checkpoint.
+    let last_frame = plan.frames - 1;
+    let mut references = Vec::new();
+    let mut frame_entries = Vec::new();
+    let mut last: Option<Obtained> = None;
+    for frame in std::iter::once(last_frame).chain(0..last_frame) {
+        let Some(source) = plan.reference_of(frame) else {
+            continue;
+        };
+        let obtained = reference_cache::obtain(&source, scene, &plan.scene_key, frame, progress)?;
+        let regions = Regions::classify(scene, &GBuffer::render(scene, frame), REFERENCE_SEED);
+        frame_entries.push(FrameReferenceEntry::new(&obtained));
+        references.push((FrameReference::new(&obtained.reference), regions));
+        if frame == last_frame {
+            last = Some(obtained);
+        }
+    }
+    references.rotate_left(1);
+    frame_entries.rotate_left(1);
+    let last = last.expect("the last frame always has a reference");
+    let frames: Vec<u32> = references.iter().map(|(r, _)| r.frame).collect();
+    let runs = render_replicas(plan, &frames, progress)?;
     let interrupted = progress.stop_requested();
 
     let mut rows = Vec::new();
     for (spec, method, replicas) in runs.iter().filter(|r| !r.2.is_empty()) {
-        let row = MethodResult::from_replicas(
-            spec,
-            method.spp(),
-            replicas,
-            &reference.reference,
-            &regions,
-        )
-        .ok_or_else(|| Error::Invalid(format!("{spec}: image size differs from the reference")))?;
+        let row = MethodResult::from_replicas(spec, method.spp(), replicas, &references)
+            .ok_or_else(|| {
+                Error::Invalid(format!("{spec}: image size differs from the reference"))
+            })?;
         rows.push(row);
     }
+    let baseline = rows.iter().find(|r| r.method == plan.baseline);
     let finals: Vec<(&str, &engine::Image)> = runs
         .iter()
-        .filter_map(|(spec, _, replicas)| Some((spec.as_str(), &replicas.first()?.image)))
+        .filter_map(|(spec, _, replicas)| Some((spec.as_str(), replicas.first()?.frames.last()?)))
         .collect();
-    let (images, scale) = write_comparison_images(&out, &finals, &reference.reference)?;
-    let markdown = tables::markdown(&rows);
+    let (images, scale) = write_comparison_images(&out, &finals, &last.reference)?;
+    let (_, regions) = references.last().expect("the last frame");
+    let figures = plots::write_figures(&out, &rows, baseline, &finals, &last.reference, regions)?;
+    let markdown = format!(
+        "{}\n{}",
+        tables::markdown(&rows, baseline),
+        tables::verdict(&rows, baseline)
+    );
     write_text(&out.join("table.md"), &markdown)?;
-    write_text(&out.join("table.csv"), &tables::csv(&rows))?;
+    write_text(&out.join("table.csv"), &tables::csv(&rows, baseline))?;
+    write_text(
+        &out.join("convergence.csv"),
+        &tables::convergence_csv(&rows),
+    )?;
     let run = RunEntry {
         scene: scene.name.clone(),
         backend: plan.backend.to_string(),
-        width: reference.reference.width,
-        height: reference.reference.height,
+        width: last.reference.width,
+        height: last.reference.height,
         frames: plan.frames,
         replicas: plan.replicas,
         equal_time: plan.equal_time,
+        baseline: baseline.map(|b| b.method.clone()),
         interrupted,
     };
     let entries = rows
         .iter()
         .zip(images)
-        .map(|(r, files)| MethodEntry::new(r, files))
+        .map(|(r, files)| MethodEntry::new(r, baseline, files))
         .collect();
-    let reference_entry =
-        ReferenceEntry::new(&reference.reference, &reference.path, reference.cached);
-    let results = Results::new(run, reference_entry, &regions, scale, entries);
+    let reference_entry = ReferenceEntry::new(&last.reference, &last.path, last.cached);
+    let results = Results::new(
+        run,
+        reference_entry,
+        frame_entries,
+        regions,
+        scale,
+        figures,
+        entries,
+    );
     write_text(&out.join("results.json"), &results.to_json_pretty())?;
+    write_text(&out.join("report.html"), &html::report(&results, &out)?)?;
     Ok(Outcome {
         results,
         rows,
@@ -146,12 +244,14 @@ pub fn run(plan: &Plan, progress: &mut dyn Progress) -> Result<Outcome, Error> {
     })
 }
 
-/// The replicas of every method, in order; after a stop request the list ends with the method
-/// that was rendering, with the replicas it finished.
+/// The replicas of every method, in order, each with its images at `frames` (ascending, the
+/// last frame last); after a stop request the list ends with the method that was rendering,
+/// with the replicas it finished.
 fn render_replicas(
     plan: &Plan,
+    frames: &[u32],
     progress: &mut dyn Progress,
-) -> Result<Vec<(String, Method, Vec<Rendered>)>, Error> {
+) -> Result<Vec<(String, Method, Vec<Replica>)>, Error> {
     let seconds_per_spp = match plan.equal_time {
         Some(_) if plan.methods.iter().any(|(s, _)| s == EQUAL_TIME_SPEC) => {
             calibrate_pt(&plan.backend, &plan.scene, plan.frames)?
@@ -177,13 +277,50 @@ fn render_replicas(
                 runs.push((spec.clone(), method, replicas));
                 break 'methods;
             }
-            replicas.push(method.render_on(&plan.backend, &plan.scene, plan.frames, seed)?);
+            replicas.push(render_replica(plan, &method, frames, seed)?);
             progress.step();
         }
         runs.push((spec.clone(), method, replicas));
     }
     progress.end();
     Ok(runs)
+}
+
+/// Replica `seed` of `method` at `frames`: the whole trajectory when earlier frames are
+/// measured, else only the last frame (which a memoryless method renders alone).
+fn render_replica(
+    plan: &Plan,
+    method: &Method,
+    frames: &[u32],
+    seed: u64,
+) -> Result<Replica, Error> {
+    let (backend, scene) = (&plan.backend, &plan.scene);
+    if frames.len() == 1 {
+        let r = method.render_on(backend, scene, plan.frames, seed)?;
+        return Ok(Replica {
+            frames: vec![r.image],
+            seconds_per_frame: r.seconds_per_frame,
+            frames_rendered: r.frames_rendered,
+            nonfinite: r.nonfinite,
+            spp: r.spp,
+        });
+    }
+    let (trajectory, seconds_per_frame) =
+        method.render_trajectory_on(backend, scene, plan.frames, seed)?;
+    let images = (0..)
+        .zip(trajectory.frames)
+        .filter_map(|(f, image)| frames.contains(&f).then_some(image))
+        .collect();
+    Ok(Replica {
+        frames: images,
+        seconds_per_frame,
+        frames_rendered: trajectory.frames_rendered,
+        nonfinite: trajectory.nonfinite,
+        spp: trajectory
+            .counts
+            .as_ref()
+            .map_or(method.spp() as f64, SampleCounts::mean),
+    })
 }
 
 /// Seconds per sample per pixel of the path tracer on this scene (median of 3 runs at 4 spp).
@@ -231,7 +368,9 @@ mod tests {
     }
 
     /// A whole comparison through the library: every file is written, the document agrees with
-    /// the rows, and a second run reuses the cached reference and reproduces the errors.
+    /// the rows, every frame is measured, a second run reuses the cached references and
+    /// reproduces the errors, and measuring the last frame alone gives the same last-frame
+    /// errors (a trajectory's last frame is the frame a single render returns).
     #[test]
     fn a_comparison_writes_its_outputs_and_reuses_the_reference() {
         let dir = std::env::temp_dir().join(format!("reshift-compare-{}", std::process::id()));
@@ -239,14 +378,16 @@ mod tests {
             scene: with_resolution(Scene::builtin("bumpy").unwrap(), Some((12, 9))),
             scene_key: "bumpy".into(),
             methods: parse_methods(&["pt:2", "restir:hybrid"]).unwrap(),
-            replicas: 2,
-            frames: 2,
+            baseline: "pt:2".into(),
+            replicas: 3,
+            frames: 3,
             equal_time: None,
             reference: ReferenceSource::Cache {
                 dir: dir.join("cache"),
                 spp: 8,
                 batch_spp: 4,
             },
+            frame_reference_spp: Some(8),
             out: dir.join("out"),
             backend: Backend::Cpu,
         };
@@ -254,17 +395,52 @@ mod tests {
         assert_eq!(first.rows.len(), 2);
         assert_eq!(first.results.methods.len(), 2);
         assert!(!first.results.reference.cached && !first.results.interrupted);
-        for file in ["table.md", "table.csv", "results.json", "reference.exr"] {
+        for file in [
+            "table.md",
+            "table.csv",
+            "convergence.csv",
+            "results.json",
+            "reference.exr",
+            "figure.png",
+            "convergence.png",
+            "report.html",
+            "restir-hybrid-abs-error.png",
+        ] {
             assert!(first.out.join(file).is_file(), "{file}");
         }
         let written = std::fs::read_to_string(first.out.join("results.json")).unwrap();
         assert_eq!(written, first.results.to_json_pretty());
+        assert_eq!(first.results.frame_references.len(), 3);
+        for row in &first.rows {
+            let frames: Vec<u32> = row.convergence.iter().map(|f| f.frame).collect();
+            assert_eq!(frames, [0, 1, 2], "{}", row.method);
+            assert_eq!(row.convergence[2].metrics, row.metrics);
+            assert_eq!(row.seconds.replicas(), 3);
+        }
+        assert_eq!(first.results.baseline.as_deref(), Some("pt:2"));
+        assert!(
+            first.markdown.contains("Efficiency over pt:2"),
+            "{}",
+            first.markdown
+        );
         let again = run(&plan, &mut Silent).unwrap();
         assert!(again.results.reference.cached);
+        assert!(again.results.frame_references.iter().all(|f| f.cached));
         assert_eq!(again.rows[1].metrics, first.rows[1].metrics);
+        let last_only = Plan {
+            frame_reference_spp: None,
+            baseline: "none".into(),
+            ..plan
+        };
+        let last = run(&last_only, &mut Silent).unwrap();
+        assert!(last.results.baseline.is_none());
+        for (a, b) in last.rows.iter().zip(&first.rows) {
+            assert_eq!(a.metrics, b.metrics, "{}", a.method);
+            assert_eq!(a.convergence.len(), 1);
+        }
         let empty = Plan {
             methods: Vec::new(),
-            ..plan
+            ..last_only
         };
         assert!(matches!(run(&empty, &mut Silent), Err(Error::Invalid(_))));
         std::fs::remove_dir_all(&dir).unwrap();

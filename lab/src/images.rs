@@ -1,21 +1,18 @@
 //! Images a comparison writes: the reference, each method's final frame (EXR + PNG through
-//! `engine::Image`) and its absolute and relative error maps as false-colour PNGs on one scale
-//! shared by all methods ([`write_comparison_images`]).
+//! `engine::Image`) and its absolute and relative error maps as false-colour PNGs with labelled
+//! colour bars, on one scale shared by all methods ([`write_comparison_images`]).
 
 use std::path::Path;
 
 use engine::Image;
-use engine::image::WriteError;
 use sss::integrator::Reference;
 
 use crate::error::Error;
 use crate::metrics::error_maps;
 use crate::reference_cache::mean_image;
 use crate::report::file_stem;
+use crate::report::plots::false_colour_map;
 use crate::report::results::{ErrorMapScale, ImageFiles};
-
-/// Height in pixels of the colour bar under an error map.
-pub const COLOUR_BAR_HEIGHT: u32 = 6;
 
 /// Writes `reference.exr`/`.png` and, per method `(spec, replica-0 final frame)`, its frame and
 /// error maps into `out`; every map is scaled to the 99th percentile of all methods' errors.
@@ -53,64 +50,30 @@ pub fn write_comparison_images(
         };
         image.write_exr(out.join(&files.final_exr))?;
         image.write_png(out.join(&files.final_png))?;
-        let (w, h) = (image.width, image.height);
-        write_false_colour(abs, w, h, scale.absolute, &out.join(&files.abs_error_png))?;
-        write_false_colour(rel, w, h, scale.relative, &out.join(&files.rel_error_png))?;
+        let size = (image.width, image.height);
+        let title = format!("{spec}: luminance of |I − R|");
+        false_colour_map(
+            &out.join(&files.abs_error_png),
+            abs,
+            size,
+            scale.absolute,
+            &title,
+        )?;
+        let title = format!("{spec}: |I − R| / (Y(R) + 0.1)");
+        false_colour_map(
+            &out.join(&files.rel_error_png),
+            rel,
+            size,
+            scale.relative,
+            &title,
+        )?;
         written.push(files);
     }
     Ok((written, scale))
 }
 
-/// Writes `values` (row-major `width × height`) as a false-colour PNG, 0 → dark blue, `max` →
-/// yellow (a viridis-like ramp), with a colour bar spanning 0 … `max` left to right in
-/// [`COLOUR_BAR_HEIGHT`] rows below the image. Non-finite values are drawn magenta.
-pub fn write_false_colour(
-    values: &[f64],
-    width: u32,
-    height: u32,
-    max: f64,
-    path: &Path,
-) -> Result<(), WriteError> {
-    let error = |reason: String| WriteError {
-        path: path.to_path_buf(),
-        reason,
-    };
-    if values.len() != width as usize * height as usize || width == 0 {
-        return Err(error(format!(
-            "{} values for a {width}×{height} image",
-            values.len()
-        )));
-    }
-    let scale = if max > 0.0 && max.is_finite() {
-        max
-    } else {
-        1.0
-    };
-    let mut bytes = Vec::with_capacity(values.len() * 3 + (width * COLOUR_BAR_HEIGHT * 3) as usize);
-    for &v in values {
-        bytes.extend(if v.is_finite() {
-            ramp(v / scale)
-        } else {
-            [255, 0, 255]
-        });
-    }
-    for _ in 0..COLOUR_BAR_HEIGHT {
-        for x in 0..width {
-            bytes.extend(ramp(x as f64 / (width - 1).max(1) as f64));
-        }
-    }
-    image::save_buffer(
-        path,
-        &bytes,
-        width,
-        height + COLOUR_BAR_HEIGHT,
-        image::ColorType::Rgb8,
-    )
-    .map_err(|e| error(e.to_string()))
-}
-
 /// A five-stop approximation of viridis for `t` clamped to [0, 1].
-fn ramp(t: f64) -> [u8; 3] {
+pub fn ramp(t: f64) -> [u8; 3] {
     const STOPS: [[f64; 3]; 5] = [
         [68.0, 1.0, 84.0],
         [59.0, 82.0, 139.0],

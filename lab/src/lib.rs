@@ -20,5 +20,6 @@ pub mod reference_cache;
 pub mod regions;
 pub mod report;
 pub mod scenes;
+pub mod uncertainty;
 
 pub use error::Error;

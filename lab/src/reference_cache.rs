@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use engine::Image;
+use glam::DVec3;
 use sss::InputError;
 use sss::integrator::pt::PtSettings;
 use sss::integrator::{Reference, ReferenceConfig, Shard};
@@ -167,7 +168,8 @@ pub fn obtain(
             cached: true,
         });
     }
-    accumulate(&mut reference, scene, &path, "reference", None, progress)?;
+    let what = format!("reference frame {frame}");
+    accumulate(&mut reference, scene, &path, &what, None, progress)?;
     if !reference.is_complete() {
         return Err(Error::Interrupted(format!(
             "interrupted while computing the reference; checkpoint {} resumes next time",
@@ -253,6 +255,30 @@ pub fn check_reference(
         ));
     }
     Ok(())
+}
+
+/// What metrics need of a reference at one frame: the per-pixel mean and its standard error
+/// over the reference's independent batches ([`crate::metrics`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameReference {
+    pub frame: u32,
+    pub mean: Vec<DVec3>,
+    pub std_err: Vec<DVec3>,
+    /// Finished batches (≥ 2).
+    pub batches: u32,
+    pub spp: u64,
+}
+
+impl FrameReference {
+    pub fn new(reference: &Reference) -> FrameReference {
+        FrameReference {
+            frame: reference.config.frame,
+            mean: reference.mean(),
+            std_err: reference.std_err(),
+            batches: reference.batches_done(),
+            spp: reference.batches_done() as u64 * reference.config.spp_per_batch as u64,
+        }
+    }
 }
 
 /// The per-pixel reference mean as a linear RGB image.

@@ -20,6 +20,7 @@
 use std::fmt;
 
 use glam::{Vec3, Vec3A};
+use rayon::prelude::*;
 use restir::rng::StreamKey;
 use sss::geometry::Ray;
 use sss::integrator::pt::SHADOW_EPSILON;
@@ -86,9 +87,10 @@ pub struct Regions {
 impl Regions {
     /// Classifies the pixels of `gbuffer` (a frame of `scene`); `seed` keys the light samples.
     pub fn classify(scene: &Scene, gbuffer: &GBuffer, seed: u64) -> Regions {
+        // Parallel over pixels; each pixel's light samples come from its own keyed stream.
         let visible = gbuffer
             .pixels
-            .iter()
+            .par_iter()
             .enumerate()
             .map(|(pixel, g)| {
                 let g = g.as_ref()?;

@@ -26,4 +26,11 @@ void broken_hybrid_ignoring_criterion_shift(ShiftSpec spec, SssSample x, SssDoma
     hybrid_plan(hybrid_for_material(src.material), false, x, src, dst, plan);
 }
 
+// DelayedJacobianOff: the replay with its Jacobian times BROKEN_JACOBIAN_ERROR (3% too large).
+void broken_delayed_jacobian_off_shift(ShiftSpec spec, SssSample x, SssDomain src, SssDomain dst,
+                                       inout ShiftPlan plan) {
+    plan.replay = DELAYED_CHECKS_ALL;
+    plan.jacobian_factor = BROKEN_JACOBIAN_ERROR;
+}
+
 #endif

@@ -5,11 +5,8 @@
 #ifndef SHIFTS_DELAYED_GLSL
 #define SHIFTS_DELAYED_GLSL
 
-// Checks: which parts of delayed reconnection run (bit set = on); only the negative controls of
-// broken.glsl switch one off.
-const uint DELAYED_CHECK_JACOBIAN = 1u;
-const uint DELAYED_CHECK_VISIBILITY = 2u;
-const uint DELAYED_CHECKS_ALL = 3u;
+// Checks: which parts of delayed reconnection run, the bits DELAYED_CHECK_* of
+// contract/shifts.glsl; only the negative controls of broken.glsl switch one off.
 
 // light_jacobian: |cos θ_y / cos θ_x| ‖x3 − x2‖² / ‖x3 − y2‖² [001 Eq. 11]; 1 for delta lights,
 // 0 for an unknown light.
@@ -57,7 +54,7 @@ uint delayed_replay(SssSample x, SssDomain src, SssDomain dst, uint checks, out 
     Probe probe = Probe(x.technique, x.u_radius, x.u_angle);
     bssrdf_probe_trace(probe, dst.x1);
     float u_pick = 0.0;
-    if (x.index == INDEX_UNKNOWN) {
+    if (x.index == BSSRDF_INDEX_UNKNOWN) {
         Stream pick = domain_shift_stream(dst, PURPOSE_PICK, src);
         u_pick = stream_next_f32(pick);
     }

@@ -6,11 +6,11 @@
 
 // invert_at: probabilistic inversion of x2 at `end`'s x1 with gamma_end, the first number of
 // end's PURPOSE_INVERSION stream keyed by `partner` [001 Alg. 4]; with `find`, x2's rank among
-// the re-traced chord's hits (NotInvertible when x2 is not among them, index INDEX_UNKNOWN
+// the re-traced chord's hits (NotInvertible when x2 is not among them, index BSSRDF_INDEX_UNKNOWN
 // without `find`).
 uint inversion_invert_at(SssDomain end, SssDomain partner, EntryPoint x2, bool find,
                          out Probe probe, out float p_disk, out uint index) {
-    index = INDEX_UNKNOWN;
+    index = BSSRDF_INDEX_UNKNOWN;
     Stream stream = domain_shift_stream(end, PURPOSE_INVERSION, partner);
     float gamma = stream_next_f32(stream);
     if (bssrdf_invert_random_numbers(end.x1, end.selection, x2, gamma, probe, p_disk)
@@ -70,7 +70,7 @@ uint inversion_shift(uint policy, SssSample x, SssDomain src, SssDomain dst, out
 // resolve_deferred_index: for the sample selected after a pass, re-trace its chord at
 // `domain`'s x1 and store x2's rank (unknown if x2 is not found); a known index is kept.
 void inversion_resolve_deferred_index(SssDomain domain, inout SssSample y) {
-    if (y.index != INDEX_UNKNOWN || y.technique >= BSSRDF_TECHNIQUE_COUNT) {
+    if (y.index != BSSRDF_INDEX_UNKNOWN || y.technique >= BSSRDF_TECHNIQUE_COUNT) {
         return;
     }
     EntryPoint x2;

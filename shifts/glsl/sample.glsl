@@ -1,11 +1,12 @@
 // The stored sample and reservoir of the SSS pipeline: the twin of shifts/src/sample.rs. The
-// structs SssSample and PixelReservoir and INDEX_UNKNOWN come from the contract
-// (shifts/src/contract.rs), in std430 with arrays of float where Rust has arrays of f32 (a vec3
-// would align to 16).
+// structs SssSample and PixelReservoir come from the contract (shifts/src/contract.rs), in std430
+// with arrays of float where Rust has arrays of f32 (a vec3 would align to 16), and
+// BSSRDF_INDEX_UNKNOWN from sss/src/contract.rs.
 
 #ifndef SHIFTS_SAMPLE_GLSL
 #define SHIFTS_SAMPLE_GLSL
 
+#include "contract/sss.glsl"
 #include "contract/shifts.glsl"
 
 vec3 sample_x3(SssSample s) {

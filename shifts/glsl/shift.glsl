@@ -54,10 +54,13 @@ struct ShiftPlan {
     // (the hybrid's bijectivity rule, DESIGN §9).
     bool reject_connectable;
     Hybrid hybrid;
+    // Negative controls only (broken.glsl): a factor on the final J, 1 for every correct shift.
+    float jacobian_factor;
 };
 
 ShiftPlan shift_plan_new(SssSample x) {
-    return ShiftPlan(SHIFT_OK, x, 1.0, false, INDEX_POLICY_EXACT, 0u, false, Hybrid(0.0, 0.0));
+    return ShiftPlan(SHIFT_OK, x, 1.0, false, INDEX_POLICY_EXACT, 0u, false, Hybrid(0.0, 0.0),
+                     1.0);
 }
 
 // SssSample::with_bssrdf: the same light vertex with a new BSSRDF part (padding zeroed, as
@@ -121,8 +124,9 @@ uint shift_shift(ShiftSpec spec, SssSample x, SssDomain src, SssDomain dst, out 
             plan.fail = SHIFT_FAIL_REJECTED;
         }
     }
+    precise float scaled = plan.jacobian * plan.jacobian_factor;
     y = plan.y;
-    jacobian = plan.jacobian;
+    jacobian = scaled;
     return plan.fail;
 }
 

@@ -3,6 +3,7 @@
 
 use restir::shift::{Fail, Shift, Shifted};
 
+use crate::contract::{BROKEN_JACOBIAN_ERROR, DELAYED_CHECK_JACOBIAN, DELAYED_CHECK_VISIBILITY};
 use crate::delayed::{Checks, replay};
 use crate::domain::SssDomain;
 use crate::hybrid::Hybrid;
@@ -20,16 +21,7 @@ impl Shift<SssDomain<'_>> for DelayedWithoutJacobian {
         src: &SssDomain,
         dst: &SssDomain,
     ) -> Result<Shifted<SssSample>, Fail> {
-        replay(
-            x,
-            src,
-            dst,
-            Checks {
-                jacobian: false,
-                ..Checks::ALL
-            },
-        )
-        .map(|(s, _)| s)
+        replay(x, src, dst, Checks::ALL.without(DELAYED_CHECK_JACOBIAN)).map(|(s, _)| s)
     }
 }
 
@@ -44,16 +36,7 @@ impl Shift<SssDomain<'_>> for DelayedWithoutVisibility {
         src: &SssDomain,
         dst: &SssDomain,
     ) -> Result<Shifted<SssSample>, Fail> {
-        replay(
-            x,
-            src,
-            dst,
-            Checks {
-                visibility: false,
-                ..Checks::ALL
-            },
-        )
-        .map(|(s, _)| s)
+        replay(x, src, dst, Checks::ALL.without(DELAYED_CHECK_VISIBILITY)).map(|(s, _)| s)
     }
 }
 
@@ -71,5 +54,26 @@ impl Shift<SssDomain<'_>> for HybridIgnoringCriterion {
         dst: &SssDomain,
     ) -> Result<Shifted<SssSample>, Fail> {
         Hybrid::for_material(src.material()).shift_checked(x, src, dst, false)
+    }
+}
+
+/// Delayed reconnection with its Jacobian [001 Eq. 11] multiplied by
+/// [`BROKEN_JACOBIAN_ERROR`] (1.03): a control near the ±2% tolerance of the unbiasedness tests
+/// (`lab/tests/unbiased.rs`), where [`DelayedWithoutJacobian`] is far off. Biased; never render
+/// with it.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct DelayedJacobianOff;
+
+impl Shift<SssDomain<'_>> for DelayedJacobianOff {
+    fn shift(
+        &self,
+        x: &SssSample,
+        src: &SssDomain,
+        dst: &SssDomain,
+    ) -> Result<Shifted<SssSample>, Fail> {
+        replay(x, src, dst, Checks::ALL).map(|(s, _)| Shifted {
+            jacobian: s.jacobian * BROKEN_JACOBIAN_ERROR,
+            ..s
+        })
     }
 }

@@ -1,9 +1,6 @@
 use bytemuck::{Pod, Zeroable};
 
 twin::contract! {
-    /// The stored intersection index meaning *unknown* (deferred index policy).
-    pub const INDEX_UNKNOWN: u32 = u32::MAX;
-
     /// Stream purpose tags of the shifts, in the top two bits of `StreamKey::purpose`; the low
     /// 30 bits hold the source pixel (see `SssDomain::shift_stream`): probabilistic
     /// inversion's γ.
@@ -13,9 +10,23 @@ twin::contract! {
     /// The source pixel's bits of a shift's stream purpose.
     pub const PARTNER_PIXEL_MASK: u32 = (1 << 30) - 1;
 
+    /// Which parts of delayed reconnection run, as bits of a set (`delayed::Checks`, GLSL
+    /// `checks`); only the negative controls of `broken` switch one off: the light Jacobian of
+    /// [001 Eq. 11], ...
+    pub const DELAYED_CHECK_JACOBIAN: u32 = 1 << 0;
+    /// ... the y2–x3 visibility test, ...
+    pub const DELAYED_CHECK_VISIBILITY: u32 = 1 << 1;
+    /// ... and both.
+    pub const DELAYED_CHECKS_ALL: u32 = DELAYED_CHECK_JACOBIAN | DELAYED_CHECK_VISIBILITY;
+
     /// Offset of shadow-segment ends from x2 (along its geometric normal) and from x3 (scene
     /// units; the built-in scenes are about one unit across).
     pub const SHADOW_EPSILON: f32 = 1e-4;
+
+    /// The factor by which the negative control `broken::DelayedJacobianOff` scales the
+    /// Jacobian of delayed reconnection: 3% too large, just beyond the ±2% that the
+    /// unbiasedness tests resolve per region and channel.
+    pub const BROKEN_JACOBIAN_ERROR: f32 = 1.03;
 
     /// How the intersection index of an inverted sample is found (DESIGN §5).
     #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -46,7 +57,8 @@ twin::contract! {
         pub(crate) technique: u32,
         pub(crate) u_radius: f32,
         pub(crate) u_angle: f32,
-        /// Rank of x2 among the probe's hits sorted by `t`, or `INDEX_UNKNOWN`.
+        /// Rank of x2 among the probe's hits sorted by `t`, or `INDEX_UNKNOWN` (of the `sss`
+        /// contract).
         pub(crate) index: u32,
         /// `p_disk(x2 | x1)` of the x1 whose random numbers are stored.
         pub(crate) p_disk: f32,

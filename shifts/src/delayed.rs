@@ -6,6 +6,7 @@ use restir::shift::{Fail, Shift, Shifted};
 use sss::bssrdf::{BssrdfSample, EntryPoint, pick_hit};
 use sss::scene::{Light, Lights};
 
+use crate::contract::{DELAYED_CHECK_JACOBIAN, DELAYED_CHECK_VISIBILITY, DELAYED_CHECKS_ALL};
 use crate::domain::{PURPOSE_PICK, SssDomain};
 use crate::sample::SssSample;
 
@@ -42,19 +43,22 @@ impl Shift<SssDomain<'_>> for DelayedReconnection {
     }
 }
 
-/// Which parts of delayed reconnection run; only the negative controls in [`crate::broken`]
-/// switch one off.
+/// Which parts of delayed reconnection run: a set of the contract's `DELAYED_CHECK_*` bits, as
+/// the GPU twin passes them; only the negative controls in [`crate::broken`] switch one off.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Checks {
-    pub jacobian: bool,
-    pub visibility: bool,
-}
+pub(crate) struct Checks(u32);
 
 impl Checks {
-    pub const ALL: Checks = Checks {
-        jacobian: true,
-        visibility: true,
-    };
+    pub const ALL: Checks = Checks(DELAYED_CHECKS_ALL);
+
+    /// These checks without the one of bit `check`.
+    pub const fn without(self, check: u32) -> Checks {
+        Checks(self.0 & !check)
+    }
+
+    fn has(self, check: u32) -> bool {
+        self.0 & check != 0
+    }
 }
 
 /// Delayed reconnection of `x` from `src` into `dst`; also returns y2 (the hybrid tests it).
@@ -84,7 +88,7 @@ pub(crate) fn replay(
         return Err(Fail::Degenerate);
     }
     let y = x.with_bssrdf(&BssrdfSample::new(&probe, Some(rank), &y2, p_disk_y));
-    let jacobian = if checks.jacobian {
+    let jacobian = if checks.has(DELAYED_CHECK_JACOBIAN) {
         // [001 Eq. 11]
         let light = light_jacobian(
             &dst.scene().lights,
@@ -100,7 +104,7 @@ pub(crate) fn replay(
     if !(jacobian > 0.0 && jacobian.is_finite()) {
         return Err(Fail::Degenerate);
     }
-    if checks.visibility && !dst.visible(&y) {
+    if checks.has(DELAYED_CHECK_VISIBILITY) && !dst.visible(&y) {
         return Err(Fail::Occluded);
     }
     Ok((Shifted { y, jacobian }, y2))

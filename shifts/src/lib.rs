@@ -31,11 +31,12 @@ pub mod preset;
 mod reconnection;
 mod sample;
 
-pub use contract::{INDEX_UNKNOWN, IndexPolicy, PixelReservoir, SssSample};
+pub use contract::{IndexPolicy, PixelReservoir, SssSample};
 pub use delayed::DelayedReconnection;
 pub use distant::DistantReconnection;
 pub use domain::{LightPath, SssDomain};
 pub use hybrid::Hybrid;
 pub use inversion::{InvertingReconnection, resolve_deferred_index};
-pub use kind::ShiftKind;
+pub use kind::{ShiftKind, StoredNumbers};
 pub use reconnection::{Identity, Reconnection};
+pub use sss::contract::bssrdf::INDEX_UNKNOWN;

@@ -222,7 +222,8 @@ impl Preset {
     }
 
     /// Checks that the preset can run: exactly one candidate pass, first; at least one BSSRDF
-    /// sample; neighbour counts in `1..MAX_DOMAINS`; caps finite and > 0.
+    /// sample; neighbour counts in `1..MAX_DOMAINS`; caps finite and > 0; and no pass replays
+    /// stored random numbers that an earlier pass may have left foreign ([`Self::chain_error`]).
     pub fn validate(&self) -> Result<(), PresetError> {
         let err = |pass: usize, reason: String| PresetError {
             preset: self.name.clone(),
@@ -269,7 +270,38 @@ impl Preset {
                 }
             }
         }
-        Ok(())
+        match self.chain_error() {
+            Some((pass, reason)) => Err(err(pass, reason)),
+            None => Ok(()),
+        }
+    }
+
+    /// The first pass that replays the BSSRDF random numbers a sample stores while an earlier
+    /// pass moves samples keeping numbers drawn at another pixel's x1 ([`crate::StoredNumbers`]), and
+    /// why. "Earlier" is earlier in the frame, or any pass once a temporal pass at or before the
+    /// replaying one carries the previous frame's final reservoirs into the frame.
+    fn chain_error(&self) -> Option<(usize, String)> {
+        let temporal = self
+            .passes
+            .iter()
+            .position(|p| matches!(p, PassSpec::Temporal { .. }));
+        let reuse = |i: usize| Some((self.passes[i], self.passes[i].shift()?.stored_numbers()));
+        (0..self.passes.len()).find_map(|i| {
+            let (pass, numbers) = reuse(i)?;
+            let feeds = |j: usize| j < i || temporal.is_some_and(|t| t <= i && j != i);
+            let (j, (earlier, _)) = (0..self.passes.len())
+                .filter(|&j| feeds(j))
+                .filter_map(|j| Some((j, reuse(j)?)))
+                .find(|(_, (_, e))| numbers.replays_foreign_of(*e))?;
+            Some((
+                i,
+                format!(
+                    "{} replays the random numbers a sample stores, but pass {j} ({}) moves samples keeping numbers drawn at another pixel's x1: biased (use inverting-reconnection-exact there, which re-derives them)",
+                    pass.label(),
+                    earlier.label()
+                ),
+            ))
+        })
     }
 }
 
@@ -354,5 +386,58 @@ mod tests {
             shade: Shade::Selected,
         };
         assert!(p.validate().is_err());
+    }
+
+    /// A pass that replays stored random numbers (delayed, hybrid) after one that keeps them
+    /// while moving samples (reconnection, or the hybrid for delayed) is refused, naming both
+    /// passes; within a frame only the order counts, and a temporal pass makes every pass
+    /// earlier. Every registered preset passes; the bias the rule prevents is measured in
+    /// `shifts/tests/unbiased.rs` (`reconnection_then_delayed_is_biased`).
+    #[test]
+    fn replaying_numbers_another_pass_left_foreign_is_refused() {
+        let with_temporal = |name: &str, shift| {
+            let mut p = Preset::named(name).unwrap();
+            p.passes[1] = temporal(shift);
+            p
+        };
+        // (preset, temporal shift, the replaying pass, the pass that leaves numbers foreign):
+        // across frames the temporal pass replays what the previous frame's hybrid reconnected.
+        for (name, shift, pass, earlier) in [
+            ("sequential", ShiftKind::Reconnection, 3, 1),
+            ("sequential-exact", ShiftKind::Reconnection, 3, 1),
+            ("delayed", ShiftKind::Reconnection, 2, 1),
+            ("hybrid", ShiftKind::Reconnection, 2, 1),
+            ("delayed", ShiftKind::Hybrid, 2, 1),
+            ("delayed", ShiftKind::DistantReconnection, 2, 1),
+            ("hybrid", ShiftKind::DelayedReconnection, 1, 2),
+            ("reconnection", ShiftKind::DelayedReconnection, 1, 2),
+        ] {
+            let e = with_temporal(name, shift).validate().unwrap_err();
+            assert_eq!(e.pass, pass, "{e}");
+            let line = e.to_string();
+            assert!(!line.contains('\n'), "{line}");
+            let cause = format!(
+                "pass {earlier} ({})",
+                with_temporal(name, shift).passes[earlier].label()
+            );
+            assert!(line.contains(&cause) && line.contains("biased"), "{line}");
+        }
+        for (name, shift) in [
+            ("hybrid", ShiftKind::DistantReconnection),
+            ("sequential", ShiftKind::DelayedReconnection),
+            ("sequential", ShiftKind::InvertingExact),
+            ("delayed", ShiftKind::InvertingExact),
+        ] {
+            with_temporal(name, shift).validate().unwrap();
+        }
+        // Without a temporal pass, a reconnection after the delayed pass feeds nothing.
+        let spatial_only = |shifts: [ShiftKind; 2]| Preset {
+            name: "spatial-only".into(),
+            passes: vec![candidates(), spatial(shifts[0], 2), spatial(shifts[1], 2)],
+            shade: Shade::Selected,
+        };
+        use ShiftKind::{DelayedReconnection as D, Reconnection as R};
+        spatial_only([D, R]).validate().unwrap();
+        assert_eq!(spatial_only([R, D]).validate().unwrap_err().pass, 2);
     }
 }

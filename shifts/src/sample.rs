@@ -9,7 +9,9 @@ use restir::reservoir::Reservoir;
 use sss::bssrdf::{BssrdfSample, Technique};
 
 pub(crate) use crate::contract::SssSample;
-use crate::contract::{INDEX_UNKNOWN, PixelReservoir};
+use sss::contract::bssrdf::INDEX_UNKNOWN;
+
+use crate::contract::PixelReservoir;
 
 impl SssSample {
     /// Size of one sample in a GPU buffer.

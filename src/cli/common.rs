@@ -2,6 +2,7 @@
 //! arguments, progress bars and the Ctrl-C flag (also as a `lab::progress::Progress`).
 
 use std::fmt;
+use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Duration;
 
@@ -9,6 +10,8 @@ use clap::{Args, ValueEnum};
 use engine::Backend;
 use indicatif::{ProgressBar, ProgressStyle};
 use sss::InputError;
+use sss::error::{MAX_MESSAGE_CHARS, one_line};
+use sss::limits::{self, MAX_IMAGE_SIDE};
 
 pub use lab::scenes::{LoadedScene, load_scene, with_resolution};
 
@@ -17,9 +20,9 @@ pub use lab::scenes::{LoadedScene, load_scene, with_resolution};
 pub struct CliError(pub String);
 
 impl fmt::Display for CliError {
+    /// One line of at most `sss::error::MAX_MESSAGE_CHARS` characters, elided in the middle.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        // One line: messages from lower layers may carry newlines (e.g. TOML parse errors).
-        f.write_str(&self.0.split_whitespace().collect::<Vec<_>>().join(" "))
+        f.write_str(&one_line(&self.0, MAX_MESSAGE_CHARS))
     }
 }
 
@@ -84,7 +87,7 @@ impl BackendArgs {
                 };
                 match stray {
                     Some((field, value)) => Err(InputError::new(
-                        "(command line)",
+                        COMMAND_LINE,
                         field,
                         value,
                         "only applies with --backend vulkan",
@@ -98,11 +101,19 @@ impl BackendArgs {
     }
 }
 
-/// Parses `WxH` (both ≥ 1 and at most 16384).
+/// The command line as the "file" of flag errors.
+pub const COMMAND_LINE: &str = "(command line)";
+
+/// [`COMMAND_LINE`] as a path, for `sss::limits` checks of flags.
+pub fn command_line() -> &'static Path {
+    Path::new(COMMAND_LINE)
+}
+
+/// Parses `WxH` within `sss::limits` (sides, pixels).
 pub fn parse_resolution(text: &str) -> CliResult<(u32, u32)> {
     let bad = |reason: &str| {
         CliError::from(InputError::new(
-            "(command line)",
+            COMMAND_LINE,
             "--resolution",
             format!("{text:?}"),
             reason,
@@ -115,11 +126,16 @@ pub fn parse_resolution(text: &str) -> CliResult<(u32, u32)> {
         v.trim()
             .parse::<u32>()
             .ok()
-            .filter(|&v| (1..=16384).contains(&v))
+            .filter(|&v| (1..=MAX_IMAGE_SIDE).contains(&v))
     };
     match (parse(w), parse(h)) {
-        (Some(w), Some(h)) => Ok((w, h)),
-        _ => Err(bad("width and height must be integers in 1..=16384")),
+        (Some(w), Some(h)) => {
+            limits::resolution(command_line(), "--resolution", w, h)?;
+            Ok((w, h))
+        }
+        _ => Err(bad(&format!(
+            "width and height must be integers in 1..={MAX_IMAGE_SIDE}"
+        ))),
     }
 }
 

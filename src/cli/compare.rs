@@ -1,17 +1,22 @@
-//! `reshift compare`: K replicas of several methods on one scene against a cached reference
-//! (`lab::compare`); writes `table.md`, `table.csv`, `results.json` (docs/results-schema.md) and
-//! images, and prints the table or the JSON.
+//! `reshift compare`: K replicas of several methods on one scene against cached references
+//! (`lab::compare`); writes `table.md`, `table.csv`, `convergence.csv`, `results.json`
+//! (docs/results-schema.md), images, `figure.png`, `convergence.png` and `report.html`, and
+//! prints the table with the efficiency verdicts over the baseline, or the JSON.
 
 use std::path::PathBuf;
 
 use clap::Args;
-use lab::compare::{self, DEFAULT_METHODS, Plan, parse_methods};
+use lab::compare::{
+    self, DEFAULT_BASELINE, DEFAULT_METHODS, Plan, frame_reference_spp, parse_methods,
+};
 use lab::reference_cache::ReferenceSource;
 use lab::report::file_stem;
 
+use sss::limits;
+
 use super::common::{
-    BackendArgs, Bars, CliError, CliResult, LoadedScene, load_scene, parse_resolution,
-    with_resolution,
+    BackendArgs, Bars, CliError, CliResult, LoadedScene, command_line, load_scene,
+    parse_resolution, with_resolution,
 };
 
 #[derive(Args, Clone, Debug)]
@@ -22,10 +27,14 @@ pub struct CompareArgs {
     /// Comma-separated methods (see `reshift methods`).
     #[arg(long, value_delimiter = ',', default_value = DEFAULT_METHODS)]
     pub methods: Vec<String>,
+    /// The method efficiency ratios are taken against (one of --methods).
+    #[arg(long, default_value = DEFAULT_BASELINE)]
+    pub baseline: String,
     /// Independent replicas per method (seeds 0..K).
     #[arg(long, default_value_t = 8)]
     pub replicas: u32,
-    /// Frames of the camera trajectory; errors are measured on the last one.
+    /// Frames of the camera trajectory; the tables measure the last one, the convergence record
+    /// every one.
     #[arg(long, default_value_t = 16)]
     pub frames: u32,
     /// Every method at its own samples per pixel (the default).
@@ -35,7 +44,7 @@ pub struct CompareArgs {
     #[arg(long, value_name = "SECONDS")]
     pub equal_time: Option<f64>,
     /// Image size WxH.
-    #[arg(long, default_value = "128x96")]
+    #[arg(long, default_value = "256x192")]
     pub resolution: String,
     /// Output folder [default: out/compare-<scene>].
     #[arg(long)]
@@ -46,9 +55,13 @@ pub struct CompareArgs {
     /// Use this reference checkpoint (from `reshift reference`) instead of the cache.
     #[arg(long)]
     pub reference: Option<PathBuf>,
-    /// Samples per pixel of the reference (a multiple of --reference-batch-spp).
-    #[arg(long, default_value_t = 8192)]
+    /// Samples per pixel of the last frame's reference (a multiple of --reference-batch-spp).
+    #[arg(long, default_value_t = 4096)]
     pub reference_spp: u32,
+    /// Samples per pixel of the references of earlier frames (their variance is subtracted);
+    /// 0 measures the last frame only [default: 1/32 of --reference-spp, at least 2 batches].
+    #[arg(long)]
+    pub frame_reference_spp: Option<u32>,
     /// Samples per pixel of one reference batch.
     #[arg(long, default_value_t = 128)]
     pub reference_batch_spp: u32,
@@ -67,8 +80,14 @@ pub fn command(args: &CompareArgs) -> CliResult<()> {
         println!("{}", outcome.results.to_json_pretty());
     } else {
         println!("{}", outcome.markdown);
+        if outcome.results.baseline.is_none() {
+            println!(
+                "No efficiency ratios: the baseline {:?} is not among the methods.",
+                args.baseline
+            );
+        }
         println!(
-            "Images, table.md, table.csv and results.json are in {}",
+            "report.html, figure.png, convergence.png, tables, images and results.json are in {}",
             outcome.out.display()
         );
     }
@@ -84,9 +103,8 @@ fn plan(args: &CompareArgs) -> CliResult<Plan> {
     if methods.is_empty() {
         return Err(CliError("--methods: no method given".into()));
     }
-    if args.replicas == 0 || args.frames == 0 {
-        return Err(CliError("--replicas and --frames must be ≥ 1".into()));
-    }
+    limits::replicas(command_line(), "--replicas", args.replicas)?;
+    limits::frames(command_line(), "--frames", args.frames)?;
     if let Some(t) = args.equal_time
         && !(t.is_finite() && t > 0.0)
     {
@@ -94,10 +112,18 @@ fn plan(args: &CompareArgs) -> CliResult<Plan> {
             "--equal-time {t}: must be a positive number of seconds"
         )));
     }
+    let (spp, batch) = (args.reference_spp, args.reference_batch_spp);
+    let frame_spp = args
+        .frame_reference_spp
+        .unwrap_or_else(|| frame_reference_spp(spp, batch));
+    if frame_spp != 0 && (batch == 0 || frame_spp < 2 * batch || !frame_spp.is_multiple_of(batch)) {
+        return Err(CliError(format!(
+            "--frame-reference-spp {frame_spp} must be 0 or a multiple ≥ 2× of --reference-batch-spp {batch}"
+        )));
+    }
     let reference = match &args.reference {
         Some(path) => ReferenceSource::File(path.clone()),
         None => {
-            let (spp, batch) = (args.reference_spp, args.reference_batch_spp);
             if batch == 0 || spp < 2 * batch || !spp.is_multiple_of(batch) {
                 return Err(CliError(format!(
                     "--reference-spp {spp} must be a multiple ≥ 2× of --reference-batch-spp {batch}"
@@ -121,10 +147,12 @@ fn plan(args: &CompareArgs) -> CliResult<Plan> {
         scene: with_resolution(scene, Some(resolution)),
         scene_key: key,
         methods,
+        baseline: args.baseline.clone(),
         replicas: args.replicas,
         frames: args.frames,
         equal_time: args.equal_time,
         reference,
+        frame_reference_spp: (frame_spp > 0).then_some(frame_spp),
         out,
         backend,
     })

@@ -7,8 +7,11 @@ use std::path::PathBuf;
 use clap::builder::PossibleValue;
 use clap::{Args, ValueEnum};
 use lab::experiments::{Experiment, Settings};
+use sss::InputError;
 
-use super::common::{BackendArgs, Bars, CliResult, parse_resolution};
+use sss::limits;
+
+use super::common::{BackendArgs, Bars, CliResult, command_line, parse_resolution};
 
 /// An experiment name on the command line; the names and their help are
 /// `lab::experiments::Experiment`'s.
@@ -39,15 +42,20 @@ impl ValueEnum for Name {
 #[derive(Args, Clone, Debug)]
 pub struct ExperimentArgs {
     pub name: Name,
-    /// Independent replicas per method.
-    #[arg(long, default_value_t = 16)]
-    pub replicas: u32,
-    /// Image size WxH.
-    #[arg(long, default_value = "128x96")]
-    pub resolution: String,
-    /// Samples per pixel of the references.
-    #[arg(long, default_value_t = 8192)]
-    pub reference_spp: u32,
+    /// Independent replicas per method [default: 16; ground-truth 8].
+    #[arg(long)]
+    pub replicas: Option<u32>,
+    /// Image size WxH [default: 128x96; ground-truth and model-gap 32x24].
+    #[arg(long)]
+    pub resolution: Option<String>,
+    /// Samples per pixel of the references [default: 8192]; ground-truth: of the random walk
+    /// [1024]; model-gap: of each estimator over all replicas [256].
+    #[arg(long)]
+    pub reference_spp: Option<u32>,
+    /// Comma-separated scenes, for ground-truth [default: every built-in scene and
+    /// sphere-<material> for every measured material] and model-gap [7 scenes].
+    #[arg(long, value_delimiter = ',')]
+    pub scenes: Vec<String>,
     /// Output folder [default: out/experiment-<name>].
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -62,13 +70,30 @@ pub struct ExperimentArgs {
 }
 
 pub fn command(args: &ExperimentArgs) -> CliResult<()> {
+    let defaults = args.name.0.defaults();
+    if !args.scenes.is_empty() && !args.name.0.takes_scenes() {
+        return Err(InputError::new(
+            "(command line)",
+            "--scenes",
+            args.scenes.join(","),
+            format!("experiment {} runs its own scenes", args.name.0.name()),
+        )
+        .into());
+    }
+    let replicas = args.replicas.unwrap_or(defaults.replicas);
+    limits::replicas(command_line(), "--replicas", replicas)?;
+    let resolution = match &args.resolution {
+        Some(text) => parse_resolution(text)?,
+        None => defaults.resolution,
+    };
     let settings = Settings {
-        replicas: args.replicas,
-        resolution: parse_resolution(&args.resolution)?,
-        reference_spp: args.reference_spp,
+        replicas,
+        resolution,
+        reference_spp: args.reference_spp.unwrap_or(defaults.reference_spp),
         out: args.out.clone(),
         cache: args.cache.clone(),
         backend: args.backend.open()?,
+        scenes: args.scenes.clone(),
     };
     let report = args.name.0.run(&settings, &mut Bars::default())?;
     if args.json {

@@ -201,8 +201,8 @@ pub fn merge(args: &MergeArgs) -> CliResult<()> {
     let parts = args
         .shards
         .iter()
-        .map(|p| Reference::load(p))
-        .collect::<Result<Vec<_>, _>>()?;
+        .map(|p| Ok((p.clone(), Reference::load(p)?)))
+        .collect::<Result<Vec<_>, CliError>>()?;
     let merged = Reference::merge(parts)?;
     if let Some(parent) = args.out.parent().filter(|p| !p.as_os_str().is_empty()) {
         output_dir(parent)?;

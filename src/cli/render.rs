@@ -1,15 +1,21 @@
 //! `reshift render`: one method, one scene → the final frame as linear EXR and tonemapped PNG,
-//! and its timing.
+//! and its timing; for a method that chooses its sample counts per pixel (`adaptive`), its mean
+//! samples per pixel and the count map as a false-colour PNG with a labelled colour bar (0 … the
+//! most a pixel may take).
 
 use std::path::PathBuf;
 
 use clap::Args;
 use lab::methods::Method;
+use lab::report::plots::false_colour_map;
 use lab::report::{file_stem, output_dir};
 use serde_json::json;
 
+use sss::limits;
+
 use super::common::{
-    BackendArgs, CliResult, json_number, load_scene, parse_resolution, with_resolution,
+    BackendArgs, CliResult, command_line, json_number, load_scene, parse_resolution,
+    with_resolution,
 };
 
 #[derive(Args, Clone, Debug)]
@@ -40,6 +46,7 @@ pub struct RenderArgs {
 }
 
 pub fn command(args: &RenderArgs) -> CliResult<()> {
+    limits::frames(command_line(), "--frames", args.frames)?;
     let method = Method::parse(&args.method)?;
     let loaded = load_scene(&args.scene)?;
     let resolution = args
@@ -58,6 +65,16 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
     );
     rendered.image.write_exr(&exr)?;
     rendered.image.write_png(&png)?;
+    let samples = match &rendered.counts {
+        Some(c) => {
+            let path = out.join(format!("{stem}-samples.png"));
+            let values: Vec<f64> = c.counts.iter().map(|&n| n as f64).collect();
+            let title = format!("{}: samples per pixel", method.name());
+            false_colour_map(&path, &values, (c.width, c.height), c.max as f64, &title)?;
+            Some(path)
+        }
+        None => None,
+    };
     if args.json {
         let value = json!({
             "schema": "reshift-render/1",
@@ -71,8 +88,10 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
             "seed": args.seed,
             "seconds_per_frame": json_number(rendered.seconds_per_frame),
             "nonfinite": rendered.nonfinite,
+            "mean_spp": json_number(rendered.spp),
             "exr": exr.display().to_string(),
             "png": png.display().to_string(),
+            "samples_png": samples.as_ref().map(|p| p.display().to_string()),
         });
         println!(
             "{}",
@@ -80,7 +99,7 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
         );
     } else {
         println!(
-            "{} on {} ({}×{}, frame {} of {}, {}): {:.1} ms/frame over {} rendered frame(s), {} non-finite\n{}\n{}",
+            "{} on {} ({}×{}, frame {} of {}, {}): {:.1} ms/frame over {} rendered frame(s), {:.2} samples per pixel, {} non-finite\n{}\n{}{}",
             method,
             scene.name,
             rendered.image.width,
@@ -90,9 +109,11 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
             backend,
             1e3 * rendered.seconds_per_frame,
             rendered.frames_rendered,
+            rendered.spp,
             rendered.nonfinite,
             exr.display(),
-            png.display()
+            png.display(),
+            samples.map_or(String::new(), |p| format!("\n{}", p.display()))
         );
     }
     Ok(())

@@ -25,23 +25,17 @@
 
 #include "scene.glsl"
 #include "burley.glsl"
+#include "xie.glsl"
+#include "dipole.glsl"
+// BSSRDF_TECHNIQUE_COUNT, BSSRDF_INDEX_UNKNOWN, the axes BSSRDF_AXIS_*, the InvertFail codes
+// BSSRDF_INVERT_* and the radius samplers BSSRDF_RADIUS_* (sss/src/contract.rs).
+#include "contract/sss.glsl"
 
-const uint BSSRDF_TECHNIQUE_COUNT = 9u;
-const uint BSSRDF_AXIS_NORMAL = 0u;
-const uint BSSRDF_AXIS_TANGENT = 1u;
-const uint BSSRDF_AXIS_BITANGENT = 2u;
-// BssrdfSample::index == None (equal to shifts' INDEX_UNKNOWN).
-const uint BSSRDF_INDEX_UNKNOWN = 0xFFFFFFFFu;
 // std::f32::consts::TAU and FRAC_1_PI, as f32.
 const float BSSRDF_TAU = 6.28318548202514648;
 const float BSSRDF_FRAC_1_PI = 0.318309873342514038;
 // 1.0f32 / 3.0 (Rust rounds the quotient once to f32).
 const float BSSRDF_ONE_THIRD = 0.333333343267440796;
-
-// InvertFail codes (0 = Ok).
-const uint BSSRDF_INVERT_OK = 0u;
-const uint BSSRDF_INVERT_OUT_OF_SUPPORT = 1u;
-const uint BSSRDF_INVERT_INDEX_NOT_FOUND = 2u;
 
 // ---------------------------------------------------------------- glam arithmetic
 
@@ -126,6 +120,22 @@ uint bssrdf_selection_sample(TechniqueSelection s, float u) {
         }
     }
     return last;
+}
+
+// RadiusSampling::sample_radius: the disk radius for u under the Burley profile of `d`.
+float bssrdf_radius_sample_radius(uint radius, float d, float u) {
+    if (radius == BSSRDF_RADIUS_XIE) {
+        return xie_sample_radius(d, u);
+    }
+    return burley_sample_radius(d, u);
+}
+
+// RadiusSampling::pdf_disk: the disk-area density of bssrdf_radius_sample_radius at r.
+float bssrdf_radius_pdf_disk(uint radius, float d, float r) {
+    if (radius == BSSRDF_RADIUS_XIE) {
+        return xie_pdf_disk(d, r);
+    }
+    return burley_pdf_disk(d, r);
 }
 
 // Inverse of bssrdf_selection_sample: the interval [lo, hi) of u that selects t, as vec2(lo, hi).
@@ -264,14 +274,20 @@ bool bssrdf_chord(ExitPoint x1, uint t, vec2 disk, out BssrdfRay ray) {
     return true;
 }
 
-// probe_ray: radius by the exact inverse CDF of channel c, angle 2 pi u_angle [001 Eq. 4, Fig. 2b].
-bool bssrdf_probe_ray(ExitPoint x1, uint t, float u_radius, float u_angle, out BssrdfRay ray) {
-    float r = burley_sample_radius(x1.d[bssrdf_technique_channel(t)], u_radius);
+// probe_ray_with: probe_ray with the radius drawn by `radius` (RadiusSampling).
+bool bssrdf_probe_ray_with(ExitPoint x1, uint t, uint radius, float u_radius, float u_angle,
+        out BssrdfRay ray) {
+    float r = bssrdf_radius_sample_radius(radius, x1.d[bssrdf_technique_channel(t)], u_radius);
     precise float phi = BSSRDF_TAU * u_angle;
     float c = cos(phi);
     float s = sin(phi);
     precise vec2 disk = vec2(r * c, r * s);
     return bssrdf_chord(x1, t, disk, ray);
+}
+
+// probe_ray: radius by the exact inverse CDF of channel c, angle 2 pi u_angle [001 Eq. 4, Fig. 2b].
+bool bssrdf_probe_ray(ExitPoint x1, uint t, float u_radius, float u_angle, out BssrdfRay ray) {
+    return bssrdf_probe_ray_with(x1, t, BSSRDF_RADIUS_EXACT, u_radius, u_angle, ray);
 }
 
 // trace_probe: every hit of `ray` on x1's object into bvh_hits, sorted by (t, prim);
@@ -299,19 +315,29 @@ Probe bssrdf_probe_sample(TechniqueSelection selection, float u_technique, float
     return Probe(bssrdf_selection_sample(selection, u_technique), u_radius, u_angle);
 }
 
-// Probe::ray.
-bool bssrdf_probe_chord(Probe probe, ExitPoint x1, out BssrdfRay ray) {
-    return bssrdf_probe_ray(x1, probe.technique, probe.u_radius, probe.u_angle, ray);
+// Probe::ray_with: the chord with the radius drawn by `radius`.
+bool bssrdf_probe_chord_with(Probe probe, ExitPoint x1, uint radius, out BssrdfRay ray) {
+    return bssrdf_probe_ray_with(x1, probe.technique, radius, probe.u_radius, probe.u_angle, ray);
 }
 
-// Probe::trace: the chord's hits on x1's object (none for an empty chord).
-void bssrdf_probe_trace(Probe probe, ExitPoint x1) {
+// Probe::ray.
+bool bssrdf_probe_chord(Probe probe, ExitPoint x1, out BssrdfRay ray) {
+    return bssrdf_probe_chord_with(probe, x1, BSSRDF_RADIUS_EXACT, ray);
+}
+
+// Probe::trace_with: the chord's hits on x1's object (none for an empty chord), radius by `radius`.
+void bssrdf_probe_trace_with(Probe probe, ExitPoint x1, uint radius) {
     BssrdfRay ray;
-    if (bssrdf_probe_chord(probe, x1, ray)) {
+    if (bssrdf_probe_chord_with(probe, x1, radius, ray)) {
         bssrdf_trace_probe(x1, ray);
     } else {
         bvh_hit_count = 0u;
     }
+}
+
+// Probe::trace.
+void bssrdf_probe_trace(Probe probe, ExitPoint x1) {
+    bssrdf_probe_trace_with(probe, x1, BSSRDF_RADIUS_EXACT);
 }
 
 // pick_hit over bvh_hits: rank `index`, or with index == BSSRDF_INDEX_UNKNOWN one picked uniformly
@@ -362,9 +388,10 @@ Probe bssrdf_sample_probe(BssrdfSample s) {
 
 // ---------------------------------------------------------------- pdf.rs
 
-// technique_terms: P(a) P(c) p_{d_c}(r_a) |n2.axis_a| 1[|x2 - x1| <= r_max,c] per technique.
-void bssrdf_technique_terms(ExitPoint x1, TechniqueSelection selection, vec3 x2, vec3 n2,
-        out float terms[9]) {
+// technique_terms_with: P(a) P(c) p_{d_c}(r_a) |n2.axis_a| 1[|x2 - x1| <= r_max,c] per technique,
+// p_{d_c} the density of the radius sampler `radius`.
+void bssrdf_technique_terms_with(ExitPoint x1, TechniqueSelection selection, uint radius, vec3 x2,
+        vec3 n2, out float terms[9]) {
     precise vec3 l = x2 - x1.position;
     precise float distance2 = glam_dot(l, l);
     for (uint t = 0u; t < BSSRDF_TECHNIQUE_COUNT; t++) {
@@ -380,20 +407,33 @@ void bssrdf_technique_terms(ExitPoint x1, TechniqueSelection selection, vec3 x2,
         float r_a = bssrdf_length2(bssrdf_exit_point_disk_coordinates(x1, a, x2));
         vec3 px, py, axis;
         bssrdf_exit_point_disk_basis(x1, a, px, py, axis);
-        precise float term = p * burley_pdf_disk(x1.d[c], r_a) * abs(glam_dot(n2, axis));
+        precise float term = p * bssrdf_radius_pdf_disk(radius, x1.d[c], r_a)
+            * abs(glam_dot(n2, axis));
         terms[t] = term;
     }
 }
 
-// p_disk(x2 | x1): the sum of the technique terms (DESIGN §9).
-float bssrdf_p_disk(ExitPoint x1, TechniqueSelection selection, vec3 x2, vec3 n2) {
+// technique_terms: the terms of the exact radius sampler.
+void bssrdf_technique_terms(ExitPoint x1, TechniqueSelection selection, vec3 x2, vec3 n2,
+        out float terms[9]) {
+    bssrdf_technique_terms_with(x1, selection, BSSRDF_RADIUS_EXACT, x2, n2, terms);
+}
+
+// p_disk_with: the sum of the technique terms of the radius sampler `radius`.
+float bssrdf_p_disk_with(ExitPoint x1, TechniqueSelection selection, uint radius, vec3 x2,
+        vec3 n2) {
     float terms[9];
-    bssrdf_technique_terms(x1, selection, x2, n2, terms);
+    bssrdf_technique_terms_with(x1, selection, radius, x2, n2, terms);
     precise float sum = 0.0;
     for (uint t = 0u; t < BSSRDF_TECHNIQUE_COUNT; t++) {
         sum = sum + terms[t];
     }
     return sum;
+}
+
+// p_disk(x2 | x1): the sum of the technique terms (DESIGN §9).
+float bssrdf_p_disk(ExitPoint x1, TechniqueSelection selection, vec3 x2, vec3 n2) {
+    return bssrdf_p_disk_with(x1, selection, BSSRDF_RADIUS_EXACT, x2, n2);
 }
 
 // ---------------------------------------------------------------- eval.rs
@@ -419,7 +459,7 @@ vec3 bssrdf_bssrdf(GpuMaterial material, ExitPoint x1, EntryPoint x2, vec3 wi) {
     return bssrdf_bssrdf_of_profile(material_albedo(material) * profile, x1, x2, wi);
 }
 
-// contribution: f = S max(0, n2.wi) L_e, unshadowed.
+// contribution: f = S max(0, n2.wi) L_e, unshadowed (eval.rs's `lit` inlined).
 vec3 bssrdf_contribution(GpuMaterial material, ExitPoint x1, EntryPoint x2, vec3 wi,
         vec3 radiance) {
     float cos_i = glam_dot(x2.shading_normal, wi);
@@ -522,6 +562,27 @@ uint bssrdf_invert(ExitPoint x1, TechniqueSelection selection, EntryPoint x2, fl
     }
     result = bssrdf_sample_new(probe, index, x2, p_disk);
     return BSSRDF_INVERT_OK;
+}
+
+// ---------------------------------------------------------------- dipole.rs
+
+// bssrdf_dipole: S = R_d(|x1 - x2|)/pi F_t(n1.wo) F_t(n2.wi) with the dipole profile, truncated at
+// r_max_all, and x1's Fresnel transmittance (bssrdf_of_profile).
+vec3 bssrdf_bssrdf_dipole(GpuDipoleProfiles dipoles, ExitPoint x1, EntryPoint x2, vec3 wi) {
+    float r = glam_length(x2.position - x1.position);
+    return bssrdf_bssrdf_of_profile(dipole_profiles_profile_rgb(dipoles, r), x1, x2, wi);
+}
+
+// contribution_dipole: f = S max(0, n2.wi) L_e with the dipole profile, unshadowed (eval.rs's
+// `lit` inlined, as in bssrdf_contribution).
+vec3 bssrdf_contribution_dipole(GpuDipoleProfiles dipoles, ExitPoint x1, EntryPoint x2, vec3 wi,
+        vec3 radiance) {
+    float cos_i = glam_dot(x2.shading_normal, wi);
+    if (isnan(cos_i) || cos_i <= 0.0) {
+        return vec3(0.0);
+    }
+    precise vec3 f = bssrdf_bssrdf_dipole(dipoles, x1, x2, wi) * cos_i * radiance;
+    return f;
 }
 
 #endif

@@ -12,9 +12,10 @@
 #ifndef SSS_BURLEY_GLSL
 #define SSS_BURLEY_GLSL
 
+// BURLEY_R_MAX_QUANTILE (sss/src/contract.rs).
+#include "contract/sss.glsl"
+
 const float BURLEY_PI = 3.14159265358979323846;
-// The quantile of the radius CDF used as the truncation radius r_max (R_MAX_QUANTILE).
-const float BURLEY_R_MAX_QUANTILE = 0.999;
 
 float burley_infinity() {
     return uintBitsToFloat(0x7F800000u);

@@ -11,6 +11,10 @@
 #ifndef SSS_BVH_GLSL
 #define SSS_BVH_GLSL
 
+// BVH_DEFAULT_MAX_HITS, BVH_NO_HIT and the queries BVH_CLOSEST, BVH_OCCLUDED, BVH_ALL_HITS
+// (sss/src/contract.rs).
+#include "contract/sss.glsl"
+
 // obvhs::cwbvh::node::CwBvhNode, repr(C): p, e[3] + imask, child_base_idx, primitive_base_idx,
 // child_meta[8], then min/max quantised planes per axis (8 bytes each).
 struct CwBvhNode {
@@ -40,11 +44,10 @@ const float BVH_BOX_EXIT_MARGIN = 3.5762793e-7; // bits 0x34C00002, the f32 the 
 const float BVH_MIN_DIR = 1e-20;
 // obvhs's TRAVERSAL_STACK_SIZE (CwBvh::validate asserts the depth stays below it).
 const int BVH_STACK_SIZE = 32;
-// Hits kept by bvh_all_hits_on_object; bvh_hit_count still counts the ones beyond.
+// Hits kept by the all-hits query; bvh_hit_count still counts the ones beyond.
 #ifndef BVH_MAX_HITS
-#define BVH_MAX_HITS 8
+#define BVH_MAX_HITS BVH_DEFAULT_MAX_HITS
 #endif
-const uint BVH_NO_HIT = 0xFFFFFFFFu;
 
 // A ray prepared for traversal: slab inverses and the watertight shear [Woop et al. 2013].
 struct BvhRay {
@@ -222,14 +225,11 @@ float bvh_next_up(float x) {
     return uintBitsToFloat(x > 0.0 ? bits + 1u : bits - 1u);
 }
 
-const int BVH_CLOSEST = 0;
-const int BVH_OCCLUDED = 1;
-const int BVH_ALL_HITS = 2;
-
-// obvhs's traverse! macro with the three visitors of Geometry: closest hit (on `object`, or on
-// any object when it is BVH_NO_HIT), occlusion, and all hits on `object` into bvh_hits.
+// obvhs's traverse! macro with the three visitors of Geometry (`mode`, a BvhQuery code): closest
+// hit (on `object`, or on any object when it is BVH_NO_HIT), occlusion, and all hits on `object`
+// into bvh_hits.
 // Returns the closest hit (closest mode) or whether anything was hit (other modes, in .prim).
-BvhHit bvh_traverse(BvhRay ray, int mode, uint object) {
+BvhHit bvh_traverse(BvhRay ray, uint mode, uint object) {
     BvhHit best;
     best.t = ray.t_max;
     best.prim = BVH_NO_HIT;

@@ -11,10 +11,10 @@
 #include "frame.glsl"
 // GpuLight and its kinds LIGHT_<KIND> (engine/src/contract.rs).
 #include "contract/engine.glsl"
+// LIGHT_DIRECTIONAL_DISTANCE (sss/src/contract.rs).
+#include "contract/sss.glsl"
 
 const float LIGHT_PI = 3.14159265358979323846;
-// DIRECTIONAL_DISTANCE.
-const float LIGHT_DIRECTIONAL_DISTANCE = 1.0e4;
 
 
 // A point sampled on a light as seen from x2 (LightSample).

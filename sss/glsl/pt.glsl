@@ -4,7 +4,7 @@
 // lighting by NEE.
 //
 // The including shader enables GL_EXT_shader_explicit_arithmetic_types_int64 and defines
-// SCENE_BINDING (and BVH_MAX_HITS, if not 8) before the first include; this file includes
+// SCENE_BINDING (and BVH_MAX_HITS, if not BVH_DEFAULT_MAX_HITS) before the first include; this file includes
 // bssrdf.glsl, hence scene.glsl. Hits of a probe beyond BVH_MAX_HITS are not evaluated on the GPU
 // (the CPU has no cap): pt_estimate counts such probes in pt_hit_overflow so a caller can tell a
 // capped estimate from a faithful one.
@@ -15,10 +15,9 @@
 #include "rng.glsl"
 #include "bssrdf.glsl"
 
-// PURPOSE_PT: purpose of the per-sample streams of the baseline.
-const uint PT_PURPOSE_PT = 0x50540001u;
-// SHADOW_EPSILON: shadow-ray origin offset along the normal and shortening at the light.
-const float PT_SHADOW_EPSILON = 1e-4;
+// PT_PURPOSE_PT, PT_SHADOW_EPSILON and the profiles PT_PROFILE_* (PtSettings::profile; no buffer
+// carries it yet) (sss/src/contract.rs).
+#include "contract/sss.glsl"
 // PtParams::hits: PT_HITS_UNIFORM_ONE, PT_HITS_ALL (engine/src/contract.rs).
 #include "contract/engine.glsl"
 // std::f32::consts::FRAC_1_PI.
@@ -50,12 +49,33 @@ bool pt_occluded(vec3 x, vec3 normal, vec3 wi, float distance) {
     return bvh_traverse(ray, BVH_OCCLUDED, BVH_NO_HIT).prim != BVH_NO_HIT;
 }
 
+// PtSettings::radius and ::profile, with the material's dipoles (used under PT_PROFILE_DIPOLE; the
+// Rust Profile enum of estimate).
+struct PtOptions {
+    uint radius;
+    uint profile;
+    GpuDipoleProfiles dipoles;
+};
+
+// The default settings: exact radii, Burley profile.
+PtOptions pt_options_default() {
+    PtOptions o;
+    o.radius = BSSRDF_RADIUS_EXACT;
+    o.profile = PT_PROFILE_BURLEY;
+    o.dipoles.r_max_all = 0.0;
+    for (int c = 0; c < 3; c++) {
+        o.dipoles.channels[c] = GpuDipole(0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    }
+    return o;
+}
+
 // The value of one entry point x2 (the `entry` closure of estimate_translucent): 3 light numbers
 // from rng, f / (p_disk p_light), 0 when unlit, outside the support or shadowed.
-vec3 pt_entry(GpuMaterial material, ExitPoint x1, TechniqueSelection selection, BvhHit hit,
-              inout Stream rng) {
+vec3 pt_entry(GpuMaterial material, ExitPoint x1, TechniqueSelection selection, PtOptions options,
+              BvhHit hit, inout Stream rng) {
     EntryPoint x2 = bssrdf_entry_point_from_hit(hit);
-    precise float p = bssrdf_p_disk(x1, selection, x2.position, x2.geometric_normal);
+    precise float p = bssrdf_p_disk_with(x1, selection, options.radius, x2.position,
+        x2.geometric_normal);
     float u0 = stream_next_f32(rng);
     float u1 = stream_next_f32(rng);
     float u2 = stream_next_f32(rng);
@@ -63,7 +83,9 @@ vec3 pt_entry(GpuMaterial material, ExitPoint x1, TechniqueSelection selection, 
     if (!lights_sample(x2.position, vec3(u0, u1, u2), light)) {
         return vec3(0.0);
     }
-    precise vec3 f = bssrdf_contribution(material, x1, x2, light.wi, light.radiance);
+    precise vec3 f = options.profile == PT_PROFILE_DIPOLE
+        ? bssrdf_contribution_dipole(options.dipoles, x1, x2, light.wi, light.radiance)
+        : bssrdf_contribution(material, x1, x2, light.wi, light.radiance);
     if (!(p > 0.0 && light.pdf > 0.0) || all(equal(f, vec3(0.0)))) {
         return vec3(0.0);
     }
@@ -77,13 +99,14 @@ vec3 pt_entry(GpuMaterial material, ExitPoint x1, TechniqueSelection selection, 
 
 // estimate_translucent: one probe, then every hit (All, summed in rank order [001 Eq. 10]) or
 // one hit picked uniformly and weighted by the hit count (UniformOne [001 Eq. 9]).
-vec3 pt_estimate_translucent(GpuMaterial material, ExitPoint x1, uint hits_policy, inout Stream rng) {
+vec3 pt_estimate_translucent(GpuMaterial material, ExitPoint x1, uint hits_policy,
+        PtOptions options, inout Stream rng) {
     TechniqueSelection selection = bssrdf_selection_default();
     float u_technique = stream_next_f32(rng);
     float u_radius = stream_next_f32(rng);
     float u_angle = stream_next_f32(rng);
     Probe probe = bssrdf_probe_sample(selection, u_technique, u_radius, u_angle);
-    bssrdf_probe_trace(probe, x1);
+    bssrdf_probe_trace_with(probe, x1, options.radius);
     // Shadow rays reset bvh_hit_count (bvh_hits stays): keep the probe's count.
     uint count = bvh_hit_count;
     if (count > uint(BVH_MAX_HITS)) {
@@ -93,7 +116,7 @@ vec3 pt_estimate_translucent(GpuMaterial material, ExitPoint x1, uint hits_polic
     if (hits_policy == PT_HITS_ALL) {
         precise vec3 sum = vec3(0.0);
         for (uint k = 0u; k < kept; k++) {
-            sum = sum + pt_entry(material, x1, selection, bvh_hits[k], rng);
+            sum = sum + pt_entry(material, x1, selection, options, bvh_hits[k], rng);
         }
         return sum;
     }
@@ -103,7 +126,7 @@ vec3 pt_estimate_translucent(GpuMaterial material, ExitPoint x1, uint hits_polic
     if (!bssrdf_pick_hit(BSSRDF_INDEX_UNKNOWN, u_pick, rank, hit)) {
         return vec3(0.0);
     }
-    precise vec3 value = pt_entry(material, x1, selection, hit, rng) * float(count);
+    precise vec3 value = pt_entry(material, x1, selection, options, hit, rng) * float(count);
     return value;
 }
 
@@ -130,17 +153,23 @@ vec3 pt_estimate_lambert(vec3 albedo, GPixel x1, inout Stream rng) {
     return value;
 }
 
-// estimate: one f32 estimate of the radiance leaving x1 toward the camera (Shading::new picks
-// the branch by x1's material).
-vec3 pt_estimate(GPixel x1, uint hits_policy, inout Stream rng) {
+// estimate with the radius sampling, profile (and, under the dipole profile, the dipoles of x1's
+// material) of `options`: one f32 estimate of the radiance leaving x1 toward the camera
+// (Shading::prepare picks the branch by x1's material).
+vec3 pt_estimate_with(GPixel x1, uint hits_policy, PtOptions options, inout Stream rng) {
     GpuMaterial material = scene_material(x1.object);
     if (material_is_translucent(material)) {
         ExitPoint exit_point = bssrdf_exit_point_new(pt_vec3(x1.position),
             pt_vec3(x1.geometric_normal), pt_vec3(x1.shading_normal), pt_vec3(x1.view), x1.object,
             material);
-        return pt_estimate_translucent(material, exit_point, hits_policy, rng);
+        return pt_estimate_translucent(material, exit_point, hits_policy, options, rng);
     }
     return pt_estimate_lambert(material_albedo(material), x1, rng);
+}
+
+// estimate with the default settings (exact radii, Burley profile).
+vec3 pt_estimate(GPixel x1, uint hits_policy, inout Stream rng) {
+    return pt_estimate_with(x1, hits_policy, pt_options_default(), rng);
 }
 
 #endif

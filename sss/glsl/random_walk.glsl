@@ -7,10 +7,11 @@
 // and scene.glsl (the BVH and scene_geometric_normal) before this file, and defines the three
 // exit_lighting_* functions declared below (the ExitLighting trait of lighting.rs).
 //
-// Bounds (no recursion, no allocation): a walk has at most RANDOM_WALK_MAX_BOUNCES segments, as
-// on the CPU (WalkSettings::default), and ends RANDOM_WALK_TRUNCATED there. The mesh boundary
-// skips at most RANDOM_WALK_MAX_ENTRY_SKIPS entering hits per query (the CPU loop is unbounded);
-// past that the walk also ends RANDOM_WALK_TRUNCATED, so the caller counts it with the cap.
+// Bounds (no recursion, no allocation): a walk has at most RANDOM_WALK_DEFAULT_MAX_BOUNCES
+// segments, as on the CPU (WalkSettings::default), and ends RANDOM_WALK_END_TRUNCATED there. The
+// mesh boundary skips at most RANDOM_WALK_MAX_ENTRY_SKIPS entering hits per query (the CPU loop is
+// unbounded); past that the walk also ends RANDOM_WALK_END_TRUNCATED, so the caller counts it with
+// the cap.
 // On lavapipe every loop iteration (the BVH traversal's included) also draws on a budget of
 // 65 535 per invocation group; method_random_walk.glsl runs one walk per dispatch and detects
 // a spent budget.
@@ -26,32 +27,17 @@
 
 #include "frame.glsl"
 #include "fresnel.glsl"
+// RANDOM_WALK_DEFAULT_MAX_BOUNCES, RANDOM_WALK_SMALL_G, the interfaces BOUNDARY_*, the crossings
+// RANDOM_WALK_CROSSING_* and the ends RANDOM_WALK_END_* (sss/src/contract.rs).
+#include "contract/sss.glsl"
 
 const float RANDOM_WALK_TAU = 6.28318530717958647692;
 const float RANDOM_WALK_FRAC_1_PI = 0.318309886183790671538;
 // phase::ISOTROPIC = 0.25 * FRAC_1_PI, computed in f32 as on the CPU.
 const float RANDOM_WALK_ISOTROPIC = 0.25 * RANDOM_WALK_FRAC_1_PI;
-// phase::SMALL_G.
-const float RANDOM_WALK_SMALL_G = 1e-3;
-// walk::DEFAULT_MAX_BOUNCES.
-const uint RANDOM_WALK_MAX_BOUNCES = 65536u;
-// Entering hits MeshBoundary::intersect may skip in one query before the walk is cut off.
+// Entering hits MeshBoundary::intersect may skip in one query before the walk is cut off: a
+// bound of the GPU loop only (the CPU loop has none), so not part of the contract.
 const uint RANDOM_WALK_MAX_ENTRY_SKIPS = 64u;
-
-// Interface (medium.rs), as uploaded in RandomWalkMedium::interface_kind.
-const uint RANDOM_WALK_INDEX_MATCHED = 0u;
-const uint RANDOM_WALK_DIELECTRIC = 1u;
-const uint RANDOM_WALK_DIFFUSE = 2u;
-
-// walk::Crossing: the path leaves with a specular or a diffuse exit direction, or is reflected.
-const uint RANDOM_WALK_LEAVES_SPECULAR = 0u;
-const uint RANDOM_WALK_LEAVES_DIFFUSE = 1u;
-const uint RANDOM_WALK_REFLECTED = 2u;
-
-// WalkEnd (walk.rs).
-const uint RANDOM_WALK_EXITED = 0u;
-const uint RANDOM_WALK_TERMINATED = 1u;
-const uint RANDOM_WALK_TRUNCATED = 2u;
 
 // The medium of one material (std430, 48 bytes; Rust twin engine::vulkan::GpuMedium):
 // Medium::sigma_s() and Medium::sigma_t() as the host computes them, HG g, the interface and
@@ -258,21 +244,21 @@ uint random_walk_mesh_intersect(uint object, bool inward_winding, vec3 origin, v
 uint random_walk_cross(uint interface_kind, float eta, vec3 dir, vec3 normal, inout Stream stream,
                        out vec3 direction) {
     direction = dir;
-    if (interface_kind == RANDOM_WALK_INDEX_MATCHED) {
-        return RANDOM_WALK_LEAVES_SPECULAR;
+    if (interface_kind == BOUNDARY_INDEX_MATCHED) {
+        return RANDOM_WALK_CROSSING_LEAVES_SPECULAR;
     }
-    if (interface_kind == RANDOM_WALK_DIFFUSE) {
-        return RANDOM_WALK_LEAVES_DIFFUSE;
+    if (interface_kind == BOUNDARY_DIFFUSE) {
+        return RANDOM_WALK_CROSSING_LEAVES_DIFFUSE;
     }
     precise float inv_eta = 1.0 / eta;
     float fresnel = fresnel_dielectric(glam_dot(dir, normal), inv_eta);
     vec3 out_dir;
     if (random_walk_refract(dir, -normal, inv_eta, out_dir) && stream_next_f32(stream) >= fresnel) {
         direction = out_dir;
-        return RANDOM_WALK_LEAVES_SPECULAR;
+        return RANDOM_WALK_CROSSING_LEAVES_SPECULAR;
     }
     direction = random_walk_reflect(dir, normal);
-    return RANDOM_WALK_REFLECTED;
+    return RANDOM_WALK_CROSSING_REFLECTED;
 }
 
 // roulette: survival with q = min(1, max_c beta_c); false = killed.
@@ -304,7 +290,7 @@ void random_walk_rescale(inout vec3 beta, inout vec3 r) {
 }
 
 // walk: from `start` along `dir` (into the medium) until it exits, is terminated or truncated.
-// Returns the WalkEnd; `exit` is filled when RANDOM_WALK_EXITED. The loop has a single exit
+// Returns the WalkEnd; `exit` is filled when RANDOM_WALK_END_EXITED. The loop has a single exit
 // (`break`), no `return` inside it.
 uint random_walk_walk(uint object, bool inward_winding, RandomWalkMedium medium, vec3 start,
                       vec3 dir_in, bool roulette, inout Stream stream, out RandomWalkExit exit) {
@@ -319,8 +305,8 @@ uint random_walk_walk(uint object, bool inward_winding, RandomWalkMedium medium,
     vec3 dir = dir_in;
     uint scatter_count = 0u;
     uint reflection_count = 0u;
-    uint end = RANDOM_WALK_TRUNCATED;
-    for (uint bounce = 0u; bounce < RANDOM_WALK_MAX_BOUNCES; bounce++) {
+    uint end = RANDOM_WALK_END_TRUNCATED;
+    for (uint bounce = 0u; bounce < RANDOM_WALK_DEFAULT_MAX_BOUNCES; bounce++) {
         // Free flight with pdf sigma_t,h e^{-sigma_t,h t} [000 slide 54].
         precise float t_collision = -log(1.0 - stream_next_f32(stream)) / sigma_hero;
         float t_hit;
@@ -340,10 +326,11 @@ uint random_walk_walk(uint object, bool inward_winding, RandomWalkMedium medium,
             vec3 out_dir;
             uint crossing =
                 random_walk_cross(medium.interface_kind, medium.eta, dir, normal, stream, out_dir);
-            if (crossing != RANDOM_WALK_REFLECTED) {
-                exit = RandomWalkExit(pos, normal, crossing == RANDOM_WALK_LEAVES_DIFFUSE, out_dir,
-                                      beta, scatter_count, reflection_count);
-                end = RANDOM_WALK_EXITED;
+            if (crossing != RANDOM_WALK_CROSSING_REFLECTED) {
+                bool diffuse = crossing == RANDOM_WALK_CROSSING_LEAVES_DIFFUSE;
+                exit = RandomWalkExit(pos, normal, diffuse, out_dir, beta, scatter_count,
+                                      reflection_count);
+                end = RANDOM_WALK_END_EXITED;
                 break;
             }
             dir = out_dir;
@@ -366,7 +353,7 @@ uint random_walk_walk(uint object, bool inward_winding, RandomWalkMedium medium,
             float pdf;
             henyey_greenstein_sample(medium.g, dir, u, scattered, value, pdf);
             if (isnan(pdf) || pdf <= 0.0) {
-                end = RANDOM_WALK_TERMINATED;
+                end = RANDOM_WALK_END_TERMINATED;
                 break;
             }
             beta *= value / pdf;
@@ -380,7 +367,7 @@ uint random_walk_walk(uint object, bool inward_winding, RandomWalkMedium medium,
                 alive = random_walk_max_element(beta) > 0.0;
             }
             if (!alive) {
-                end = RANDOM_WALK_TERMINATED;
+                end = RANDOM_WALK_END_TERMINATED;
                 break;
             }
             beta = survivor;
@@ -435,11 +422,11 @@ bool random_walk_enter(uint interface_kind, float eta, vec3 n1, vec3 wo, inout S
     if (cos_o <= 0.0) {
         return false;
     }
-    if (interface_kind == RANDOM_WALK_INDEX_MATCHED) {
+    if (interface_kind == BOUNDARY_INDEX_MATCHED) {
         dir = -wo;
         return true;
     }
-    if (interface_kind == RANDOM_WALK_DIELECTRIC) {
+    if (interface_kind == BOUNDARY_DIELECTRIC) {
         // Refraction of the camera ray into the medium, weighted by the transmittance 1 - F.
         if (!random_walk_refract(-wo, n1, eta, dir)) {
             return false;
@@ -456,8 +443,9 @@ bool random_walk_enter(uint interface_kind, float eta, vec3 n1, vec3 wo, inout S
 }
 
 // estimate_exitant_with: one sample of the subsurface radiance leaving x1 (outward normal n1)
-// toward wo, carried by a walk on the mesh `object`. Returns the WalkEnd (RANDOM_WALK_TERMINATED,
-// without drawing, when wo is below the surface); `exit` reports the walk's exit.
+// toward wo, carried by a walk on the mesh `object`. Returns the WalkEnd
+// (RANDOM_WALK_END_TERMINATED, without drawing, when wo is below the surface); `exit` reports the
+// walk's exit.
 uint random_walk_estimate_exitant(uint object, bool inward_winding, RandomWalkMedium medium,
                                   vec3 x1, vec3 n1, vec3 wo, bool roulette, inout Stream stream,
                                   out vec3 radiance, out RandomWalkExit exit) {
@@ -466,10 +454,10 @@ uint random_walk_estimate_exitant(uint object, bool inward_winding, RandomWalkMe
     vec3 dir;
     float entry_weight;
     if (!random_walk_enter(medium.interface_kind, medium.eta, n1, wo, stream, dir, entry_weight)) {
-        return RANDOM_WALK_TERMINATED;
+        return RANDOM_WALK_END_TERMINATED;
     }
     uint end = random_walk_walk(object, inward_winding, medium, x1, dir, roulette, stream, exit);
-    if (end == RANDOM_WALK_EXITED) {
+    if (end == RANDOM_WALK_END_EXITED) {
         precise vec3 l = (entry_weight * exit.weight)
             * random_walk_incident(exit.point, exit.normal, exit.diffuse, exit.direction, stream);
         radiance = l;

@@ -4,7 +4,7 @@
 // by BSSRDF IS (signed); Lambert pixels get the path tracer's direct lighting.
 //
 // The including shader enables GL_EXT_shader_explicit_arithmetic_types_int64, defines
-// SCENE_BINDING (and BVH_MAX_HITS, if not 8), includes scene.glsl, pt.glsl and random_walk.glsl,
+// SCENE_BINDING (and BVH_MAX_HITS, if not BVH_DEFAULT_MAX_HITS), includes scene.glsl, pt.glsl and random_walk.glsl,
 // defines the three exit_lighting_* functions random_walk.glsl declares (the ExitLighting of the
 // exits, e.g. method_random_walk.glsl's SceneLighting twin), and then includes this file (as
 // method_random_walk.glsl does for random_walk.glsl). Compiled with glslc -O -Werror in a
@@ -35,13 +35,9 @@
 #include "pt.glsl"
 #include "random_walk.glsl"
 
-// PURPOSE_SINGLE_SCATTER: purpose of the per-sample streams.
-const uint SINGLE_SCATTER_PURPOSE = 0x53530001u;
-// single_scatter::DEFAULT_MAX_SEGMENTS.
-const uint SINGLE_SCATTER_DEFAULT_MAX_SEGMENTS = 256u;
-// ChannelSelection in declaration order.
-const uint SINGLE_SCATTER_CHANNEL_UNIFORM = 0u;
-const uint SINGLE_SCATTER_CHANNEL_SCATTERING = 1u;
+// SINGLE_SCATTER_PURPOSE_SINGLE_SCATTER, SINGLE_SCATTER_DEFAULT_MAX_SEGMENTS and the
+// ChannelSelection codes SINGLE_SCATTER_CHANNEL_* (sss/src/contract.rs).
+#include "contract/sss.glsl"
 // 1.0f32 / 3.0.
 const float SINGLE_SCATTER_ONE_THIRD = 0.333333343267440796;
 
@@ -70,7 +66,8 @@ vec3 single_scatter_vec3(float v[3]) {
 
 // sample_stream: the stream of sample `sample_index` of `pixel` in `frame`.
 Stream single_scatter_sample_stream(uint pixel, uint frame, uint sample_index, uint64_t seed) {
-    return stream_new(StreamKey(pixel, frame, sample_index, SINGLE_SCATTER_PURPOSE), seed);
+    StreamKey key = StreamKey(pixel, frame, sample_index, SINGLE_SCATTER_PURPOSE_SINGLE_SCATTER);
+    return stream_new(key, seed);
 }
 
 // ChannelSelection::probabilities: sigma_s / sum, or 1/3 (also when the medium does not scatter).
@@ -155,9 +152,9 @@ bool single_scatter_unscattered(uint object, bool inward_winding, RandomWalkMedi
         vec3 out_dir;
         uint crossing =
             random_walk_cross(medium.interface_kind, medium.eta, dir, normal, stream, out_dir);
-        if (crossing != RANDOM_WALK_REFLECTED) {
+        if (crossing != RANDOM_WALK_CROSSING_REFLECTED) {
             precise vec3 l = beta * random_walk_incident(pos, normal,
-                crossing == RANDOM_WALK_LEAVES_DIFFUSE, out_dir, stream);
+                crossing == RANDOM_WALK_CROSSING_LEAVES_DIFFUSE, out_dir, stream);
             light = l;
             return true;
         }
@@ -243,9 +240,9 @@ SingleScatterOrders single_scatter_path_traced(uint object, bool inward_winding,
         vec3 out_dir;
         uint crossing =
             random_walk_cross(medium.interface_kind, medium.eta, dir, normal, stream, out_dir);
-        if (crossing != RANDOM_WALK_REFLECTED) {
+        if (crossing != RANDOM_WALK_CROSSING_REFLECTED) {
             precise vec3 zero = beta * random_walk_incident(pos, normal,
-                crossing == RANDOM_WALK_LEAVES_DIFFUSE, out_dir, stream);
+                crossing == RANDOM_WALK_CROSSING_LEAVES_DIFFUSE, out_dir, stream);
             orders.zero = zero;
             done = true;
             break;

@@ -3,9 +3,14 @@
 //! (path-tracing baseline, progressive reference, volumetric random walk).
 
 pub mod bssrdf;
+/// What the GLSL twins (`sss/glsl/`) share with this crate: per twin its constants and kinds
+/// (`twin::contract!`; rendered to `contract/sss.glsl` by `engine/build.rs`). The modules below
+/// re-export them where they are used.
+pub mod contract;
 pub mod error;
 pub mod geometry;
 pub mod integrator;
+pub mod limits;
 pub mod material;
 pub mod profile;
 pub mod random_walk;

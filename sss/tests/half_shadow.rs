@@ -126,6 +126,7 @@ fn reference_matches_the_half_plane_integral_across_the_shadow_edge() {
                 axis: [1.0, 0.0, 0.0],
                 channel: [1.0 / 3.0; 3],
             },
+            ..PtSettings::default()
         },
     };
     let mut reference = Reference::new(config, 1, gbuffer.height, Shard::WHOLE).unwrap();

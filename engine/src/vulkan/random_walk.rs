@@ -44,7 +44,7 @@ pub struct GpuMedium {
     pub sigma_t: [f32; 3],
     /// Henyey–Greenstein mean cosine.
     pub g: f32,
-    /// [`GpuMedium::INDEX_MATCHED`], [`GpuMedium::DIELECTRIC`] or [`GpuMedium::DIFFUSE`].
+    /// The [`BoundaryKind`](sss::material::BoundaryKind) code of [`Medium::interface`].
     pub interface: u32,
     /// `η` of a dielectric interface (0 otherwise).
     pub eta: f32,
@@ -52,22 +52,18 @@ pub struct GpuMedium {
 }
 
 impl GpuMedium {
-    pub const INDEX_MATCHED: u32 = 0;
-    pub const DIELECTRIC: u32 = 1;
-    pub const DIFFUSE: u32 = 2;
-
     /// The device layout of `medium` (Henyey–Greenstein phase).
     pub fn new(medium: &Medium) -> GpuMedium {
-        let (interface, eta) = match medium.interface() {
-            Interface::IndexMatched => (GpuMedium::INDEX_MATCHED, 0.0),
-            Interface::Dielectric { eta } => (GpuMedium::DIELECTRIC, eta),
-            Interface::Diffuse => (GpuMedium::DIFFUSE, 0.0),
+        let interface = medium.interface();
+        let eta = match interface {
+            Interface::Dielectric { eta } => eta,
+            Interface::IndexMatched | Interface::Diffuse => 0.0,
         };
         GpuMedium {
             sigma_s: medium.sigma_s().to_array(),
             sigma_t: medium.sigma_t().to_array(),
             g: medium.phase().g(),
-            interface,
+            interface: interface.kind().code(),
             eta,
             pad: [0; 3],
         }
@@ -222,7 +218,7 @@ mod tests {
                 Material::Translucent(t) => {
                     let cpu = Medium::from_translucent(t, Path::new("x"), "m").unwrap();
                     assert_eq!(*gpu, GpuMedium::new(&cpu));
-                    assert_eq!(gpu.interface, GpuMedium::DIFFUSE);
+                    assert_eq!(gpu.interface, BoundaryKind::Diffuse.code());
                 }
                 Material::Lambert(_) => assert_eq!(*gpu, GpuMedium::default()),
             }
@@ -239,7 +235,10 @@ mod tests {
             .zip(scene_media(&dielectric).unwrap())
         {
             if let Material::Translucent(t) = m {
-                assert_eq!((gpu.interface, gpu.eta), (GpuMedium::DIELECTRIC, t.ior));
+                assert_eq!(
+                    (gpu.interface, gpu.eta),
+                    (BoundaryKind::Dielectric.code(), t.ior)
+                );
             }
         }
         let mut dmfp = Scene::builtin("bumpy").expect("built-in");

@@ -1,28 +1,32 @@
 //! The diagnostics figures of seed 001: the hybrid criterion's map (Fig. 4), the fraction of
 //! improved samples of hybrid vs. sequential (Fig. 5) and the temporal shift of the sequential
-//! scheme (Fig. 10). Per-pixel diagnostics of `engine::diagnostics` (replica 0, the 16-frame
-//! trajectory) are averaged per region.
+//! scheme (Fig. 10). Per-pixel diagnostics of `engine::diagnostics` (the 16-frame trajectory)
+//! are averaged per region in every replica; findings compare those means by their 95%
+//! intervals over replicas ([`crate::findings`]), maps show replica 0.
 
 use std::path::Path;
 
-use engine::{Backend, Diagnostics, RunConfig};
+use engine::{Diagnostics, RunConfig};
 use serde_json::json;
 use sss::scene::{GBuffer, Scene};
 
 use crate::compare;
 use crate::error::Error;
-use crate::findings::{self, Finding, mse};
+use crate::findings::{self, Quantity, all_above, all_below, mse_below};
+use crate::method_result::Measured;
 use crate::methods::restir;
 use crate::progress::Progress;
 use crate::reference_cache::REFERENCE_SEED;
 use crate::regions::{Region, Regions};
+use crate::report::tables::with_ci;
 use crate::report::{file_stem, output_dir};
 use crate::scenes::{load_scene, with_resolution};
+use crate::uncertainty::Estimate;
 
 use super::setup::{FRAMES, Report, Settings, equal_time_plan};
 
-/// A value averaged over each of [`AREAS`]; `None` where a region is empty.
-type RegionMeans = Vec<Option<f64>>;
+/// Per area of [`AREAS`], a value's region mean over replicas; `None` where a region is empty.
+type RegionMeans = Vec<Option<Estimate>>;
 
 const AREAS: [Region; 4] = [
     Region::Translucent,
@@ -36,36 +40,36 @@ const AREAS: [Region; 4] = [
 pub fn hybrid_map(settings: &Settings) -> Result<Report, Error> {
     let out = output_dir(&settings.out_dir("hybrid-map"))?;
     let (scene, regions) = scene_and_regions(settings, "bumpy")?;
-    let d = diagnostics(&settings.backend, &scene, "restir:hybrid")?;
-    d.hybrid_choice.write_png(out.join("hybrid-choice.png"))?;
+    let runs = replicas(settings, &scene, "restir:hybrid")?;
+    runs[0]
+        .hybrid_choice
+        .write_png(out.join("hybrid-choice.png"))?;
     // The map is yellow → blue by the reconnection fraction (its blue channel); black = no choice.
-    let fraction = |p: usize| {
+    let means = region_means(&runs, &regions, |d, p| {
         let c = d.hybrid_choice.pixels[p];
         (c != glam::Vec3::ZERO).then_some(c.z as f64)
-    };
-    let means: Vec<Option<f64>> = AREAS
-        .iter()
-        .map(|&r| region_mean(&regions, r, fraction))
-        .collect();
-    let mut table = String::from("| region | pixels | reconnection fraction |\n|---|---:|---:|\n");
+    });
+    let mut table =
+        String::from("| region | pixels | reconnection fraction [95% CI] |\n|---|---:|---:|\n");
     for (r, m) in AREAS.iter().zip(&means) {
-        table.push_str(&format!("| {r} | {} | {} |\n", regions.count(*r), fmt(*m)));
+        table.push_str(&format!("| {r} | {} | {} |\n", regions.count(*r), shown(m)));
     }
-    let (lit, shadowed) = (means[1], means[3]);
-    let findings = findings::markdown(&[Finding {
-        claim: "the criterion separates lit (delayed) and shadowed (reconnection) regions".into(),
-        holds: lit.zip(shadowed).map(|(l, s)| s > l),
-        measured: format!(
-            "reconnection fraction lit {}, shadowed {}",
-            fmt(lit),
-            fmt(shadowed)
-        ),
-    }]);
+    let difference = means[3]
+        .as_ref()
+        .zip(means[1].as_ref())
+        .and_then(|(s, l)| s.minus(l));
+    let findings = findings::markdown(&[all_above(
+        "the criterion separates lit (delayed) and shadowed (reconnection) regions".into(),
+        &[("reconnection fraction shadowed − lit".into(), difference)],
+        0.0,
+        false,
+    )]);
     let json = json!({
         "schema": "reshift-experiment/1",
         "experiment": "hybrid-map",
+        "replicas": runs.len(),
         "reconnection_fraction": AREAS.iter().zip(&means)
-            .map(|(r, m)| (r.name().to_string(), json!(m.filter(|v| v.is_finite()))))
+            .map(|(r, m)| (r.name().to_string(), json!(m.as_ref().map(|e| e.value).filter(|v| v.is_finite()))))
             .collect::<serde_json::Map<_, _>>(),
     });
     Report {
@@ -82,17 +86,20 @@ pub fn improved_fraction(settings: &Settings) -> Result<Report, Error> {
     let out = output_dir(&settings.out_dir("improved-fraction"))?;
     let (scene, regions) = scene_and_regions(settings, "bumpy")?;
     let methods = ["restir:hybrid", "restir:sequential"];
-    let (table, means) = improved_table(&settings.backend, &scene, &regions, &methods, &out)?;
-    let found: Vec<Finding> = [(0, Region::Translucent), (2, Region::Penumbra)]
+    let (table, means) = improved_table(settings, &scene, &regions, &methods, &out)?;
+    let found: Vec<_> = [(0, Region::Translucent), (2, Region::Penumbra)]
         .into_iter()
-        .map(|(i, region)| Finding {
-            claim: format!("sequential yields more improved samples than hybrid ({region})"),
-            holds: means[0][i].zip(means[1][i]).map(|(h, s)| s > h),
-            measured: format!(
-                "hybrid {}, sequential {}",
-                fmt(means[0][i]),
-                fmt(means[1][i])
-            ),
+        .map(|(i, region)| {
+            let more = means[1][i]
+                .as_ref()
+                .zip(means[0][i].as_ref())
+                .and_then(|(s, h)| s.minus(h));
+            all_above(
+                format!("sequential yields more improved samples than hybrid ({region})"),
+                &[("improved fraction sequential − hybrid".into(), more)],
+                0.0,
+                false,
+            )
         })
         .collect();
     Report {
@@ -114,29 +121,29 @@ pub fn temporal_shift(settings: &Settings, progress: &mut dyn Progress) -> Resul
         progress,
     )?;
     let (scene, regions) = scene_and_regions(settings, "bumpy")?;
-    let (improved, means) =
-        improved_table(&settings.backend, &scene, &regions, &specs, &outcome.out)?;
+    let (improved, means) = improved_table(settings, &scene, &regions, &specs, &outcome.out)?;
     let r = &outcome.rows;
-    let (a, b) = (
-        mse(r, specs[0], Region::Translucent),
-        mse(r, specs[1], Region::Translucent),
-    );
+    let more = means[0][0]
+        .as_ref()
+        .zip(means[1][0].as_ref())
+        .and_then(|(a, b)| a.minus(b));
+    let error: Quantity = mse_below(r, specs[0], specs[1], Region::Translucent);
     let findings = findings::markdown(&[
-        Finding {
-            claim: "temporal reconnection gives lower error than temporal delayed reconnection"
-                .into(),
-            holds: a.zip(b).map(|(a, b)| a < b),
-            measured: format!(
-                "translucent MSE {:.3e} vs {:.3e}",
-                a.unwrap_or(f64::NAN),
-                b.unwrap_or(f64::NAN)
-            ),
-        },
-        Finding {
-            claim: "temporal reconnection yields more improved samples".into(),
-            holds: means[0][0].zip(means[1][0]).map(|(a, b)| a > b),
-            measured: format!("{} vs {}", fmt(means[0][0]), fmt(means[1][0])),
-        },
+        all_below(
+            "temporal reconnection gives lower error than temporal delayed reconnection".into(),
+            &[error],
+            0.0,
+            true,
+        ),
+        all_above(
+            "temporal reconnection yields more improved samples".into(),
+            &[(
+                "improved fraction reconnection − delayed (translucent)".into(),
+                more,
+            )],
+            0.0,
+            false,
+        ),
     ]);
     let mut report = Report::of_comparison(outcome, findings)?;
     report.table = format!("{}\n{improved}", report.table);
@@ -150,65 +157,83 @@ fn scene_and_regions(settings: &Settings, name: &str) -> Result<(Scene, Regions)
     Ok((scene, regions))
 }
 
-/// Diagnostics of replica 0 of the ReSTIR method `spec` over the trajectory.
-fn diagnostics(backend: &Backend, scene: &Scene, spec: &str) -> Result<Diagnostics, Error> {
+/// Diagnostics of every replica (seeds `0..settings.replicas`) of the ReSTIR method `spec`
+/// over the trajectory.
+fn replicas(settings: &Settings, scene: &Scene, spec: &str) -> Result<Vec<Diagnostics>, Error> {
     let preset = restir::preset(spec.strip_prefix("restir:")).map_err(|reason| {
         Error::Invalid(format!(
             "{spec}: diagnostics need a ReSTIR method; {reason}"
         ))
     })?;
-    let config = RunConfig {
-        seed: 0,
-        frames: FRAMES,
-        collect_diagnostics: true,
-    };
-    backend
-        .run(scene, &preset, &config)?
-        .diagnostics
-        .ok_or_else(|| Error::Invalid(format!("{spec}: the run returned no diagnostics")))
+    (0..settings.replicas.max(1) as u64)
+        .map(|seed| {
+            let config = RunConfig {
+                seed,
+                frames: FRAMES,
+                collect_diagnostics: true,
+            };
+            settings
+                .backend
+                .run(scene, &preset, &config)?
+                .diagnostics
+                .ok_or_else(|| Error::Invalid(format!("{spec}: the run returned no diagnostics")))
+        })
+        .collect()
 }
 
-/// Mean of `value(pixel)` over the pixels of `region` where it is defined.
-fn region_mean(
+/// Per area of [`AREAS`], the mean of `value(diagnostics, pixel)` over the area's pixels where
+/// it is defined, as an estimate over the replicas `runs`; `None` where a replica has no
+/// defined pixel there.
+fn region_means(
+    runs: &[Diagnostics],
     regions: &Regions,
-    region: Region,
-    value: impl Fn(usize) -> Option<f64>,
-) -> Option<f64> {
-    let values: Vec<f64> = regions
-        .pixels(region)
-        .into_iter()
-        .filter_map(value)
-        .collect();
-    (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
+    value: impl Fn(&Diagnostics, usize) -> Option<f64>,
+) -> RegionMeans {
+    AREAS
+        .iter()
+        .map(|&r| {
+            let pixels = regions.pixels(r);
+            let means = runs
+                .iter()
+                .map(|d| {
+                    let values: Vec<f64> = pixels.iter().filter_map(|&p| value(d, p)).collect();
+                    (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
+                })
+                .collect::<Option<Vec<f64>>>()?;
+            Some(Estimate::mean(&means))
+        })
+        .collect()
 }
 
-fn fmt(v: Option<f64>) -> String {
-    v.map_or("-".into(), |v| format!("{v:.3}"))
+/// A region mean with its interval.
+fn shown(m: &Option<Estimate>) -> String {
+    with_ci(m.as_ref().map(Measured::of))
 }
 
 /// Mean improved fraction (shifted samples with a higher target than the canonical one) per
-/// region for each method, as a table; writes each method's map `<method>-improved.png`.
+/// region for each method over replicas, as a table; writes replica 0's map of each method,
+/// `<method>-improved.png`.
 fn improved_table(
-    backend: &Backend,
+    settings: &Settings,
     scene: &Scene,
     regions: &Regions,
     methods: &[&str],
     out: &Path,
 ) -> Result<(String, Vec<RegionMeans>), Error> {
     let mut table = String::from(
-        "| method | translucent | lit | penumbra | shadowed |\n|---|---:|---:|---:|---:|\n",
+        "| method (95% CI over replicas) | translucent | lit | penumbra | shadowed |\n|---|---:|---:|---:|---:|\n",
     );
     let mut all = Vec::new();
     for spec in methods {
-        let d = diagnostics(backend, scene, spec)?;
+        let runs = replicas(settings, scene, spec)?;
         let stem = file_stem(spec);
-        d.improved_fraction
+        runs[0]
+            .improved_fraction
             .write_png(out.join(format!("{stem}-improved.png")))?;
-        let means: RegionMeans = AREAS
-            .iter()
-            .map(|&r| region_mean(regions, r, |p| Some(d.improved_fraction.pixels[p].x as f64)))
-            .collect();
-        let cells: Vec<String> = means.iter().map(|m| fmt(*m)).collect();
+        let means = region_means(&runs, regions, |d, p| {
+            Some(d.improved_fraction.pixels[p].x as f64)
+        });
+        let cells: Vec<String> = means.iter().map(shown).collect();
         table.push_str(&format!("| {spec} | {} |\n", cells.join(" | ")));
         all.push(means);
     }

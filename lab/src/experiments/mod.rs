@@ -1,12 +1,15 @@
 //! Named reproductions of seed 001's figures (DESIGN §7), each ending in a table of the paper's
 //! qualitative findings and whether the measured numbers reproduce them ([`crate::findings`]).
 //! The comparisons (Fig. 6–9) run [`crate::compare`] at equal time; the diagnostics figures
-//! (Fig. 4, 5, 10) average `engine::diagnostics` per region. docs/experiments.md has the protocol
+//! (Fig. 4, 5, 10) average `engine::diagnostics` per region. `ground-truth` measures every
+//! method against the volumetric random walk [000]. docs/experiments.md has the protocol
 //! and measured results.
 
 mod figures;
+pub mod ground_truth;
 mod materials;
 mod mfp_scaling;
+pub mod model_gap;
 mod setup;
 mod shift_comparison;
 
@@ -25,10 +28,20 @@ pub enum Experiment {
     HybridMap,
     ImprovedFraction,
     TemporalShift,
+    GroundTruth,
+    ModelGap,
+}
+
+/// An experiment's default replicas, resolution and reference spp (the command line's).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Defaults {
+    pub replicas: u32,
+    pub resolution: (u32, u32),
+    pub reference_spp: u32,
 }
 
 impl Experiment {
-    pub const ALL: [Experiment; 7] = [
+    pub const ALL: [Experiment; 9] = [
         Experiment::ShiftComparison,
         Experiment::ManyLights,
         Experiment::Materials,
@@ -36,6 +49,8 @@ impl Experiment {
         Experiment::HybridMap,
         Experiment::ImprovedFraction,
         Experiment::TemporalShift,
+        Experiment::GroundTruth,
+        Experiment::ModelGap,
     ];
 
     /// The name on the command line and of the default output folder `out/experiment-<name>`.
@@ -48,6 +63,8 @@ impl Experiment {
             Experiment::HybridMap => "hybrid-map",
             Experiment::ImprovedFraction => "improved-fraction",
             Experiment::TemporalShift => "temporal-shift",
+            Experiment::GroundTruth => "ground-truth",
+            Experiment::ModelGap => "model-gap",
         }
     }
 
@@ -75,11 +92,47 @@ impl Experiment {
             Experiment::TemporalShift => {
                 "Fig. 10: reconnection vs. delayed reconnection in the sequential scheme's temporal pass"
             }
+            Experiment::GroundTruth => {
+                "every method against the volumetric random walk (000): model error, noise, equal-time efficiency"
+            }
+            Experiment::ModelGap => {
+                "the random walk minus the diffusion BSSRDF, split by scattering order, profile and boundary (000)"
+            }
         }
+    }
+
+    /// Its defaults: `ground-truth` (21 scenes, 9 methods, the walk as reference) and
+    /// `model-gap` (7 scenes × 3 boundaries, 8 estimators per sample; `reference_spp` is every
+    /// estimator's total over the replicas) run small; the figures at 128×96, 16 replicas,
+    /// 8192-spp references.
+    pub fn defaults(self) -> Defaults {
+        match self {
+            Experiment::GroundTruth => Defaults {
+                replicas: 8,
+                resolution: (32, 24),
+                reference_spp: 1024,
+            },
+            Experiment::ModelGap => Defaults {
+                replicas: 16,
+                resolution: (32, 24),
+                reference_spp: 256,
+            },
+            _ => Defaults {
+                replicas: 16,
+                resolution: (128, 96),
+                reference_spp: 8192,
+            },
+        }
+    }
+
+    /// Whether it runs a list of scenes that [`Settings::scenes`] may replace.
+    pub fn takes_scenes(self) -> bool {
+        matches!(self, Experiment::GroundTruth | Experiment::ModelGap)
     }
 
     /// Runs the experiment, writing its tables, findings and images into its folder.
     pub fn run(self, settings: &Settings, progress: &mut dyn Progress) -> Result<Report, Error> {
+        settings.check()?;
         let name = self.name();
         match self {
             Experiment::ShiftComparison => shift_comparison::run(settings, "bumpy", name, progress),
@@ -91,6 +144,8 @@ impl Experiment {
             Experiment::HybridMap => figures::hybrid_map(settings),
             Experiment::ImprovedFraction => figures::improved_fraction(settings),
             Experiment::TemporalShift => figures::temporal_shift(settings, progress),
+            Experiment::GroundTruth => ground_truth::run(settings, progress),
+            Experiment::ModelGap => model_gap::run(settings, progress),
         }
     }
 }

@@ -5,8 +5,10 @@ use std::path::{Path, PathBuf};
 
 use engine::Backend;
 use serde_json::Value;
+use sss::InputError;
+use sss::limits;
 
-use crate::compare::{Outcome, Plan, parse_methods};
+use crate::compare::{DEFAULT_BASELINE, Outcome, Plan, frame_reference_spp, parse_methods};
 use crate::error::Error;
 use crate::methods::Method;
 use crate::reference_cache::ReferenceSource;
@@ -33,6 +35,9 @@ pub struct Settings {
     /// Folder of cached references.
     pub cache: PathBuf,
     pub backend: Backend,
+    /// The scenes of an experiment that runs several ([`super::Experiment::takes_scenes`]);
+    /// empty: its own list.
+    pub scenes: Vec<String>,
 }
 
 /// What an experiment produced.
@@ -48,6 +53,14 @@ pub struct Report {
 }
 
 impl Settings {
+    /// The replicas and the resolution within [`sss::limits`].
+    pub fn check(&self) -> Result<(), InputError> {
+        let origin = Path::new("(experiment settings)");
+        let (width, height) = self.resolution;
+        limits::replicas(origin, "replicas", self.replicas)?;
+        limits::resolution(origin, "resolution", width, height)
+    }
+
     /// The output folder of experiment `name`.
     pub fn out_dir(&self, name: &str) -> PathBuf {
         self.out
@@ -100,6 +113,7 @@ pub fn equal_time_plan(
         scene: scene_at,
         scene_key: loaded.key,
         methods: parse_methods(methods)?,
+        baseline: DEFAULT_BASELINE.into(),
         replicas: settings.replicas,
         frames: FRAMES,
         equal_time: Some(times[1]),
@@ -108,6 +122,10 @@ pub fn equal_time_plan(
             spp: settings.reference_spp,
             batch_spp: REFERENCE_BATCH_SPP,
         },
+        frame_reference_spp: Some(frame_reference_spp(
+            settings.reference_spp,
+            REFERENCE_BATCH_SPP,
+        )),
         out: out.to_path_buf(),
         backend: settings.backend.clone(),
     })

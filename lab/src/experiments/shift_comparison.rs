@@ -3,7 +3,7 @@
 
 use crate::compare::{self, DEFAULT_METHODS};
 use crate::error::Error;
-use crate::findings::{self, Finding, best, mse};
+use crate::findings::{self, Finding, Quantity, all_below, cost_below, mse_below};
 use crate::method_result::MethodResult;
 use crate::progress::Progress;
 use crate::regions::Region;
@@ -31,73 +31,74 @@ pub fn run(
     Report::of_comparison(outcome, table)
 }
 
-/// Seed 001 §6 (Fig. 6, 7): reconnection wins in shadow, delayed reconnection in the light, hybrid and
-/// sequential over all translucent pixels, and every preset beats path tracing where the light
-/// is hard to reach.
+/// Seed 001 §6 (Fig. 6, 7): reconnection wins in shadow, delayed reconnection in the light,
+/// hybrid and sequential over all translucent pixels, and every preset beats path tracing
+/// where the light is hard to reach; each decided by the intervals of MSE ratios (equal spp)
+/// or of MSE·s ratios (equal time) ([`findings`]).
 fn shift_findings(r: &[MethodResult]) -> Vec<Finding> {
-    let fmt = |m: &str, region| mse(r, m, region).map_or("-".into(), |v| format!("{v:.3e}"));
-    let list = |region| {
+    let [reconnection, delayed, hybrid, sequential] = PRESETS;
+    let others = |best: &str, region| -> Vec<Quantity> {
         PRESETS
             .iter()
-            .chain(["pt", "pt:1"].iter())
-            .map(|m| format!("{}={}", m.trim_start_matches("restir:"), fmt(m, region)))
-            .collect::<Vec<_>>()
-            .join(", ")
+            .filter(|&&m| m != best)
+            .map(|m| mse_below(r, best, m, region))
+            .collect()
     };
-    let below = |a: &str, b: &str, region| Some(mse(r, a, region)? < mse(r, b, region)?);
     let mut findings = vec![
-        Finding {
-            claim: "reconnection has lower error than delayed reconnection in shadowed regions"
-                .into(),
-            holds: below("restir:reconnection", "restir:delayed", Region::Shadowed),
-            measured: list(Region::Shadowed),
-        },
-        Finding {
-            claim: "delayed reconnection has lower error than reconnection in lit regions".into(),
-            holds: below("restir:delayed", "restir:reconnection", Region::Lit),
-            measured: list(Region::Lit),
-        },
-        Finding {
-            claim: "reconnection has the lowest error in shadowed regions".into(),
-            holds: best(r, &PRESETS, Region::Shadowed).map(|b| b == "restir:reconnection"),
-            measured: list(Region::Shadowed),
-        },
-        Finding {
-            claim: "delayed reconnection has the lowest error in lit regions".into(),
-            holds: best(r, &PRESETS, Region::Lit).map(|b| b == "restir:delayed"),
-            measured: list(Region::Lit),
-        },
-        Finding {
-            claim: "hybrid and sequential are best over all translucent pixels".into(),
-            holds: (|| {
-                let worst_new = mse(r, "restir:hybrid", Region::Translucent)?.max(mse(
-                    r,
-                    "restir:sequential",
-                    Region::Translucent,
-                )?);
-                let best_old = mse(r, "restir:reconnection", Region::Translucent)?.min(mse(
-                    r,
-                    "restir:delayed",
-                    Region::Translucent,
-                )?);
-                Some(worst_new < best_old)
-            })(),
-            measured: list(Region::Translucent),
-        },
+        all_below(
+            "reconnection has lower error than delayed reconnection in shadowed regions".into(),
+            &[mse_below(r, reconnection, delayed, Region::Shadowed)],
+            0.0,
+            true,
+        ),
+        all_below(
+            "delayed reconnection has lower error than reconnection in lit regions".into(),
+            &[mse_below(r, delayed, reconnection, Region::Lit)],
+            0.0,
+            true,
+        ),
+        all_below(
+            "reconnection has the lowest error in shadowed regions".into(),
+            &others(reconnection, Region::Shadowed),
+            0.0,
+            true,
+        ),
+        all_below(
+            "delayed reconnection has the lowest error in lit regions".into(),
+            &others(delayed, Region::Lit),
+            0.0,
+            true,
+        ),
+        all_below(
+            "hybrid and sequential are best over all translucent pixels".into(),
+            &[
+                mse_below(r, hybrid, reconnection, Region::Translucent),
+                mse_below(r, hybrid, delayed, Region::Translucent),
+                mse_below(r, sequential, reconnection, Region::Translucent),
+                mse_below(r, sequential, delayed, Region::Translucent),
+            ],
+            0.0,
+            true,
+        ),
     ];
     for (pt, budget) in [("pt:1", "1-spp (equal-spp)"), ("pt", "equal-time")] {
         for region in [Region::Shadowed, Region::Penumbra] {
-            findings.push(Finding {
-                claim: format!(
-                    "every ReSTIR preset is below {budget} path tracing in {region} regions"
-                ),
-                holds: mse(r, pt, region).map(|pt| {
-                    PRESETS
-                        .iter()
-                        .all(|m| mse(r, m, region).is_some_and(|v| v < pt))
-                }),
-                measured: list(region),
-            });
+            let quantities: Vec<Quantity> = PRESETS
+                .iter()
+                .map(|m| {
+                    if pt == "pt" {
+                        cost_below(r, m, pt, region)
+                    } else {
+                        mse_below(r, m, pt, region)
+                    }
+                })
+                .collect();
+            findings.push(all_below(
+                format!("every ReSTIR preset is below {budget} path tracing in {region} regions"),
+                &quantities,
+                0.0,
+                true,
+            ));
         }
     }
     findings

@@ -2,11 +2,14 @@
 //! [`Entry`] that registers a family of methods by name.
 
 use std::fmt;
+use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
 use engine::image::Image;
 use engine::{Backend, PipelineError};
+use sss::integrator::pt::PtSettings;
+use sss::limits::{self, MAX_SPP};
 use sss::scene::Scene;
 
 /// One family of methods: `family[:argument]`.
@@ -41,6 +44,81 @@ pub trait Estimator: fmt::Debug + Send + Sync + 'static {
         frames: u32,
         seed: u64,
     ) -> Result<Frame, PipelineError>;
+
+    /// [`Estimator::render`] with the per-pixel sample counts of the returned frame, for a
+    /// method that chooses them itself (adaptive sampling). The default is `render` and `None`:
+    /// every pixel with a primary hit takes [`Estimator::spp`] samples.
+    fn render_counted(
+        &self,
+        backend: &Backend,
+        scene: &Scene,
+        frames: u32,
+        seed: u64,
+    ) -> Result<(Frame, Option<SampleCounts>), PipelineError> {
+        Ok((self.render(backend, scene, frames, seed)?, None))
+    }
+
+    /// The path-tracer settings whose converged image this method estimates, i.e. its
+    /// reference in `bias` (DESIGN §7): the default path tracer (Burley BSSRDF) unless the
+    /// method renders another transport model (`image-space`: the dipole profile).
+    fn reference(&self) -> PtSettings {
+        PtSettings::default()
+    }
+
+    /// Renders replica `seed` like [`Estimator::render`] and returns every frame `0..frames`,
+    /// with the sample counts of the last (as [`Estimator::render_counted`]). The default
+    /// renders each frame `f` on its own (`render_counted` of `f + 1` frames): right and cheap
+    /// for a memoryless estimator. An estimator with memory across frames overrides it with
+    /// one run of the trajectory.
+    fn render_trajectory(
+        &self,
+        backend: &Backend,
+        scene: &Scene,
+        frames: u32,
+        seed: u64,
+    ) -> Result<Trajectory, PipelineError> {
+        let mut trajectory = Trajectory {
+            frames: Vec::with_capacity(frames as usize),
+            frames_rendered: 0,
+            nonfinite: 0,
+            counts: None,
+        };
+        for f in 1..=frames {
+            let (frame, counts) = self.render_counted(backend, scene, f, seed)?;
+            trajectory.frames.push(frame.image);
+            trajectory.frames_rendered += frame.frames_rendered;
+            trajectory.nonfinite += frame.nonfinite;
+            trajectory.counts = counts;
+        }
+        Ok(trajectory)
+    }
+}
+
+/// The samples each pixel of a frame took, for a method that chooses them per pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SampleCounts {
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel, row-major from the top row (0 without a primary hit).
+    pub counts: Vec<u32>,
+    /// The most samples a pixel may take (the top of the count map's scale).
+    pub max: u32,
+}
+
+impl SampleCounts {
+    /// The mean count over `pixels` (indices into `counts`); 0 for none.
+    pub fn mean_over(&self, pixels: &[usize]) -> f64 {
+        let sum: u64 = pixels.iter().map(|&p| self.counts[p] as u64).sum();
+        sum as f64 / pixels.len().max(1) as f64
+    }
+
+    /// The mean count over the pixels with a primary hit (those with a count > 0).
+    pub fn mean(&self) -> f64 {
+        let hit: Vec<usize> = (0..self.counts.len())
+            .filter(|&p| self.counts[p] > 0)
+            .collect();
+        self.mean_over(&hit)
+    }
 }
 
 /// The output of [`Estimator::render`].
@@ -54,6 +132,19 @@ pub struct Frame {
     pub nonfinite: u64,
 }
 
+/// The output of [`Estimator::render_trajectory`].
+#[derive(Clone, Debug)]
+pub struct Trajectory {
+    /// Linear RGB of frames `0..frames`.
+    pub frames: Vec<Image>,
+    /// Frames rendered to produce them.
+    pub frames_rendered: u32,
+    /// Shaded values that were NaN or infinite, over all frames.
+    pub nonfinite: u64,
+    /// Per-pixel sample counts of the last frame (`None`: [`Estimator::spp`] everywhere).
+    pub counts: Option<SampleCounts>,
+}
+
 /// The final frame of one replica of a method, and what it cost.
 #[derive(Clone, Debug)]
 pub struct Rendered {
@@ -65,6 +156,12 @@ pub struct Rendered {
     pub frames_rendered: u32,
     /// Shaded values that were NaN or infinite (written as 0 or left out of the mean).
     pub nonfinite: u64,
+    /// Mean samples per pixel of the frame over the pixels with a primary hit: the method's
+    /// [`Method::spp`], or the mean of `counts` for a method that chooses them per pixel. An
+    /// equal-cost comparison holds this equal, not `spp`.
+    pub spp: f64,
+    /// Per-pixel sample counts of the frame (`None`: `spp` everywhere).
+    pub counts: Option<SampleCounts>,
 }
 
 /// A rendering method: a shared [`Estimator`]. Two methods are equal when their canonical
@@ -83,7 +180,8 @@ impl Method {
         self.0.name()
     }
 
-    /// Samples per pixel per frame: the path tracers' `spp`, 1 candidate for ReSTIR.
+    /// Samples per pixel per frame: the path tracers' `spp`, 1 candidate for ReSTIR; for a method
+    /// that chooses counts per pixel, the most a pixel may take (the mean is [`Rendered::spp`]).
     pub fn spp(&self) -> u32 {
         self.0.spp()
     }
@@ -100,6 +198,11 @@ impl Method {
         self.render_on(&Backend::Cpu, scene, frames, seed)
     }
 
+    /// The path-tracer settings of this method's reference ([`Estimator::reference`]).
+    pub fn reference(&self) -> PtSettings {
+        self.0.reference()
+    }
+
     /// [`Method::render`] on `backend`, timed: `seconds_per_frame` is wall-clock time per
     /// rendered frame, including read-back on Vulkan.
     pub fn render_on(
@@ -109,17 +212,47 @@ impl Method {
         frames: u32,
         seed: u64,
     ) -> Result<Rendered, PipelineError> {
-        if frames == 0 {
-            return Err(PipelineError::Config("frames = 0; need at least 1".into()));
-        }
+        let origin = Path::new("(run)");
+        let (width, height) = (scene.camera.width(), scene.camera.height());
+        limits::frames(origin, "frames", frames)
+            .and_then(|_| limits::resolution(origin, "width×height", width, height))
+            .and_then(|_| {
+                let bytes = limits::run_bytes(width as u64 * height as u64, frames);
+                let value = format!("{frames} frames at {width}×{height}");
+                limits::memory(origin, "frames", &value, bytes, "the run")
+            })
+            .map_err(|e| PipelineError::Config(e.to_string()))?;
         let start = Instant::now();
-        let frame = self.0.render(backend, scene, frames, seed)?;
+        let (frame, counts) = self.0.render_counted(backend, scene, frames, seed)?;
         Ok(Rendered {
             seconds_per_frame: start.elapsed().as_secs_f64() / frame.frames_rendered as f64,
             image: frame.image,
             frames_rendered: frame.frames_rendered,
             nonfinite: frame.nonfinite,
+            spp: counts
+                .as_ref()
+                .map_or(self.spp() as f64, SampleCounts::mean),
+            counts,
         })
+    }
+
+    /// [`Estimator::render_trajectory`] of replica `seed` on `backend`, timed like
+    /// [`Method::render_on`]: the returned `seconds_per_frame` is the wall-clock time of the
+    /// whole trajectory per rendered frame.
+    pub fn render_trajectory_on(
+        &self,
+        backend: &Backend,
+        scene: &Scene,
+        frames: u32,
+        seed: u64,
+    ) -> Result<(Trajectory, f64), PipelineError> {
+        if frames == 0 {
+            return Err(PipelineError::Config("frames = 0; need at least 1".into()));
+        }
+        let start = Instant::now();
+        let trajectory = self.0.render_trajectory(backend, scene, frames, seed)?;
+        let seconds = start.elapsed().as_secs_f64() / trajectory.frames_rendered.max(1) as f64;
+        Ok((trajectory, seconds))
     }
 }
 
@@ -141,15 +274,26 @@ impl fmt::Display for Method {
     }
 }
 
-/// `spp` of `family[:spp]`: 1 without an argument, else a positive integer.
+/// `spp` of `family[:spp]`: 1 without an argument, else an integer in `1..=`[`MAX_SPP`].
 pub fn parse_spp(arg: Option<&str>) -> Result<u32, String> {
     match arg {
         None => Ok(1),
         Some(text) => match text.parse::<u32>() {
-            Ok(n) if n > 0 => Ok(n),
+            Ok(n) if (1..=MAX_SPP).contains(&n) => Ok(n),
             _ => Err(format!(
-                "samples per pixel {text:?} is not a positive integer"
+                "samples per pixel {text:?} is not an integer in 1..={MAX_SPP}"
             )),
         },
+    }
+}
+
+/// `Ok` on the CPU; on another backend the one-line error of a method (`family`) whose device
+/// kernels do not exist yet.
+pub fn cpu_only(backend: &Backend, family: &str) -> Result<(), PipelineError> {
+    match backend.renderer() {
+        None => Ok(()),
+        Some(_) => Err(PipelineError::Config(format!(
+            "{family} is not yet available on Vulkan (use --backend cpu)"
+        ))),
     }
 }

@@ -1,20 +1,25 @@
 //! Rendering methods by name (DESIGN §7): `pt[:spp]`, `restir:<preset>`, `random-walk[:spp]`,
-//! `pt-one-hit[:spp]`.
+//! `pt-one-hit[:spp]`, `single-scatter[:spp]`, `image-space[:spp]`, `adaptive[:options]`.
 //!
-//! A method renders the final frame of a scene's camera trajectory for one replica seed on a
-//! backend. Each family is one file implementing [`Estimator`] with its [`Entry`] (family,
+//! A method renders the final frame of a scene's camera trajectory (or every frame of it) for
+//! one replica seed on a backend. Each family is one file implementing [`Estimator`] with its [`Entry`] (family,
 //! usage, about, build); [`REGISTRY`] lists the entries, one line each. Adding a method is that
 //! file plus its `mod` line and its registry line (docs/adding-a-method.md).
 
+pub mod adaptive;
 mod estimator;
+pub mod image_space;
 pub mod pt;
 pub mod pt_one_hit;
 pub mod random_walk;
 pub mod restir;
+pub mod single_scatter;
 
 use std::fmt;
 
-pub use estimator::{Entry, Estimator, Frame, Method, Rendered, parse_spp};
+pub use estimator::{
+    Entry, Estimator, Frame, Method, Rendered, SampleCounts, Trajectory, cpu_only, parse_spp,
+};
 
 /// Every method family the CLI knows, in the order `reshift methods` lists them.
 pub const REGISTRY: &[Entry] = &[
@@ -22,6 +27,9 @@ pub const REGISTRY: &[Entry] = &[
     restir::ENTRY,
     random_walk::ENTRY,
     pt_one_hit::ENTRY,
+    single_scatter::ENTRY,
+    image_space::ENTRY,
+    adaptive::ENTRY,
 ];
 
 /// A method specification that could not be parsed.

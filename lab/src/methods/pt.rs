@@ -84,13 +84,7 @@ pub fn path_trace(
                 ..PtSettings::default()
             };
             let image = pt::render(scene, &gbuffer, &settings, seed, 0, spp);
-            let pixels = image.pixels.iter().map(|p| p.as_vec3()).collect();
-            let converted = Image {
-                width: image.width,
-                height: image.height,
-                pixels,
-            };
-            (converted, image.nonfinite)
+            (to_image(&image), image.nonfinite)
         }
     };
     Ok(Frame {
@@ -98,6 +92,15 @@ pub fn path_trace(
         frames_rendered: 1,
         nonfinite,
     })
+}
+
+/// The `f32` image of an integrator's `f64` per-pixel means.
+pub fn to_image(image: &pt::Image) -> Image {
+    Image {
+        width: image.width,
+        height: image.height,
+        pixels: image.pixels.iter().map(|p| p.as_vec3()).collect(),
+    }
 }
 
 #[cfg(test)]

@@ -11,7 +11,7 @@ use engine::{Backend, PassSpec, PipelineError, Preset, RunConfig, Shade, ShiftKi
 use shifts::preset::PRESET_NAMES;
 use sss::scene::Scene;
 
-use super::estimator::{Entry, Estimator, Frame, Method};
+use super::estimator::{Entry, Estimator, Frame, Method, Trajectory};
 
 pub const ENTRY: Entry = Entry {
     family: "restir",
@@ -67,6 +67,7 @@ pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
         };
     }
     preset.name = arg.to_string();
+    preset.validate().map_err(|e| e.to_string())?;
     Ok(preset)
 }
 
@@ -135,6 +136,34 @@ impl Estimator for Restir {
             nonfinite: result.nan_count,
         })
     }
+
+    /// One run of the trajectory: `engine::Run::frames` holds every frame.
+    fn render_trajectory(
+        &self,
+        backend: &Backend,
+        scene: &Scene,
+        frames: u32,
+        seed: u64,
+    ) -> Result<Trajectory, PipelineError> {
+        let config = RunConfig {
+            seed,
+            frames,
+            collect_diagnostics: false,
+        };
+        let result = backend.run(scene, &self.0, &config)?;
+        if result.frames.len() != frames as usize {
+            return Err(PipelineError::Config(format!(
+                "the run returned {} frames, not {frames}",
+                result.frames.len()
+            )));
+        }
+        Ok(Trajectory {
+            frames: result.frames,
+            frames_rendered: frames,
+            nonfinite: result.nan_count,
+            counts: None,
+        })
+    }
 }
 
 #[cfg(test)]
@@ -190,6 +219,7 @@ mod tests {
             "restir:hybrid/cap",
             "restir:sequential/temporal=nope",
             "restir:nope/temporal=delayed",
+            "restir:sequential/temporal=reconnection",
         ] {
             assert_eq!(Method::parse(bad).expect_err(bad).spec, bad);
         }

@@ -1,7 +1,11 @@
-//! What a job writes besides images: output folders and text files ([`output_dir`],
-//! [`write_text`]), the comparison table as Markdown and CSV ([`tables`]) and `results.json` as
-//! typed structs ([`results`]).
+//! What a job writes: output folders and text files ([`output_dir`], [`write_text`]), the
+//! comparison tables as Markdown and CSV with their intervals ([`tables`]), `results.json` as
+//! typed structs ([`results`]), plots ([`plots`]), the inset figure ([`figure`]) and the
+//! self-contained `report.html` ([`html`]).
 
+pub mod figure;
+pub mod html;
+pub mod plots;
 pub mod results;
 pub mod tables;
 

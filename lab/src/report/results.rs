@@ -1,4 +1,4 @@
-//! `results.json` of a comparison (schema `reshift-compare/1`, docs/results-schema.md) as typed
+//! `results.json` of a comparison (schema `reshift-compare/2`, docs/results-schema.md) as typed
 //! structs. Optional and non-finite numbers are written as `null`, never NaN; keys are written
 //! in sorted order ([`Results::to_json`]).
 
@@ -8,12 +8,14 @@ use std::path::Path;
 use serde::Serialize;
 use sss::integrator::Reference;
 
-use crate::method_result::MethodResult;
-use crate::metrics::{AreaMetrics, BIAS_CONFIDENCE, REL_EPSILON, efficiency};
+use crate::method_result::{FrameMetrics, Measured, MethodResult};
+use crate::metrics::{AreaMetrics, BIAS_CONFIDENCE, REL_EPSILON};
+use crate::reference_cache::Obtained;
 use crate::regions::{Region, Regions};
+use crate::uncertainty::{CONFIDENCE, INTERVAL_METHOD, Interval};
 
 /// The schema name written into [`Results::schema`].
-pub const SCHEMA: &str = "reshift-compare/1";
+pub const SCHEMA: &str = "reshift-compare/2";
 
 /// The whole document.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -24,19 +26,29 @@ pub struct Results {
     pub backend: String,
     pub width: u32,
     pub height: u32,
-    /// Frames of the trajectory; errors are measured on the last, `frame`.
+    /// Frames of the trajectory; the tables measure the last, `frame`.
     pub frames: u32,
     pub frame: u32,
     pub replicas: u32,
     pub budget: Budget,
+    /// The reference of the last frame.
     pub reference: ReferenceEntry,
+    /// The reference of every measured frame, ascending (the last is `reference`).
+    pub frame_references: Vec<FrameReferenceEntry>,
     pub rel_epsilon: f64,
     pub bias_confidence: f64,
+    /// The confidence of every interval except the bias's.
+    pub confidence: f64,
+    /// How the intervals are computed ([`INTERVAL_METHOD`]).
+    pub interval_method: String,
+    /// The method efficiency and MSE ratios are taken against (`null`: none, no ratios).
+    pub baseline: Option<String>,
     /// Whether the caller stopped the comparison before every replica was rendered.
     pub interrupted: bool,
-    /// Pixels per region.
+    /// Pixels per region at the last frame.
     pub regions: BTreeMap<String, usize>,
     pub error_map_scale: ErrorMapScale,
+    pub figures: FigureFiles,
     pub methods: Vec<MethodEntry>,
 }
 
@@ -49,6 +61,7 @@ pub struct RunEntry {
     pub frames: u32,
     pub replicas: u32,
     pub equal_time: Option<f64>,
+    pub baseline: Option<String>,
     pub interrupted: bool,
 }
 
@@ -71,6 +84,16 @@ pub struct ReferenceEntry {
     pub cached: bool,
 }
 
+/// The reference of one measured frame.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FrameReferenceEntry {
+    pub frame: u32,
+    pub spp: u64,
+    pub batches: u32,
+    pub path: String,
+    pub cached: bool,
+}
+
 /// The values at the top of the false-colour scales, shared by all methods' error maps.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct ErrorMapScale {
@@ -87,18 +110,37 @@ pub struct ImageFiles {
     pub rel_error_png: String,
 }
 
+/// The comparison's figures, relative to the output folder.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FigureFiles {
+    /// Reference and methods side by side with insets of each region (seed 001 Fig. 6).
+    pub figure: String,
+    /// MSE against frame, one panel per region.
+    pub convergence: String,
+    /// The self-contained HTML report.
+    pub report: String,
+}
+
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct MethodEntry {
     pub method: String,
     pub spp: u32,
+    pub mean_spp: f64,
     pub replicas: usize,
+    /// Mean over replicas of the wall-clock seconds per rendered frame.
     pub seconds_per_frame: f64,
+    pub seconds_per_frame_ci: Option<Interval>,
+    /// One timing per replica, by seed.
+    pub seconds_per_frame_replicas: Vec<f64>,
     pub frames_rendered: u32,
     pub nonfinite: u64,
     pub tonemapped_mse: f64,
+    pub tonemapped_mse_ci: Option<Interval>,
     pub tonemapped_rmse: f64,
     pub images: ImageFiles,
     pub areas: Vec<AreaEntry>,
+    /// The MSE per area at every measured frame, ascending.
+    pub convergence: Vec<ConvergenceEntry>,
 }
 
 /// docs/results-schema.md explains each field.
@@ -107,7 +149,9 @@ pub struct AreaEntry {
     pub area: String,
     pub pixels: usize,
     pub mse: f64,
+    pub mse_ci: Option<Interval>,
     pub rel_mse: f64,
+    pub rel_mse_ci: Option<Interval>,
     pub reference_mean: f64,
     pub bias: f64,
     pub bias_ci99: Option<f64>,
@@ -115,6 +159,29 @@ pub struct AreaEntry {
     pub variance: Option<f64>,
     pub reference_mse: f64,
     pub efficiency: Option<f64>,
+    pub efficiency_ci: Option<Interval>,
+    pub efficiency_ratio: Option<f64>,
+    pub efficiency_ratio_ci: Option<Interval>,
+    pub mse_ratio: Option<f64>,
+    pub mse_ratio_ci: Option<Interval>,
+}
+
+/// The errors of one frame.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ConvergenceEntry {
+    pub frame: u32,
+    pub areas: Vec<ConvergenceArea>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ConvergenceArea {
+    pub area: String,
+    pub pixels: usize,
+    pub mse: f64,
+    pub mse_ci: Option<Interval>,
+    pub rel_mse: f64,
+    pub rel_mse_ci: Option<Interval>,
+    pub reference_mse: f64,
 }
 
 impl Results {
@@ -123,8 +190,10 @@ impl Results {
     pub fn new(
         run: RunEntry,
         reference: ReferenceEntry,
+        frame_references: Vec<FrameReferenceEntry>,
         regions: &Regions,
         error_map_scale: ErrorMapScale,
+        figures: FigureFiles,
         methods: Vec<MethodEntry>,
     ) -> Results {
         Results {
@@ -138,11 +207,16 @@ impl Results {
             replicas: run.replicas,
             budget: Budget::new(run.equal_time),
             reference,
+            frame_references,
             rel_epsilon: REL_EPSILON,
             bias_confidence: BIAS_CONFIDENCE,
+            confidence: CONFIDENCE,
+            interval_method: INTERVAL_METHOD.into(),
+            baseline: run.baseline,
             interrupted: run.interrupted,
             regions: region_counts(regions),
             error_map_scale,
+            figures,
             methods,
         }
     }
@@ -185,41 +259,107 @@ impl ReferenceEntry {
     }
 }
 
+impl FrameReferenceEntry {
+    pub fn new(obtained: &Obtained) -> FrameReferenceEntry {
+        let r = &obtained.reference;
+        FrameReferenceEntry {
+            frame: r.config.frame,
+            spp: r.batches_done() as u64 * r.config.spp_per_batch as u64,
+            batches: r.batches_done(),
+            path: obtained.path.display().to_string(),
+            cached: obtained.cached,
+        }
+    }
+}
+
+/// `(value, interval)` of an optional measured number.
+fn split(m: Option<Measured>) -> (Option<f64>, Option<Interval>) {
+    (m.map(|m| m.value), m.and_then(|m| m.ci))
+}
+
 impl MethodEntry {
-    pub fn new(r: &MethodResult, images: ImageFiles) -> MethodEntry {
+    /// The entry of `r`, with ratios to `baseline` when there is one.
+    pub fn new(
+        r: &MethodResult,
+        baseline: Option<&MethodResult>,
+        images: ImageFiles,
+    ) -> MethodEntry {
+        let seconds = Measured::of(&r.seconds);
+        let tonemapped = Measured::of(&r.tonemapped_mse);
         MethodEntry {
             method: r.method.clone(),
             spp: r.spp,
+            mean_spp: r.mean_spp,
             replicas: r.replicas,
-            seconds_per_frame: r.seconds_per_frame,
+            seconds_per_frame: seconds.value,
+            seconds_per_frame_ci: seconds.ci,
+            seconds_per_frame_replicas: r.seconds.influences().to_vec(),
             frames_rendered: r.frames_rendered,
             nonfinite: r.nonfinite,
-            tonemapped_mse: r.tonemapped_mse,
-            tonemapped_rmse: r.tonemapped_mse.sqrt(),
+            tonemapped_mse: tonemapped.value,
+            tonemapped_mse_ci: tonemapped.ci,
+            tonemapped_rmse: tonemapped.value.max(0.0).sqrt(),
             images,
             areas: r
                 .metrics
                 .iter()
-                .map(|m| AreaEntry::new(m, r.seconds_per_frame))
+                .map(|m| AreaEntry::new(m, r, baseline))
                 .collect(),
+            convergence: r.convergence.iter().map(ConvergenceEntry::new).collect(),
         }
     }
 }
 
 impl AreaEntry {
-    pub fn new(m: &AreaMetrics, seconds_per_frame: f64) -> AreaEntry {
+    pub fn new(m: &AreaMetrics, r: &MethodResult, baseline: Option<&MethodResult>) -> AreaEntry {
+        let (mse, rel) = (Measured::of(&m.mse), Measured::of(&m.rel_mse));
+        let (efficiency, efficiency_ci) = split(r.efficiency(m.area));
+        let (efficiency_ratio, efficiency_ratio_ci) =
+            split(baseline.and_then(|b| r.efficiency_ratio(b, m.area)));
+        let (mse_ratio, mse_ratio_ci) = split(baseline.and_then(|b| r.mse_ratio(b, m.area)));
         AreaEntry {
             area: m.area.name().to_string(),
             pixels: m.pixels,
-            mse: m.mse,
-            rel_mse: m.rel_mse,
+            mse: mse.value,
+            mse_ci: mse.ci,
+            rel_mse: rel.value,
+            rel_mse_ci: rel.ci,
             reference_mean: m.reference_mean,
             bias: m.bias,
             bias_ci99: m.bias_ci,
             relative_bias: (m.reference_mean > 0.0).then(|| m.bias / m.reference_mean),
             variance: m.variance,
             reference_mse: m.reference_mse,
-            efficiency: efficiency(m.mse, seconds_per_frame),
+            efficiency,
+            efficiency_ci,
+            efficiency_ratio,
+            efficiency_ratio_ci,
+            mse_ratio,
+            mse_ratio_ci,
+        }
+    }
+}
+
+impl ConvergenceEntry {
+    pub fn new(f: &FrameMetrics) -> ConvergenceEntry {
+        ConvergenceEntry {
+            frame: f.frame,
+            areas: f
+                .metrics
+                .iter()
+                .map(|m| {
+                    let (mse, rel) = (Measured::of(&m.mse), Measured::of(&m.rel_mse));
+                    ConvergenceArea {
+                        area: m.area.name().to_string(),
+                        pixels: m.pixels,
+                        mse: mse.value,
+                        mse_ci: mse.ci,
+                        rel_mse: rel.value,
+                        rel_mse_ci: rel.ci,
+                        reference_mse: m.reference_mse,
+                    }
+                })
+                .collect(),
         }
     }
 }
@@ -243,7 +383,12 @@ mod tests {
             area: "image".into(),
             pixels: 4,
             mse: f64::NAN,
+            mse_ci: Some(Interval {
+                lo: 0.5,
+                hi: f64::INFINITY,
+            }),
             rel_mse: 0.5,
+            rel_mse_ci: None,
             reference_mean: 0.0,
             bias: f64::INFINITY,
             bias_ci99: None,
@@ -251,10 +396,17 @@ mod tests {
             variance: Some(0.25),
             reference_mse: 0.0,
             efficiency: Some(f64::NAN),
+            efficiency_ci: None,
+            efficiency_ratio: None,
+            efficiency_ratio_ci: None,
+            mse_ratio: None,
+            mse_ratio_ci: None,
         };
         let json = serde_json::to_value(&area).unwrap();
         assert!(json["mse"].is_null() && json["bias"].is_null());
         assert!(json["bias_ci99"].is_null() && json["efficiency"].is_null());
+        assert_eq!(json["mse_ci"]["lo"], 0.5);
+        assert!(json["mse_ci"]["hi"].is_null() && json["rel_mse_ci"].is_null());
         assert_eq!(json["variance"], 0.25);
         let keys: Vec<&String> = json.as_object().unwrap().keys().collect();
         assert!(keys.windows(2).all(|w| w[0] < w[1]), "{keys:?}");

@@ -1,44 +1,82 @@
-//! The comparison table of `reshift compare` as Markdown and CSV: one row per method and area.
+//! The comparison's tables: per method and area as Markdown ([`markdown`]) and CSV ([`csv`]),
+//! every number with its 95% interval `value [lo, hi]`; the efficiency of each method over the
+//! baseline with its verdict ([`verdict`]); and the per-frame MSE ([`convergence_csv`]).
 
 use std::fmt::Write as _;
 
-use crate::method_result::MethodResult;
-use crate::metrics::{AreaMetrics, efficiency};
+use crate::method_result::{Measured, MethodResult};
+use crate::metrics::Area;
+use crate::uncertainty::Interval;
 
 /// Column names of [`csv`], in order.
-pub const CSV_HEADER: &str = "method,spp,replicas,area,pixels,ms_per_frame,mse,rel_mse,bias,bias_ci99,relative_bias,variance,reference_mse,efficiency,tonemapped_mse,tonemapped_rmse";
+pub const CSV_HEADER: &str = "method,spp,mean_spp,replicas,area,pixels,ms_per_frame,ms_per_frame_lo,ms_per_frame_hi,mse,mse_lo,mse_hi,rel_mse,rel_mse_lo,rel_mse_hi,bias,bias_ci99,relative_bias,variance,reference_mse,efficiency,efficiency_lo,efficiency_hi,efficiency_ratio,efficiency_ratio_lo,efficiency_ratio_hi,tonemapped_mse,tonemapped_mse_lo,tonemapped_mse_hi";
 
-/// `mse` relative to the row with the lowest `mse` in the same area, e.g. `×1.00` for the best.
-fn rank(results: &[MethodResult], row: &AreaMetrics) -> String {
-    let best = results
-        .iter()
-        .filter_map(|r| r.metrics.iter().find(|m| m.area == row.area))
-        .map(|m| m.mse)
-        .fold(f64::INFINITY, f64::min);
-    if best > 0.0 && best.is_finite() {
-        format!("×{:.2}", row.mse / best)
+/// Column names of [`convergence_csv`], in order.
+pub const CONVERGENCE_HEADER: &str = "method,frame,area,pixels,mse,mse_lo,mse_hi,reference_mse";
+
+/// `v` with three significant digits: fixed between 0.01 and 1000, else scientific.
+pub fn sig(v: f64) -> String {
+    let a = v.abs();
+    if !v.is_finite() {
+        if v > 0.0 { "∞" } else { "-" }.into()
+    } else if a == 0.0 {
+        "0".into()
+    } else if (0.01..1000.0).contains(&a) {
+        let decimals = (2 - a.log10().floor() as i32).max(0) as usize;
+        format!("{v:.decimals$}")
     } else {
-        "-".into()
+        format!("{v:.2e}")
     }
 }
 
-fn relative_bias(m: &AreaMetrics) -> Option<f64> {
+/// `value [lo, hi]`, or the value alone without an interval; `-` for no value.
+pub fn with_ci(m: Option<Measured>) -> String {
+    match m {
+        None => "-".into(),
+        Some(Measured { value, ci: None }) => sig(value),
+        Some(Measured {
+            value,
+            ci: Some(Interval { lo, hi }),
+        }) => format!("{} [{}, {}]", sig(value), sig(lo), sig(hi)),
+    }
+}
+
+/// The verdict of an efficiency ratio over the baseline by its interval: `better` (entirely
+/// above 1), `worse` (entirely below), else `inconclusive`.
+pub fn verdict_word(ratio: &Measured) -> &'static str {
+    match ratio.ci {
+        Some(i) if i.above(1.0) => "better",
+        Some(i) if i.below(1.0) => "worse",
+        _ => "inconclusive",
+    }
+}
+
+fn relative_bias(r: &MethodResult, area: Area) -> Option<f64> {
+    let m = r.area(area)?;
     (m.reference_mean > 0.0).then(|| m.bias / m.reference_mean)
 }
 
-fn opt(v: Option<f64>, digits: usize) -> String {
-    v.map_or("-".into(), |v| format!("{v:.digits$e}"))
+/// Milliseconds per frame with its interval.
+fn milliseconds(r: &MethodResult) -> Measured {
+    let s = Measured::of(&r.seconds);
+    Measured {
+        value: 1e3 * s.value,
+        ci: s.ci.map(|i| Interval {
+            lo: 1e3 * i.lo,
+            hi: 1e3 * i.hi,
+        }),
+    }
 }
 
-/// The Markdown table: per method and area, MSE (and its ratio to the best method in that
-/// area), relMSE, bias ± 99% CI (relative to the reference mean), per-pixel variance,
-/// ms/frame and efficiency `1/(MSE·s)`; the whole-frame (`image`) row also carries seed 001's
-/// tonemapped 8-bit MSE and RMSE.
-pub fn markdown(results: &[MethodResult]) -> String {
-    let mut out = String::new();
-    out.push_str(
-        "| method | spp | area | px | MSE | vs best | relMSE | bias ± 99% CI | rel. bias | variance | ms/frame | efficiency | TM-8bit RMSE |\n\
-         |---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+/// The Markdown table: per method and area, MSE and relMSE (the reference's variance
+/// subtracted), bias ± 99% CI (also relative to the reference mean), ms/frame, efficiency
+/// `1/(MSE·s)` and its ratio to `baseline`, each with its 95% interval; the whole-frame
+/// (`image`) row also carries seed 001's tonemapped 8-bit MSE.
+pub fn markdown(results: &[MethodResult], baseline: Option<&MethodResult>) -> String {
+    let base = baseline.map_or("baseline".into(), |b| b.method.clone());
+    let mut out = format!(
+        "| method | spp | area | px | MSE [95% CI] | relMSE [95% CI] | bias ± 99% CI | rel. bias | ms/frame [95% CI] | efficiency [95% CI] | eff. / {base} [95% CI] | TM-8bit MSE [95% CI] |\n\
+         |---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
     );
     for r in results {
         for m in &r.metrics {
@@ -46,27 +84,27 @@ pub fn markdown(results: &[MethodResult]) -> String {
                 Some(ci) => format!("{:+.2e} ± {ci:.1e}", m.bias),
                 None => format!("{:+.2e}", m.bias),
             };
-            let rel = relative_bias(m).map_or("-".into(), |b| format!("{:+.2}%", 100.0 * b));
-            let tm = if m.area == crate::metrics::Area::Image {
-                format!("{:.4}", r.tonemapped_mse.sqrt())
+            let rel =
+                relative_bias(r, m.area).map_or("-".into(), |b| format!("{:+.2}%", 100.0 * b));
+            let tm = if m.area == Area::Image {
+                with_ci(Some(Measured::of(&r.tonemapped_mse)))
             } else {
                 String::new()
             };
             let _ = writeln!(
                 out,
-                "| {} | {} | {} | {} | {:.3e} | {} | {:.3e} | {} | {} | {} | {:.1} | {} | {} |",
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 r.method,
-                r.spp,
+                spp_cell(r),
                 m.area.name(),
                 m.pixels,
-                m.mse,
-                rank(results, m),
-                m.rel_mse,
+                with_ci(Some(Measured::of(&m.mse))),
+                with_ci(Some(Measured::of(&m.rel_mse))),
                 bias,
                 rel,
-                opt(m.variance, 2),
-                1e3 * r.seconds_per_frame,
-                opt(efficiency(m.mse, r.seconds_per_frame), 2),
+                with_ci(Some(milliseconds(r))),
+                with_ci(r.efficiency(m.area)),
+                with_ci(baseline.and_then(|b| r.efficiency_ratio(b, m.area))),
                 tm,
             );
         }
@@ -74,32 +112,110 @@ pub fn markdown(results: &[MethodResult]) -> String {
     out
 }
 
-/// The same rows as CSV with [`CSV_HEADER`]; empty cells for values that do not exist.
-pub fn csv(results: &[MethodResult]) -> String {
+/// The efficiency of every other method over `baseline` per area, `ratio [lo, hi] verdict`
+/// ([`verdict_word`]), as Markdown; empty without a baseline.
+pub fn verdict(results: &[MethodResult], baseline: Option<&MethodResult>) -> String {
+    let Some(b) = baseline else {
+        return String::new();
+    };
+    let areas: Vec<Area> = Area::ALL
+        .into_iter()
+        .filter(|&a| b.area(a).is_some())
+        .collect();
+    let names: Vec<&str> = areas.iter().map(|a| a.name()).collect();
+    let mut out = format!(
+        "Efficiency over {} (ratio of 1/(MSE·s) per frame, 95% CI over replicas; > 1: more \
+         efficient; the verdict is the interval's):\n\n| method | {} |\n|---|{}\n",
+        b.method,
+        names.join(" | "),
+        "---:|".repeat(areas.len())
+    );
+    for r in results.iter().filter(|r| r.method != b.method) {
+        let cells: Vec<String> = areas
+            .iter()
+            .map(|&a| match r.efficiency_ratio(b, a) {
+                Some(m) => format!("{} {}", with_ci(Some(m)), verdict_word(&m)),
+                None => "-".into(),
+            })
+            .collect();
+        let _ = writeln!(out, "| {} | {} |", r.method, cells.join(" | "));
+    }
+    out
+}
+
+/// CSV cells of an optional measured number: value, lo, hi (empty when absent).
+fn cells(m: Option<Measured>) -> String {
+    let cell = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:e}"));
+    let ci = m.and_then(|m| m.ci);
+    format!(
+        "{},{},{}",
+        cell(m.map(|m| m.value)),
+        cell(ci.map(|i| i.lo)),
+        cell(ci.map(|i| i.hi))
+    )
+}
+
+/// The `spp` cell: the method's spp, or `mean ≤ max` for a method that chooses its counts per
+/// pixel.
+fn spp_cell(r: &MethodResult) -> String {
+    if r.mean_spp == r.spp as f64 {
+        r.spp.to_string()
+    } else {
+        format!("{:.1} ≤ {}", r.mean_spp, r.spp)
+    }
+}
+
+/// The rows of [`markdown`] as CSV with [`CSV_HEADER`]; empty cells for values that do not
+/// exist.
+pub fn csv(results: &[MethodResult], baseline: Option<&MethodResult>) -> String {
     let mut out = format!("{CSV_HEADER}\n");
     let cell = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:e}"));
     for r in results {
         for m in &r.metrics {
             let _ = writeln!(
                 out,
-                "{},{},{},{},{},{},{:e},{:e},{:e},{},{},{},{:e},{},{:e},{:e}",
+                "{},{},{},{},{},{},{},{},{},{:e},{},{},{},{:e},{},{},{}",
                 r.method,
                 r.spp,
+                r.mean_spp,
                 r.replicas,
                 m.area.name(),
                 m.pixels,
-                1e3 * r.seconds_per_frame,
-                m.mse,
-                m.rel_mse,
+                cells(Some(milliseconds(r))),
+                cells(Some(Measured::of(&m.mse))),
+                cells(Some(Measured::of(&m.rel_mse))),
                 m.bias,
                 cell(m.bias_ci),
-                cell(relative_bias(m)),
+                cell(relative_bias(r, m.area)),
                 cell(m.variance),
                 m.reference_mse,
-                cell(efficiency(m.mse, r.seconds_per_frame)),
-                r.tonemapped_mse,
-                r.tonemapped_mse.sqrt(),
+                cells(r.efficiency(m.area)),
+                cells(baseline.and_then(|b| r.efficiency_ratio(b, m.area))),
+                cells(Some(Measured::of(&r.tonemapped_mse))),
             );
+        }
+    }
+    out
+}
+
+/// The MSE of every method, frame and area with its interval, as CSV with
+/// [`CONVERGENCE_HEADER`].
+pub fn convergence_csv(results: &[MethodResult]) -> String {
+    let mut out = format!("{CONVERGENCE_HEADER}\n");
+    for r in results {
+        for f in &r.convergence {
+            for m in &f.metrics {
+                let _ = writeln!(
+                    out,
+                    "{},{},{},{},{},{:e}",
+                    r.method,
+                    f.frame,
+                    m.area.name(),
+                    m.pixels,
+                    cells(Some(Measured::of(&m.mse))),
+                    m.reference_mse
+                );
+            }
         }
     }
     out
@@ -108,58 +224,103 @@ pub fn csv(results: &[MethodResult]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::metrics::Area;
+    use crate::method_result::FrameMetrics;
+    use crate::metrics::AreaMetrics;
     use crate::regions::Region;
+    use crate::uncertainty::Estimate;
 
+    /// Two replicas with MSE `mse · (1 ± 0.1)` and 0.5 s/frame ± 0.05.
     fn result(method: &str, mse: f64) -> MethodResult {
         let m = |area| AreaMetrics {
             area,
             pixels: 10,
             replicas: 2,
-            mse,
-            rel_mse: mse,
+            mse: Estimate::mean(&[0.9 * mse, 1.1 * mse]),
+            rel_mse: Estimate::mean(&[mse, mse]),
             reference_mean: 0.5,
             bias: 0.01,
             bias_ci: Some(0.02),
             variance: Some(mse),
             reference_mse: 0.0,
         };
+        let metrics = vec![m(Area::Image), m(Area::Region(Region::Shadowed))];
         MethodResult {
             method: method.into(),
             spp: 1,
+            mean_spp: 1.0,
             replicas: 2,
-            seconds_per_frame: 0.5,
+            seconds: Estimate::mean(&[0.45, 0.55]),
             frames_rendered: 16,
-            metrics: vec![m(Area::Image), m(Area::Region(Region::Shadowed))],
-            tonemapped_mse: 0.25,
+            convergence: vec![FrameMetrics {
+                frame: 15,
+                metrics: metrics.clone(),
+            }],
+            metrics,
+            tonemapped_mse: Estimate::mean(&[0.25, 0.25]),
             nonfinite: 0,
         }
     }
 
     #[test]
-    fn tables_have_one_row_per_method_and_area() {
+    fn numbers_print_with_three_significant_digits() {
+        assert_eq!(sig(0.5234), "0.523");
+        assert_eq!(sig(12.345), "12.3");
+        assert_eq!(sig(1.0), "1.00");
+        assert_eq!(sig(0.001234), "1.23e-3");
+        assert_eq!(sig(f64::INFINITY), "∞");
+        let m = Measured {
+            value: 2.0,
+            ci: Some(Interval { lo: 1.5, hi: 2.5 }),
+        };
+        assert_eq!(with_ci(Some(m)), "2.00 [1.50, 2.50]");
+        assert_eq!(verdict_word(&m), "better");
+    }
+
+    #[test]
+    fn tables_have_one_row_per_method_and_area_with_intervals() {
         let results = [result("pt:1", 0.2), result("restir:hybrid", 0.1)];
-        let md = markdown(&results);
+        let baseline = Some(&results[0]);
+        let md = markdown(&results, baseline);
         assert_eq!(md.lines().count(), 2 + 4, "{md}");
+        // MSE 0.1 from {0.09, 0.11}: s.e. 0.01, t_1(0.975) = 12.706 → [-0.027, 0.227].
         assert!(
-            md.contains("| restir:hybrid | 1 | shadowed | 10 | 1.000e-1 | ×1.00 |"),
+            md.contains("| restir:hybrid | 1 | shadowed | 10 | 0.100 [-0.0271, 0.227] |"),
             "{md}"
         );
-        assert!(
-            md.contains("| pt:1 | 1 | image | 10 | 2.000e-1 | ×2.00 |"),
-            "{md}"
-        );
+        assert!(md.contains("| eff. / pt:1 [95% CI] |"), "{md}");
         assert!(md.contains("+2.00%"), "relative bias 0.01/0.5: {md}");
-        let csv = csv(&results);
+        let adaptive = MethodResult {
+            spp: 64,
+            mean_spp: 12.34,
+            ..result("adaptive", 0.1)
+        };
+        assert!(
+            markdown(&[adaptive], None).contains("| adaptive | 12.3 ≤ 64 | image |"),
+            "a method that chooses its counts shows their mean and maximum"
+        );
+        let csv = csv(&results, baseline);
         let columns = CSV_HEADER.split(',').count();
         assert_eq!(csv.lines().count(), 1 + 4);
         for line in csv.lines() {
             assert_eq!(line.split(',').count(), columns, "{line}");
         }
-        // efficiency = 1 / (0.2 · 0.5) = 10; tonemapped RMSE = √0.25 = 0.5.
+        // Efficiency = 1 / (0.2 · 0.5) = 10 (column 21); the tonemapped MSE has no spread.
+        let row = csv.lines().nth(1).unwrap();
+        let efficiency: f64 = row.split(',').nth(20).unwrap().parse().unwrap();
+        assert!((efficiency - 10.0).abs() < 1e-9, "{row}");
+        assert!(row.ends_with(",2.5e-1,2.5e-1,2.5e-1"), "{row}");
+        let v = verdict(&results, baseline);
+        assert!(v.contains("| restir:hybrid | 2.00 ["), "{v}");
         assert!(
-            csv.lines().nth(1).unwrap().ends_with(",1e1,2.5e-1,5e-1"),
-            "{csv}"
+            !v.contains("| pt:1 |"),
+            "no row for the baseline itself: {v}"
+        );
+        assert_eq!(verdict(&results, None), "");
+        let conv = convergence_csv(&results);
+        assert_eq!(conv.lines().count(), 1 + 4);
+        assert!(
+            conv.contains("restir:hybrid,15,shadowed,10,1e-1,"),
+            "{conv}"
         );
     }
 }

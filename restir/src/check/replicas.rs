@@ -96,14 +96,10 @@ pub fn unbiasedness(
         .collect();
     let rejected = holm(&p_values, alpha).iter().filter(|&&r| r).count();
     let total = image_equivalence(estimates, reference, delta, confidence);
-    let verdict = match total.verdict {
-        Verdict::Unbiased => "unbiased",
-        Verdict::Biased => "biased",
-        Verdict::Inconclusive => "inconclusive",
-    };
+    let verdict = total.verdict.name();
     CheckReport::new(
         CheckName::Unbiasedness,
-        rejected == 0 && total.verdict == Verdict::Unbiased,
+        rejected == 0 && total.verdict == Verdict::Equivalent,
         &[
             ("replicas", estimates.len() as f64),
             ("pixels", reference.len() as f64),

@@ -1,4 +1,5 @@
-//! The equivalence test that alone may declare an estimator unbiased (DESIGN §3).
+//! The equivalence test: the only test that may call an estimator's bias negligible, by showing it
+//! lies within ±δ (DESIGN §3).
 
 use std::fmt;
 
@@ -10,15 +11,39 @@ use super::welch::{satterthwaite, welch};
 ///
 /// With `CI` the two-sided `confidence` interval of the relative bias and
 /// `p_zero_bias` the Welch p-value of "no bias" (α = 1 − confidence):
-/// * `Unbiased` ⇔ `CI ⊂ (−δ, +δ)`;
-/// * `Biased` ⇔ not `Unbiased`, and `CI ∩ [−δ, δ] = ∅` or `p_zero_bias < α`
+/// * `Equivalent` ⇔ `CI ⊂ (−δ, +δ)`: the bias is shown to lie within ±δ at that confidence,
+///   which is all a finite number of replicas can show (not "unbiased");
+/// * `Biased` ⇔ not `Equivalent`, and `CI ∩ [−δ, δ] = ∅` or `p_zero_bias < α`
 ///   (a significant bias that is not shown to be within tolerance);
-/// * `Inconclusive` otherwise (too few replicas or too much variance to decide).
+/// * `Inconclusive` otherwise (too few replicas, too much variance, or none at all to decide).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Verdict {
-    Unbiased,
+    Equivalent,
     Biased,
     Inconclusive,
+}
+
+impl Verdict {
+    /// `equivalent`, `biased` or `inconclusive` (the word of JSON outputs).
+    pub fn name(self) -> &'static str {
+        match self {
+            Verdict::Equivalent => "equivalent",
+            Verdict::Biased => "biased",
+            Verdict::Inconclusive => "inconclusive",
+        }
+    }
+
+    /// What the verdict claims, e.g. `equivalent within ±2% at 99%`, `biased`, `inconclusive`.
+    pub fn describe(self, delta: f64, confidence: f64) -> String {
+        match self {
+            Verdict::Equivalent => format!(
+                "equivalent within ±{}% at {}%",
+                percent(delta),
+                percent(confidence)
+            ),
+            v => v.name().to_string(),
+        }
+    }
 }
 
 /// Equivalence test of the relative bias `(estimate − reference)/reference`; see [`Verdict`]
@@ -49,8 +74,10 @@ pub struct Equivalence {
 ///   means are equal), the CI is (−∞, ∞), so the verdict is `Biased` if Welch rejects zero
 ///   bias and `Inconclusive` otherwise;
 /// * a non-finite estimate mean (a NaN/∞ replica): bias and CI +∞ (or −∞), `Biased`;
-/// * `confidence` outside (0, 1) gives an unbounded CI, hence never `Unbiased`;
-/// * fewer than two replicas: infinite standard error, unbounded CI, `Inconclusive`.
+/// * `confidence` outside (0, 1) gives an unbounded CI, hence never `Equivalent`;
+/// * fewer than two replicas, or replicas that are all equal on either side
+///   ([`Summary::no_spread`], e.g. a region black in every replica): the spread is unknown, so
+///   the CI is unbounded, `p_zero_bias = 1` and the verdict `Inconclusive`, never `Biased`.
 pub fn equivalence(
     estimate: &Summary,
     reference: &Summary,
@@ -60,7 +87,7 @@ pub fn equivalence(
     let p_zero_bias = welch(estimate, reference).p_value;
     let (relative_bias, ci_low, ci_high) = relative_ci(estimate, reference, confidence);
     let verdict = if ci_low > -delta && ci_high < delta {
-        Verdict::Unbiased
+        Verdict::Equivalent
     } else if ci_low >= delta || ci_high <= -delta || p_zero_bias < 1.0 - confidence {
         Verdict::Biased
     } else {
@@ -105,7 +132,9 @@ fn relative_ci(estimate: &Summary, reference: &Summary, confidence: f64) -> (f64
     let v_estimate = (estimate.std_err / r).powi(2);
     let v_reference = (e * reference.std_err / (r * r)).powi(2);
     let variance = v_estimate + v_reference;
-    let half = if !(confidence > 0.0 && confidence < 1.0 && variance.is_finite()) {
+    let spread_unknown = estimate.no_spread() || reference.no_spread();
+    let half = if spread_unknown || !(confidence > 0.0 && confidence < 1.0 && variance.is_finite())
+    {
         f64::INFINITY
     } else if variance == 0.0 {
         0.0
@@ -117,24 +146,31 @@ fn relative_ci(estimate: &Summary, reference: &Summary, confidence: f64) -> (f64
 }
 
 impl fmt::Display for Equivalence {
-    /// E.g. `unbiased (δ = ±1%, 99% CI, N = 64): bias +0.12% [-0.31%, +0.55%], p(bias = 0) = 0.412`.
+    /// E.g. `equivalent within ±1% at 99% (N = 64): bias +0.12% [-0.31%, +0.55%], p(bias = 0)
+    /// = 0.412`, or `biased (δ = ±1%, 99% CI, N = 64): …`.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let word = match self.verdict {
-            Verdict::Unbiased => "unbiased",
-            Verdict::Biased => "BIASED",
-            Verdict::Inconclusive => "inconclusive",
-        };
         let p = if self.p_zero_bias >= 1e-3 {
             format!("{:.3}", self.p_zero_bias)
         } else {
             format!("{:.1e}", self.p_zero_bias)
         };
+        let design = match self.verdict {
+            Verdict::Equivalent => format!(
+                "{} (N = {})",
+                self.verdict.describe(self.delta, self.confidence),
+                self.n
+            ),
+            v => format!(
+                "{} (δ = ±{}%, {}% CI, N = {})",
+                v.name(),
+                percent(self.delta),
+                percent(self.confidence),
+                self.n
+            ),
+        };
         write!(
             f,
-            "{word} (δ = ±{}%, {}% CI, N = {}): bias {:+.2}% [{:+.2}%, {:+.2}%], p(bias = 0) = {p}",
-            percent(self.delta),
-            percent(self.confidence),
-            self.n,
+            "{design}: bias {:+.2}% [{:+.2}%, {:+.2}%], p(bias = 0) = {p}",
             100.0 * self.relative_bias,
             100.0 * self.ci_low,
             100.0 * self.ci_high,
@@ -163,13 +199,13 @@ mod tests {
     }
 
     /// δ = 1%, 99% confidence, N = 200 replicas with s.e. ≈ 0.1% against an exact reference:
-    /// a true bias of +0.1% is Unbiased, +5% (negative control) Biased, and the same +0.1%
+    /// a true bias of +0.1% is Equivalent, +5% (negative control) Biased, and the same +0.1%
     /// with s.e. ≈ 2% Inconclusive (no claim without evidence).
     #[test]
-    fn verdicts_small_bias_large_bias_noisy() {
+    fn verdicts_equivalent_biased_inconclusive() {
         let reference = Summary::exact(2.0);
         let small = equivalence(&replicas(1, 200, 2.002, 0.001), &reference, 0.01, 0.99);
-        assert_eq!(small.verdict, Verdict::Unbiased, "{small}");
+        assert_eq!(small.verdict, Verdict::Equivalent, "{small}");
         assert!(small.ci_low < 0.001 && 0.001 < small.ci_high, "{small}");
         let large = equivalence(&replicas(2, 200, 2.1, 0.001), &reference, 0.01, 0.99);
         assert_eq!(large.verdict, Verdict::Biased, "{large}");
@@ -180,18 +216,18 @@ mod tests {
         assert!(
             small
                 .to_string()
-                .starts_with("unbiased (δ = ±1%, 99% CI, N = 200): bias +0."),
+                .starts_with("equivalent within ±1% at 99% (N = 200): bias +0."),
             "{small}"
         );
     }
 
-    /// A significant bias inside a loose tolerance is Unbiased (equivalence, not difference);
+    /// A significant bias inside a loose tolerance is Equivalent (equivalence, not difference);
     /// the same bias with a tight tolerance is Biased although the CI overlaps ±δ.
     #[test]
     fn significant_but_tolerable_bias() {
         let estimate = replicas(4, 400, 1.02, 0.002);
         let loose = equivalence(&estimate, &Summary::exact(1.0), 0.05, 0.99);
-        assert_eq!(loose.verdict, Verdict::Unbiased, "{loose}");
+        assert_eq!(loose.verdict, Verdict::Equivalent, "{loose}");
         assert!(loose.p_zero_bias < 0.01, "{loose}");
         let tight = equivalence(&estimate, &Summary::exact(1.0), 0.02, 0.99);
         assert!(tight.ci_low < 0.02 && tight.ci_high > 0.02, "{tight}");
@@ -230,6 +266,37 @@ mod tests {
             misses_exact_reference > hi,
             "control: {misses_exact_reference}/{M} misses, should exceed {hi}"
         );
+    }
+
+    /// Replicas that are all equal have no spread to test against: a region black in both of
+    /// two replicas against a reference that is not black, or a constant estimate against a
+    /// noisy reference, is Inconclusive with an unbounded CI, never Biased; so is a noisy
+    /// estimate against a reference without spread. Control: the same means with spread are
+    /// Biased.
+    #[test]
+    fn zero_variance_is_inconclusive_never_biased() {
+        let black = Summary::from_samples(&[0.0, 0.0]);
+        let reference = Summary::from_samples(&[0.010, 0.012, 0.011, 0.009]);
+        let constant = Summary::from_samples(&[2.0; 50]);
+        for (estimate, reference) in [
+            (black, reference),
+            (black, Summary::exact(0.011)),
+            (constant, Summary::from_samples(&[1.0, 1.01, 0.99])),
+            (Summary::from_samples(&[1.0, 1.01, 0.99]), constant),
+        ] {
+            let e = equivalence(&estimate, &reference, 0.02, 0.99);
+            assert_eq!(e.verdict, Verdict::Inconclusive, "{e}");
+            assert_eq!((e.ci_low, e.ci_high), (f64::NEG_INFINITY, f64::INFINITY));
+            assert_eq!(e.p_zero_bias, 1.0, "{e}");
+        }
+        let spread = Summary::from_samples(&[1.99, 2.0, 2.01]);
+        let control = equivalence(
+            &spread,
+            &Summary::from_samples(&[1.0, 1.01, 0.99]),
+            0.02,
+            0.99,
+        );
+        assert_eq!(control.verdict, Verdict::Biased, "{control}");
     }
 
     #[test]

@@ -2,17 +2,20 @@
 //!
 //! The unit of independence is a *replica* (a whole run with its own seed): pixels inside one
 //! replica are correlated by reuse. Summaries of replicas feed Welch tests, family-wise
-//! corrections, and the [`equivalence`] test, the only test allowed to call an estimator
-//! unbiased. Goodness-of-fit tests check sampling routines against their pdfs.
+//! corrections, and the [`equivalence`] test, the only test allowed to call an estimator's bias
+//! negligible ("equivalent within ±δ"); [`replicas_for`] plans how many replicas it needs.
+//! Goodness-of-fit tests check sampling routines against their pdfs.
 
 mod equivalence;
 mod gof;
+mod power;
 mod special;
 mod summary;
 mod welch;
 
 pub use equivalence::{Equivalence, Verdict, equivalence};
 pub use gof::{ChiSquare, Ks, chi_square_from_z, chi_square_gof, ks_one_sample};
+pub use power::{EquivalencePlan, family_power, replicas_for};
 pub use special::{
     beta_i, binomial_cdf, binomial_interval, chi_square_sf, gamma_p, gamma_q, kolmogorov_sf,
     ln_gamma, normal_cdf, normal_quantile, student_t_cdf, student_t_quantile,

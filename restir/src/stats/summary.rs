@@ -6,6 +6,7 @@
 /// and the tests treat it as a defect, see [`welch`](super::welch())):
 /// * empty sample: `n = 0`, `mean = 0`, `variance = std_err = ∞` (no information);
 /// * one replica: `n = 1`, `mean = x`, `variance = std_err = ∞` (spread unknown);
+/// * replicas that are all equal: `variance = std_err = 0`, flagged by [`Summary::no_spread`];
 /// * [`Summary::exact`]: `n = 0`, `variance = std_err = 0`, a constant without sampling error.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Summary {
@@ -37,6 +38,13 @@ impl Summary {
             variance: 0.0,
             std_err: 0.0,
         }
+    }
+
+    /// Whether this is a sample of at least two replicas that are all equal: its zero standard
+    /// error reflects too few replicas (e.g. a region that is black in every replica), not
+    /// knowledge, so the tests treat its spread as unknown. [`Summary::exact`] is not one.
+    pub fn no_spread(&self) -> bool {
+        self.n >= 2 && self.variance == 0.0
     }
 
     /// `n` samples with mean `mean` and sum of squared deviations `m2`.
@@ -118,6 +126,8 @@ mod tests {
         let exact = Summary::exact(2.0);
         assert_eq!((exact.n, exact.mean, exact.std_err), (0, 2.0, 0.0));
         assert_eq!(Welford::new().summary(), empty);
+        assert!(Summary::from_samples(&[0.0, 0.0]).no_spread());
+        assert!(!exact.no_spread() && !one.no_spread() && !empty.no_spread());
     }
 
     #[test]

@@ -20,8 +20,8 @@ pub struct WelchTest {
 /// Edge cases (never NaN):
 /// * a non-finite mean (a replica produced NaN/∞) is rejected outright: `t = ±∞` (+∞ for
 ///   NaN), `dof = 0`, `p = 0`; such an estimator is broken whatever its bias;
-/// * an infinite standard error (fewer than two replicas): no information, `t = 0`,
-///   `dof = 0`, `p = 1`;
+/// * an infinite standard error (fewer than two replicas) or a sample without spread
+///   ([`Summary::no_spread`]: all replicas equal): no information, `t = 0`, `dof = 0`, `p = 1`;
 /// * both standard errors 0: `p = 1`, `t = 0` if the means are equal, else `p = 0`,
 ///   `t = ±∞`; `dof = ∞`.
 pub fn welch(a: &Summary, b: &Summary) -> WelchTest {
@@ -39,7 +39,7 @@ pub fn welch(a: &Summary, b: &Summary) -> WelchTest {
         };
     }
     let (va, vb) = (a.std_err * a.std_err, b.std_err * b.std_err);
-    if !(va + vb).is_finite() {
+    if !(va + vb).is_finite() || a.no_spread() || b.no_spread() {
         return WelchTest {
             t: 0.0,
             dof: 0.0,
@@ -227,6 +227,18 @@ mod tests {
         );
         let same = Summary::from_samples(&[5.0, 5.0, 5.0]);
         assert_eq!(welch(&same, &Summary::exact(5.0)).p_value, 1.0);
+        // All replicas equal is no evidence of a difference, however far the constant is.
+        let no_information = WelchTest {
+            t: 0.0,
+            dof: 0.0,
+            p_value: 1.0,
+        };
+        assert_eq!(welch(&same, &three), no_information);
+        let noisy = Summary::from_samples(&[2.9, 3.0, 3.1]);
+        assert_eq!(
+            welch(&noisy, &Summary::from_samples(&[0.0; 2])),
+            no_information
+        );
     }
 
     /// Textbook example (Wikipedia, "Holm–Bonferroni method"): p = 0.01, 0.04, 0.03, 0.005 at

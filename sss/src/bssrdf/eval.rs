@@ -41,11 +41,22 @@ pub fn contribution(
     wi: Vec3,
     radiance: Vec3,
 ) -> Vec3 {
+    lit(x2, wi, radiance, || bssrdf(material, x1, x2, wi))
+}
+
+/// `f = S · max(0, n2·ωi) · L_e` for the BSSRDF value `bssrdf()`, evaluated only when light
+/// arrives from above x2's shading normal.
+pub(super) fn lit(
+    x2: &EntryPoint,
+    wi: Vec3,
+    radiance: Vec3,
+    bssrdf: impl FnOnce() -> Vec3,
+) -> Vec3 {
     let cos_i = x2.shading_normal.dot(wi);
     if cos_i.is_nan() || cos_i <= 0.0 {
         return Vec3::ZERO;
     }
-    bssrdf(material, x1, x2, wi) * cos_i * radiance
+    bssrdf() * cos_i * radiance
 }
 
 /// `p̂ = luminance(f)` (unshadowed).

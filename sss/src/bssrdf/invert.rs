@@ -11,14 +11,7 @@ use super::sample::{BssrdfSample, Probe};
 use super::technique::{Technique, TechniqueSelection};
 use crate::geometry::{Geometry, Hit};
 
-/// Why x2 cannot be regenerated from x1.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum InvertFail {
-    /// No technique reaches x2 from x1 (`p_disk(x2 | x1) = 0`).
-    OutOfSupport,
-    /// The re-traced chord has no hit on x2's triangle at x2's `t` (exact index policy).
-    IndexNotFound,
-}
+pub use crate::contract::bssrdf::InvertFail;
 
 /// The random numbers with which technique `t` at x1 produces a disk point under `x2`
 /// [001 Alg. 4, lines 2–9]: `u_radius = CDF_{d_c}(r_a)`, `u_angle = atan2(l_y, l_x) / 2π` wrapped

@@ -7,6 +7,7 @@
 //! Each sampling routine has its density ([`p_disk`], [`technique_terms`]) and its inverse
 //! ([`invert`], [`TechniqueSelection::u_interval`]).
 
+mod dipole;
 mod eval;
 mod invert;
 mod pdf;
@@ -14,12 +15,13 @@ mod probe;
 mod sample;
 mod technique;
 
+pub use dipole::{bssrdf_dipole, contribution_dipole};
 pub use eval::{bssrdf, bssrdf_of_profile, contribution, target};
 pub use invert::{InvertFail, find_index, invert, invert_random_numbers, invert_technique};
-pub use pdf::{p_disk, technique_terms};
-pub use probe::{EntryPoint, ExitPoint, chord, probe_ray, trace_probe};
+pub use pdf::{p_disk, p_disk_with, technique_terms, technique_terms_with};
+pub use probe::{EntryPoint, ExitPoint, chord, probe_ray, probe_ray_with, trace_probe};
 pub use sample::{BssrdfSample, Probe, pick_hit};
-pub use technique::{Axis, Technique, TechniqueSelection};
+pub use technique::{Axis, RadiusSampling, Technique, TechniqueSelection};
 
 #[cfg(test)]
 mod tests;

@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use super::probe::ExitPoint;
-use super::technique::{Technique, TechniqueSelection};
+use super::technique::{RadiusSampling, Technique, TechniqueSelection};
 
 /// The per-technique terms `P(a) P(c) p_{d_c}(r_a) |n2·axis_a| 1[‖x2 − x1‖ ≤ r_max,c]`, in
 /// [`Technique::index`] order. Their sum is `p_disk`, their ratios the posterior over techniques
@@ -12,6 +12,18 @@ use super::technique::{Technique, TechniqueSelection};
 pub fn technique_terms(
     x1: &ExitPoint,
     selection: &TechniqueSelection,
+    x2: Vec3,
+    n2: Vec3,
+) -> [f32; Technique::COUNT] {
+    technique_terms_with(x1, selection, RadiusSampling::Exact, x2, n2)
+}
+
+/// [`technique_terms`] for techniques whose radii come from `radius`: `p_{d_c}` is then the
+/// density of that sampler.
+pub fn technique_terms_with(
+    x1: &ExitPoint,
+    selection: &TechniqueSelection,
+    radius: RadiusSampling,
     x2: Vec3,
     n2: Vec3,
 ) -> [f32; Technique::COUNT] {
@@ -24,7 +36,7 @@ pub fn technique_terms(
         }
         let r_a = x1.disk_coordinates(t.axis, x2).length();
         let axis = x1.disk_basis(t.axis)[2];
-        p * x1.profiles[t.channel].pdf_disk(r_a) * n2.dot(axis).abs()
+        p * radius.pdf_disk(&x1.profiles[t.channel], r_a) * n2.dot(axis).abs()
     })
 }
 
@@ -32,4 +44,17 @@ pub fn technique_terms(
 /// the geometric normal at x2 (DESIGN §9). Zero where no technique reaches x2.
 pub fn p_disk(x1: &ExitPoint, selection: &TechniqueSelection, x2: Vec3, n2: Vec3) -> f32 {
     technique_terms(x1, selection, x2, n2).iter().sum()
+}
+
+/// [`p_disk`] for techniques whose radii come from `radius`.
+pub fn p_disk_with(
+    x1: &ExitPoint,
+    selection: &TechniqueSelection,
+    radius: RadiusSampling,
+    x2: Vec3,
+    n2: Vec3,
+) -> f32 {
+    technique_terms_with(x1, selection, radius, x2, n2)
+        .iter()
+        .sum()
 }

@@ -2,7 +2,7 @@
 
 use glam::{Vec2, Vec3, Vec3A};
 
-use super::technique::{Axis, Technique};
+use super::technique::{Axis, RadiusSampling, Technique};
 use crate::geometry::{Frame, Geometry, Hit, Ray};
 use crate::material::{FresnelTransmission, Translucent};
 use crate::profile::Burley;
@@ -149,7 +149,18 @@ pub fn chord(x1: &ExitPoint, t: Technique, disk: Vec2) -> Option<Ray> {
 /// The probe ray for technique `t` and random numbers `(u_radius, u_angle)`: radius by the exact
 /// inverse CDF of channel `c`, angle `2π u_angle` [001 Eq. 4, Fig. 2b].
 pub fn probe_ray(x1: &ExitPoint, t: Technique, u_radius: f32, u_angle: f32) -> Option<Ray> {
-    let r = x1.profiles[t.channel].sample_radius(u_radius);
+    probe_ray_with(x1, t, RadiusSampling::Exact, u_radius, u_angle)
+}
+
+/// [`probe_ray`] with the radius drawn by `radius` instead of the exact inverse CDF.
+pub fn probe_ray_with(
+    x1: &ExitPoint,
+    t: Technique,
+    radius: RadiusSampling,
+    u_radius: f32,
+    u_angle: f32,
+) -> Option<Ray> {
+    let r = radius.sample_radius(&x1.profiles[t.channel], u_radius);
     let phi = std::f32::consts::TAU * u_angle;
     chord(x1, t, r * Vec2::new(phi.cos(), phi.sin()))
 }

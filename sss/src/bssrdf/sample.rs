@@ -2,8 +2,8 @@
 
 use glam::Vec2;
 
-use super::probe::{EntryPoint, ExitPoint, probe_ray, trace_probe};
-use super::technique::{Technique, TechniqueSelection};
+use super::probe::{EntryPoint, ExitPoint, probe_ray_with, trace_probe};
+use super::technique::{RadiusSampling, Technique, TechniqueSelection};
 use crate::geometry::{Geometry, Hit, Ray};
 
 /// One BSSRDF IS draw before tracing: the technique and its two random numbers. Replaying it at
@@ -33,12 +33,28 @@ impl Probe {
 
     /// The chord to trace; `None` when the sampled radius reaches `r_max,c` (no hit possible).
     pub fn ray(&self, x1: &ExitPoint) -> Option<Ray> {
-        probe_ray(x1, self.technique, self.u_radius, self.u_angle)
+        self.ray_with(x1, RadiusSampling::Exact)
+    }
+
+    /// [`Probe::ray`] with the radius drawn by `radius`.
+    pub fn ray_with(&self, x1: &ExitPoint, radius: RadiusSampling) -> Option<Ray> {
+        probe_ray_with(x1, self.technique, radius, self.u_radius, self.u_angle)
     }
 
     /// Fills `hits` with the chord's hits on x1's object, sorted by `t` (empty for an empty chord).
     pub fn trace(&self, geometry: &Geometry, x1: &ExitPoint, hits: &mut Vec<Hit>) {
-        match self.ray(x1) {
+        self.trace_with(geometry, x1, RadiusSampling::Exact, hits)
+    }
+
+    /// [`Probe::trace`] with the radius drawn by `radius`.
+    pub fn trace_with(
+        &self,
+        geometry: &Geometry,
+        x1: &ExitPoint,
+        radius: RadiusSampling,
+        hits: &mut Vec<Hit>,
+    ) {
+        match self.ray_with(x1, radius) {
             Some(ray) => trace_probe(geometry, x1, &ray, hits),
             None => hits.clear(),
         }

@@ -176,7 +176,19 @@ fn wrong_terms(
     n2: Vec3,
     drop_cosine: bool,
 ) -> [f32; 9] {
-    let mut terms = technique_terms(x1, selection, x2, n2);
+    wrong_terms_with(x1, selection, RadiusSampling::Exact, x2, n2, drop_cosine)
+}
+
+/// [`wrong_terms`] for techniques whose radii come from `radius`.
+fn wrong_terms_with(
+    x1: &ExitPoint,
+    selection: &TechniqueSelection,
+    radius: RadiusSampling,
+    x2: Vec3,
+    n2: Vec3,
+    drop_cosine: bool,
+) -> [f32; 9] {
+    let mut terms = technique_terms_with(x1, selection, radius, x2, n2);
     for t in Technique::ALL {
         if drop_cosine {
             let cos = n2.dot(x1.disk_basis(t.axis)[2]).abs();
@@ -279,21 +291,21 @@ fn inversion_posterior_matches_the_sampling_technique() {
     );
 }
 
-/// Composite quadrature of `f` (three densities at once) over the triangle `v`: `k²` sub-triangles,
+/// Composite quadrature of `f` (`D` densities at once) over the triangle `v`: `k²` sub-triangles,
 /// each by the Duffy map from its vertex nearest `apex` (removing a 1/r singularity there) with
 /// 3×3 Gauss–Legendre.
-fn integrate(
+fn integrate<const D: usize>(
     v: [DVec3; 3],
     apex: DVec3,
     k: usize,
-    f: &mut impl FnMut(DVec3) -> [f64; 3],
-) -> [f64; 3] {
+    f: &mut impl FnMut(DVec3) -> [f64; D],
+) -> [f64; D] {
     const NODES: [f64; 3] = [0.112_701_665_379_258_3, 0.5, 0.887_298_334_620_741_7];
     const WEIGHTS: [f64; 3] = [5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0];
     let grid = |i: usize, j: usize| {
         v[0] + (i as f64 / k as f64) * (v[1] - v[0]) + (j as f64 / k as f64) * (v[2] - v[0])
     };
-    let mut sum = [0.0; 3];
+    let mut sum = [0.0; D];
     for i in 0..k {
         for j in 0..k - i {
             let mut subs = vec![[grid(i, j), grid(i + 1, j), grid(i, j + 1)]];
@@ -343,13 +355,13 @@ fn singular_point(v: [DVec3; 3], origin: DVec3, axis: DVec3) -> Option<DVec3> {
 }
 
 /// [`integrate`] over `v` split into three triangles at `apex` (a point of `v`).
-fn integrate_around(
+fn integrate_around<const D: usize>(
     v: [DVec3; 3],
     apex: DVec3,
     k: usize,
-    f: &mut impl FnMut(DVec3) -> [f64; 3],
-) -> [f64; 3] {
-    let mut sum = [0.0; 3];
+    f: &mut impl FnMut(DVec3) -> [f64; D],
+) -> [f64; D] {
+    let mut sum = [0.0; D];
     for (a, b) in [(v[0], v[1]), (v[1], v[2]), (v[2], v[0])] {
         if (a - apex).cross(b - apex).length() > 1e-14 {
             let part = integrate([apex, a, b], apex, k, f);
@@ -370,6 +382,19 @@ fn integrate_around(
 /// `|n2·axis|`, and from one missing the bitangent techniques, are rejected.
 #[test]
 fn sampled_entry_points_follow_p_disk() {
+    entry_point_histogram(RadiusSampling::Exact);
+}
+
+/// [`sampled_entry_points_follow_p_disk`] for probes whose radii come from `g(ξ)` [004 Eq. 21],
+/// against `p_disk` with the density of `g(U)`. (This histogram cannot tell `g(U)` from Burley's
+/// radii at N = 10⁵, p ≈ 0.03; `technique::tests::xie_weighted_estimates_are_unbiased` does.)
+#[test]
+fn xie_entry_points_follow_their_own_p_disk() {
+    entry_point_histogram(RadiusSampling::Xie);
+}
+
+/// The histogram test of x2 drawn with `radius`.
+fn entry_point_histogram(radius: RadiusSampling) {
     const N: u32 = 100_000;
     const ALPHA: f64 = 1e-3;
     const QUADRATURE_K: usize = 8;
@@ -398,7 +423,7 @@ fn sampled_entry_points_follow_p_disk() {
     for i in 0..N {
         let mut rng = StreamKey::new(i, 0, 2, PURPOSE).stream(4);
         let probe = Probe::sample(&selection, rng.next_f32(), rng.next_f32(), rng.next_f32());
-        probe.trace(&geometry, &x1, &mut hits);
+        probe.trace_with(&geometry, &x1, radius, &mut hits);
         match pick_hit(&hits, None, rng.next_f32()) {
             Some((_, hit)) => {
                 observed[bin_of(hit.prim).expect("hit outside the r_max ball")] += 1.0
@@ -421,16 +446,12 @@ fn sampled_entry_points_follow_p_disk() {
             terms.iter().zip(per_hit).map(|(&p, w)| p as f64 * w).sum()
         };
         [
-            weigh(technique_terms(&x1, &selection, x, n)),
-            weigh(wrong_terms(&x1, &selection, x, n, true)),
-            weigh(wrong_terms(&x1, &selection, x, n, false)),
+            weigh(technique_terms_with(&x1, &selection, radius, x, n)),
+            weigh(wrong_terms_with(&x1, &selection, radius, x, n, true)),
+            weigh(wrong_terms_with(&x1, &selection, radius, x, n, false)),
         ]
     };
-    let mut expected = [
-        vec![0.0f64; bins.len() + 1],
-        vec![0.0; bins.len() + 1],
-        vec![0.0; bins.len() + 1],
-    ];
+    let mut expected: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0f64; bins.len() + 1]);
     let origin = x1.position.as_dvec3();
     for (b, &p) in bins.iter().enumerate() {
         let n = geometry.geometric_normal(p);
@@ -451,7 +472,7 @@ fn sampled_entry_points_follow_p_disk() {
     }
     let [right, no_cosine, no_bitangent] = expected.map(|e| chi_square_gof(&observed, &e, 5.0));
     eprintln!(
-        "x2 histogram (N = {N}, {} bins): χ² = {:.1}, dof {}, p = {:.3}; \
+        "{radius:?} x2 histogram (N = {N}, {} bins): χ² = {:.1}, dof {}, p = {:.3}; \
          controls p = {:.2e} (no |n2·axis|), {:.2e} (no bitangent)",
         bins.len() + 1,
         right.statistic,

@@ -12,25 +12,28 @@
 //!   point (that is `Σ_t P_t p_t / n_t`, with the hit count of each technique's chord), but the
 //!   estimator is still unbiased: given the probe, its expectation over the uniform pick is
 //!   exactly the all-hits sum above.
+//!
+//! Options beside the hit policy, both off by default: the techniques may draw their radii with
+//! Xie's `g(ξ)` instead of the exact inverse ([`RadiusSampling`]; `p_disk` then uses the density
+//! of `g(U)`, so the estimator stays unbiased), and `f` may evaluate the dipole profile of the
+//! material instead of Burley's ([`ProfileKind::Dipole`], the reference of the image-space method
+//! of seed 002). BSSRDF IS keeps sampling Burley radii under the dipole profile: `p_disk > 0`
+//! wherever the truncated dipole `f` is, so the estimate is unbiased for it.
 
 use glam::{DVec3, Vec3, Vec3A};
 use rayon::prelude::*;
 use restir::rng::{Stream, StreamKey};
 
 use crate::bssrdf::{
-    EntryPoint, ExitPoint, Probe, TechniqueSelection, contribution, p_disk, pick_hit,
+    EntryPoint, ExitPoint, Probe, RadiusSampling, TechniqueSelection, contribution,
+    contribution_dipole, p_disk_with, pick_hit,
 };
 use crate::geometry::{Hit, Ray};
-use crate::material::{Lambert, Material, Translucent};
+use crate::material::{DipoleProfiles, Lambert, Material, Translucent};
+use crate::profile::ProfileKind;
 use crate::scene::{GBuffer, GPixel, Scene};
 
-/// `purpose` of the per-sample streams of the baseline (and of the reference, which is the same
-/// estimator with more samples).
-pub const PURPOSE_PT: u32 = 0x5054_0001;
-
-/// Offset of shadow-ray origins along the geometric normal and their shortening at the light, in
-/// scene units (scenes are about 1 unit across; the BVH ignores hits closer than 1e-4 anyway).
-pub const SHADOW_EPSILON: f32 = 1e-4;
+pub use crate::contract::pt::{PURPOSE_PT, SHADOW_EPSILON};
 
 /// Which probe hits become entry points x2.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -46,6 +49,10 @@ pub enum HitPolicy {
 pub struct PtSettings {
     pub hits: HitPolicy,
     pub selection: TechniqueSelection,
+    /// How the techniques draw their radii.
+    pub radius: RadiusSampling,
+    /// Which profile `f` evaluates.
+    pub profile: ProfileKind,
 }
 
 impl Default for PtSettings {
@@ -53,6 +60,8 @@ impl Default for PtSettings {
         PtSettings {
             hits: HitPolicy::All,
             selection: TechniqueSelection::default(),
+            radius: RadiusSampling::Exact,
+            profile: ProfileKind::Burley,
         }
     }
 }
@@ -84,6 +93,8 @@ pub enum Shading<'a> {
     Translucent {
         material: &'a Translucent,
         x1: ExitPoint,
+        /// The material's dipoles when the settings evaluate [`ProfileKind::Dipole`].
+        dipoles: Option<DipoleProfiles>,
     },
     Lambert {
         material: &'a Lambert,
@@ -92,7 +103,13 @@ pub enum Shading<'a> {
 }
 
 impl<'a> Shading<'a> {
+    /// The pixel prepared for the default settings (Burley profile).
     pub fn new(scene: &'a Scene, x1: &GPixel) -> Shading<'a> {
+        Shading::prepare(scene, x1, ProfileKind::Burley)
+    }
+
+    /// The pixel prepared for evaluating `profile` (the dipole is derived here, once per pixel).
+    pub fn prepare(scene: &'a Scene, x1: &GPixel, profile: ProfileKind) -> Shading<'a> {
         match scene.material_of_object(x1.object) {
             Material::Translucent(material) => Shading::Translucent {
                 material,
@@ -104,13 +121,16 @@ impl<'a> Shading<'a> {
                     x1.object,
                     material,
                 ),
+                dipoles: (profile == ProfileKind::Dipole).then(|| DipoleProfiles::new(material)),
             },
             Material::Lambert(material) => Shading::Lambert { material, x1: *x1 },
         }
     }
 }
 
-/// One `f32` estimate of the radiance leaving x1 toward the camera.
+/// One `f32` estimate of the radiance leaving x1 toward the camera. Under
+/// [`ProfileKind::Dipole`] a `shading` from [`Shading::new`] has no dipoles and they are derived
+/// for every sample: prepare it with [`Shading::prepare`].
 pub fn estimate(
     scene: &Scene,
     shading: &Shading,
@@ -119,29 +139,29 @@ pub fn estimate(
     hits: &mut Vec<Hit>,
 ) -> Vec3 {
     match shading {
-        Shading::Translucent { material, x1 } => {
-            estimate_translucent(scene, material, x1, settings, rng, hits)
-        }
+        Shading::Translucent {
+            material,
+            x1,
+            dipoles,
+        } => match settings.profile {
+            ProfileKind::Burley => estimate_bssrdf(scene, x1, settings, rng, hits, |x2, wi, le| {
+                contribution(material, x1, x2, wi, le)
+            }),
+            ProfileKind::Dipole => {
+                let dipoles = dipoles.unwrap_or_else(|| DipoleProfiles::new(material));
+                estimate_bssrdf(scene, x1, settings, rng, hits, |x2, wi, le| {
+                    contribution_dipole(&dipoles, x1, x2, wi, le)
+                })
+            }
+        },
         Shading::Lambert { material, x1 } => estimate_lambert(scene, material, x1, rng),
     }
 }
 
-fn estimate_translucent(
-    scene: &Scene,
-    material: &Translucent,
-    x1: &ExitPoint,
-    settings: &PtSettings,
-    rng: &mut Stream,
-    hits: &mut Vec<Hit>,
-) -> Vec3 {
-    estimate_bssrdf(scene, x1, settings, rng, hits, |x2, wi, radiance| {
-        contribution(material, x1, x2, wi, radiance)
-    })
-}
-
 /// One BSSRDF-IS estimate at x1 of `∫ f(x2, ωi) dA dωi` for the path contribution
 /// `contribution(x2, ωi, L_e)` of a BSSRDF on x1's cached profiles (they sample x2 and give
-/// `p_disk`): the material's [`contribution`], or seed 000's multiple-scattering-only profile
+/// `p_disk`, with radii from `settings.radius`): the material's [`contribution`], its dipole's
+/// ([`contribution_dipole`]), or seed 000's multiple-scattering-only profile
 /// ([`single_scatter`](super::single_scatter)). Unbiased for any `f` — of either sign — that
 /// vanishes where `p_disk` does; NEE at x2, shadow-tested, per the hit policy (module doc).
 pub fn estimate_bssrdf(
@@ -158,10 +178,16 @@ pub fn estimate_bssrdf(
         rng.next_f32(),
         rng.next_f32(),
     );
-    probe.trace(&scene.geometry, x1, hits);
+    probe.trace_with(&scene.geometry, x1, settings.radius, hits);
     let entry = |hit: &Hit, rng: &mut Stream| -> Vec3 {
         let x2 = EntryPoint::from_hit(&scene.geometry, hit);
-        let p = p_disk(x1, &settings.selection, x2.position, x2.geometric_normal);
+        let p = p_disk_with(
+            x1,
+            &settings.selection,
+            settings.radius,
+            x2.position,
+            x2.geometric_normal,
+        );
         let Some(light) = scene.lights.sample(
             x2.position,
             [rng.next_f32(), rng.next_f32(), rng.next_f32()],
@@ -247,7 +273,7 @@ pub fn render(
     render_pixels(
         gbuffer,
         first_sample..first_sample + spp,
-        |_, x1| Shading::new(scene, x1),
+        |_, x1| Shading::prepare(scene, x1, settings.profile),
         |shading, pixel, sample, hits| {
             let mut rng = sample_stream(pixel, gbuffer.frame, sample, seed);
             estimate(scene, shading, settings, &mut rng, hits)

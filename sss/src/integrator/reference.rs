@@ -14,7 +14,7 @@
 //! | width, height, frame | u32 ×3 |
 //! | seed | u64 |
 //! | spp_per_batch, batches (planned total), start, next, end | u32 ×5 |
-//! | hit policy (0 = uniform one, 1 = all) | u8 |
+//! | estimator: bit 0 hit policy (0 = uniform one, 1 = all), bit 1 Xie radii, bit 2 dipole profile | u8 |
 //! | P(axis) ×3, P(channel) ×3 | f32 ×6 |
 //! | nonfinite | u64 |
 //! | scene name: length, UTF-8 bytes | u32, bytes |
@@ -23,17 +23,47 @@
 //! `start..next` are the batches accumulated so far, `start..end` the ones this run owns.
 
 use std::ops::Range;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
 use super::exact::ExactSum;
 use super::pt::{self, HitPolicy, PtSettings};
 use crate::InputError;
-use crate::bssrdf::TechniqueSelection;
+use crate::bssrdf::{RadiusSampling, TechniqueSelection};
+use crate::limits::{self, MAX_PIXELS, bytes as human};
+use crate::profile::ProfileKind;
 use crate::scene::{GBuffer, Scene};
 
 const MAGIC: &[u8; 8] = b"RSSSREF1";
+/// Bytes of the fixed-size fields of a checkpoint (everything but the name and the pixels).
+const FIXED_BYTES: u64 = 8 + 3 * 4 + 8 + 5 * 4 + 1 + 6 * 4 + 8 + 4;
+/// Bytes of one pixel: Σm and Σm² per RGB channel, 4 limbs each.
+const PIXEL_BYTES: u64 = 2 * 3 * 4 * 8;
+/// Longest scene name in a checkpoint, in bytes.
+const MAX_NAME_BYTES: u64 = 4096;
+/// Largest checkpoint file: [`MAX_PIXELS`] pixels.
+pub const MAX_CHECKPOINT_BYTES: u64 = FIXED_BYTES + MAX_NAME_BYTES + MAX_PIXELS * PIXEL_BYTES;
+
+/// Bits of the checkpoint's estimator byte (a byte of 0 or 1 is a file from before the options).
+const FLAG_ALL_HITS: u8 = 1;
+const FLAG_XIE: u8 = 2;
+const FLAG_DIPOLE: u8 = 4;
+
+/// The estimator byte of `settings`.
+fn estimator_flags(settings: &PtSettings) -> u8 {
+    let mut flags = 0;
+    if settings.hits == HitPolicy::All {
+        flags |= FLAG_ALL_HITS;
+    }
+    if settings.radius == RadiusSampling::Xie {
+        flags |= FLAG_XIE;
+    }
+    if settings.profile == ProfileKind::Dipole {
+        flags |= FLAG_DIPOLE;
+    }
+    flags
+}
 
 /// What a reference integrates; two references can be merged only if these agree.
 #[derive(Clone, Debug, PartialEq)]
@@ -127,6 +157,7 @@ impl Reference {
                 "batches × spp_per_batch must not exceed 2³² samples per pixel",
             );
         }
+        limits::resolution(Path::new("(reference)"), "width×height", width, height)?;
         let range = shard.batches(config.batches);
         let pixels = width as usize * height as usize;
         Ok(Reference {
@@ -211,53 +242,53 @@ impl Reference {
             .collect()
     }
 
-    /// Sums complete shards of one reference (any order). The shards must share the
-    /// configuration and image size and cover a contiguous batch range without overlap.
-    pub fn merge(mut parts: Vec<Reference>) -> Result<Reference, InputError> {
-        let bad = |field: &str, value: String, reason: &str| {
-            Err(InputError::new("(merge)", field, value, reason))
-        };
-        parts.sort_by_key(|p| p.start);
-        let Some(first) = parts.first() else {
-            return bad("shards", "none".into(), "nothing to merge");
+    /// Sums complete shards of one reference, each with the file it was read from (any order).
+    /// The shards must share the configuration and image size and cover a contiguous batch
+    /// range without overlap; errors name the shard's file, the field and both values.
+    pub fn merge(mut parts: Vec<(PathBuf, Reference)>) -> Result<Reference, InputError> {
+        parts.sort_by_key(|(_, p)| p.start);
+        let Some((first_path, first)) = parts.first() else {
+            return Err(InputError::new(
+                "(merge)",
+                "shards",
+                "none",
+                "nothing to merge",
+            ));
         };
         let mut merged = first.clone();
-        if !first.is_complete() {
-            return bad(
-                "shards",
-                format!(
-                    "{}..{} of {}..{}",
-                    first.start, first.next, first.start, first.end
-                ),
-                "shard is incomplete",
-            );
-        }
-        for part in &parts[1..] {
-            if part.config != merged.config
-                || (part.width, part.height) != (merged.width, merged.height)
-            {
-                return bad(
-                    "config",
-                    format!("{:?}", part.config),
-                    "shards of different references",
-                );
+        for (path, part) in &parts {
+            if let Some((field, theirs, ours)) = first.difference(part) {
+                return Err(InputError::new(
+                    path,
+                    field,
+                    theirs,
+                    format!(
+                        "differs from {} ({ours}): shards of different references",
+                        first_path.display()
+                    ),
+                ));
             }
             if !part.is_complete() {
-                return bad(
-                    "shards",
-                    format!(
-                        "{}..{} of {}..{}",
-                        part.start, part.next, part.start, part.end
-                    ),
+                return Err(InputError::new(
+                    path,
+                    "start/next/end",
+                    format!("{}/{}/{}", part.start, part.next, part.end),
                     "shard is incomplete",
-                );
+                ));
+            }
+            if std::ptr::eq(part, first) {
+                continue;
             }
             if part.start != merged.end {
-                return bad(
-                    "shards",
-                    format!("{}..{} after ..{}", part.start, part.end, merged.end),
-                    "batch ranges overlap or leave a gap",
-                );
+                return Err(InputError::new(
+                    path,
+                    "start/end",
+                    format!("{}/{}", part.start, part.end),
+                    format!(
+                        "batch ranges overlap or leave a gap: the shards before it end at {}",
+                        merged.end
+                    ),
+                ));
             }
             for (a, b) in merged
                 .sum
@@ -269,15 +300,49 @@ impl Reference {
                     a[c].add_exact(&b[c]);
                 }
             }
-            merged.nonfinite += part.nonfinite;
+            merged.nonfinite = merged.nonfinite.saturating_add(part.nonfinite);
             merged.end = part.end;
             merged.next = part.end;
         }
         Ok(merged)
     }
 
+    /// The first field in which `other` is of another reference: `(field, other's, self's)`.
+    fn difference(&self, other: &Reference) -> Option<(&'static str, String, String)> {
+        let (a, b) = (&self.config, &other.config);
+        let size = |r: &Reference| format!("{}×{}", r.width, r.height);
+        let fields = [
+            ("scene", format!("{:?}", b.scene), format!("{:?}", a.scene)),
+            ("width×height", size(other), size(self)),
+            ("frame", b.frame.to_string(), a.frame.to_string()),
+            ("seed", b.seed.to_string(), a.seed.to_string()),
+            (
+                "spp_per_batch",
+                b.spp_per_batch.to_string(),
+                a.spp_per_batch.to_string(),
+            ),
+            ("batches", b.batches.to_string(), a.batches.to_string()),
+            (
+                "hit_policy",
+                format!("{:?}", b.settings.hits),
+                format!("{:?}", a.settings.hits),
+            ),
+            (
+                "selection",
+                format!("{:?}", b.settings.selection),
+                format!("{:?}", a.settings.selection),
+            ),
+        ];
+        fields.into_iter().find(|(_, theirs, ours)| theirs != ours)
+    }
+
     /// Writes the checkpoint (format in the module documentation).
     pub fn save(&self, path: &Path) -> std::io::Result<()> {
+        std::fs::write(path, self.to_bytes())
+    }
+
+    /// The checkpoint's bytes (format in the module documentation).
+    pub fn to_bytes(&self) -> Vec<u8> {
         let c = &self.config;
         let mut out = Vec::with_capacity(96 + c.scene.len() + self.sum.len() * 192);
         out.extend_from_slice(MAGIC);
@@ -288,10 +353,7 @@ impl Reference {
         for v in [c.spp_per_batch, c.batches, self.start, self.next, self.end] {
             out.extend_from_slice(&v.to_le_bytes());
         }
-        out.push(match c.settings.hits {
-            HitPolicy::UniformOne => 0,
-            HitPolicy::All => 1,
-        });
+        out.push(estimator_flags(&c.settings));
         for p in c
             .settings
             .selection
@@ -309,24 +371,18 @@ impl Reference {
                 out.extend_from_slice(&limb.to_le_bytes());
             }
         }
-        std::fs::write(path, out)
+        out
     }
 
     /// Reads a checkpoint written by [`Reference::save`].
     pub fn load(path: &Path) -> Result<Reference, InputError> {
-        let bytes = std::fs::read(path).map_err(|e| {
-            InputError::new(
-                path,
-                "(file)",
-                format!("{:?}", path.display().to_string()),
-                e.to_string(),
-            )
-        })?;
-        let mut reader = Reader {
-            bytes: &bytes,
-            at: 0,
-            path,
-        };
+        Reference::from_bytes(&limits::read_file(path, MAX_CHECKPOINT_BYTES)?, path)
+    }
+
+    /// Parses checkpoint bytes; `path` names them in errors. Every size in the header is checked
+    /// against the limits and the bytes present before anything is allocated.
+    pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<Reference, InputError> {
+        let mut reader = Reader { bytes, at: 0, path };
         let magic = reader.take(8, "magic")?;
         if magic != MAGIC {
             return Err(InputError::new(
@@ -341,6 +397,7 @@ impl Reference {
             reader.u32("height")?,
             reader.u32("frame")?,
         );
+        limits::resolution(path, "width×height", width, height)?;
         let seed = reader.u64("seed")?;
         let (spp_per_batch, batches) = (reader.u32("spp_per_batch")?, reader.u32("batches")?);
         let (start, next, end) = (
@@ -348,30 +405,6 @@ impl Reference {
             reader.u32("next")?,
             reader.u32("end")?,
         );
-        let hits = match reader.take(1, "hit_policy")?[0] {
-            0 => HitPolicy::UniformOne,
-            1 => HitPolicy::All,
-            other => {
-                return Err(InputError::new(
-                    path,
-                    "hit_policy",
-                    other.to_string(),
-                    "expected 0 or 1",
-                ));
-            }
-        };
-        let mut probabilities = [0.0f32; 6];
-        for p in &mut probabilities {
-            *p = f32::from_le_bytes(reader.take(4, "selection")?.try_into().unwrap());
-        }
-        let selection = TechniqueSelection {
-            axis: [probabilities[0], probabilities[1], probabilities[2]],
-            channel: [probabilities[3], probabilities[4], probabilities[5]],
-        };
-        let nonfinite = reader.u64("nonfinite")?;
-        let name_len = reader.u32("scene_name_length")? as usize;
-        let scene = String::from_utf8(reader.take(name_len, "scene_name")?.to_vec())
-            .map_err(|e| InputError::new(path, "scene_name", "(bytes)", e.to_string()))?;
         if !(start <= next && next <= end && end <= batches) {
             return Err(InputError::new(
                 path,
@@ -380,13 +413,86 @@ impl Reference {
                 "inconsistent batch range",
             ));
         }
+        let flags = reader.take(1, "estimator")?[0];
+        if flags > FLAG_ALL_HITS | FLAG_XIE | FLAG_DIPOLE {
+            return Err(InputError::new(
+                path,
+                "estimator",
+                flags.to_string(),
+                "expected bits 0 (all hits), 1 (Xie radii) and 2 (dipole profile) only",
+            ));
+        }
+        let mut probabilities = [0.0f32; 6];
+        for p in &mut probabilities {
+            *p = f32::from_le_bytes(reader.array("selection")?);
+        }
+        let selection = TechniqueSelection {
+            axis: [probabilities[0], probabilities[1], probabilities[2]],
+            channel: [probabilities[3], probabilities[4], probabilities[5]],
+        };
+        for (field, p) in [
+            ("selection.axis", selection.axis),
+            ("selection.channel", selection.channel),
+        ] {
+            let sum: f32 = p.iter().sum();
+            if !(p.iter().all(|x| (0.0..=1.0).contains(x)) && (sum - 1.0).abs() <= 1e-4) {
+                return Err(InputError::new(
+                    path,
+                    field,
+                    format!("{p:?}"),
+                    "probabilities must lie in [0, 1] and sum to 1",
+                ));
+            }
+        }
+        let nonfinite = reader.u64("nonfinite")?;
+        let name_len = reader.u32("scene_name_length")? as u64;
+        if name_len > MAX_NAME_BYTES {
+            return Err(InputError::new(
+                path,
+                "scene_name_length",
+                name_len.to_string(),
+                format!("longer than {MAX_NAME_BYTES} bytes"),
+            ));
+        }
+        let scene = String::from_utf8(reader.take(name_len as usize, "scene_name")?.to_vec())
+            .map_err(|e| InputError::new(path, "scene_name", "(bytes)", e.to_string()))?;
+        let pixel_bytes = width as u64 * height as u64 * PIXEL_BYTES;
+        let left = (bytes.len() - reader.at) as u64;
+        if left != pixel_bytes {
+            return Err(InputError::new(
+                path,
+                "pixels",
+                human(left),
+                format!(
+                    "the header's {width}×{height} pixels need {}",
+                    human(pixel_bytes)
+                ),
+            ));
+        }
         let config = ReferenceConfig {
             scene,
             frame,
             seed,
             spp_per_batch,
             batches,
-            settings: PtSettings { hits, selection },
+            settings: PtSettings {
+                hits: if flags & FLAG_ALL_HITS != 0 {
+                    HitPolicy::All
+                } else {
+                    HitPolicy::UniformOne
+                },
+                selection,
+                radius: if flags & FLAG_XIE != 0 {
+                    RadiusSampling::Xie
+                } else {
+                    RadiusSampling::Exact
+                },
+                profile: if flags & FLAG_DIPOLE != 0 {
+                    ProfileKind::Dipole
+                } else {
+                    ProfileKind::Burley
+                },
+            },
         };
         let mut reference =
             Reference::new(config, width, height, Shard::WHOLE).map_err(|e| InputError {
@@ -406,14 +512,6 @@ impl Reference {
                 }
             }
         }
-        if reader.at != bytes.len() {
-            return Err(InputError::new(
-                path,
-                "pixels",
-                format!("{} trailing bytes", bytes.len() - reader.at),
-                "file longer than its header says",
-            ));
-        }
         Ok(reference)
     }
 }
@@ -427,24 +525,33 @@ struct Reader<'a> {
 
 impl Reader<'_> {
     fn take(&mut self, n: usize, field: &str) -> Result<&[u8], InputError> {
-        let slice = self.bytes.get(self.at..self.at + n).ok_or_else(|| {
-            InputError::new(
-                self.path,
-                field,
-                format!("offset {}", self.at),
-                "file ends early (truncated checkpoint)",
-            )
-        })?;
+        let slice = self
+            .bytes
+            .get(self.at..self.at.saturating_add(n))
+            .ok_or_else(|| {
+                InputError::new(
+                    self.path,
+                    field,
+                    format!("offset {}", self.at),
+                    "file ends early (truncated checkpoint)",
+                )
+            })?;
         self.at += n;
         Ok(slice)
     }
 
+    fn array<const N: usize>(&mut self, field: &str) -> Result<[u8; N], InputError> {
+        let mut out = [0; N];
+        out.copy_from_slice(self.take(N, field)?);
+        Ok(out)
+    }
+
     fn u32(&mut self, field: &str) -> Result<u32, InputError> {
-        Ok(u32::from_le_bytes(self.take(4, field)?.try_into().unwrap()))
+        Ok(u32::from_le_bytes(self.array(field)?))
     }
 
     fn u64(&mut self, field: &str) -> Result<u64, InputError> {
-        Ok(u64::from_le_bytes(self.take(8, field)?.try_into().unwrap()))
+        Ok(u64::from_le_bytes(self.array(field)?))
     }
 }
 
@@ -484,17 +591,37 @@ mod tests {
         );
         assert_eq!(whole.nonfinite, 0);
 
-        let shards: Vec<Reference> = [2, 0, 1]
+        let shards: Vec<(PathBuf, Reference)> = [2, 0, 1]
             .into_iter()
             .map(|i| {
                 let mut r = Reference::new(config(7), w, h, Shard { index: i, count: 3 }).unwrap();
                 r.run(&scene, &gbuffer, u32::MAX);
-                r
+                (PathBuf::from(format!("shard{i}")), r)
             })
             .collect();
-        let ranges: Vec<_> = shards.iter().map(|s| s.start..s.end).collect();
+        let ranges: Vec<_> = shards.iter().map(|(_, s)| s.start..s.end).collect();
         assert_eq!(ranges, [4..7, 0..2, 2..4]);
         assert_eq!(Reference::merge(shards.clone()).unwrap(), whole);
+
+        // Shards of different references name both files, the field and both values.
+        let mut other = shards.clone();
+        other[0].1.config.seed = 12;
+        let e = Reference::merge(other).unwrap_err();
+        assert_eq!(
+            (e.file.to_str(), e.field.as_str(), e.value.as_str()),
+            (Some("shard2"), "seed", "12")
+        );
+        assert!(e.reason.contains("shard0 (11)"), "{e}");
+        let mut other = shards.clone();
+        other[2].1.width = w + 1;
+        let e = Reference::merge(other).unwrap_err();
+        assert_eq!(
+            (e.file.to_str(), e.field.as_str()),
+            (Some("shard1"), "width×height")
+        );
+        assert!(e.reason.contains(&format!("shard0 ({w}×{h})")), "{e}");
+        let e = Reference::merge(vec![shards[0].clone(), shards[0].clone()]).unwrap_err();
+        assert!(e.reason.contains("overlap"), "{e}");
 
         let dir = std::env::temp_dir().join(format!("reshift-reference-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
@@ -527,6 +654,43 @@ mod tests {
             sequential, grouped,
             "control: plain f64 sums happen to be associative here"
         );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Every combination of hit policy, radius sampling and profile survives a checkpoint; an
+    /// estimator byte with an unknown bit is a typed error naming the field.
+    #[test]
+    fn estimator_options_round_trip_through_checkpoints() {
+        let dir =
+            std::env::temp_dir().join(format!("reshift-reference-flags-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("checkpoint.bin");
+        for hits in [HitPolicy::UniformOne, HitPolicy::All] {
+            for radius in [RadiusSampling::Exact, RadiusSampling::Xie] {
+                for profile in [ProfileKind::Burley, ProfileKind::Dipole] {
+                    let settings = PtSettings {
+                        hits,
+                        radius,
+                        profile,
+                        ..PtSettings::default()
+                    };
+                    let config = ReferenceConfig {
+                        settings,
+                        ..config(2)
+                    };
+                    let r = Reference::new(config, 3, 2, Shard::WHOLE).unwrap();
+                    r.save(&path).unwrap();
+                    assert_eq!(Reference::load(&path).unwrap(), r, "{settings:?}");
+                }
+            }
+        }
+        let mut bytes = std::fs::read(&path).unwrap();
+        let flags_at = 8 + 3 * 4 + 8 + 5 * 4;
+        assert_eq!(bytes[flags_at], 7, "the all-options file sets bits 0–2");
+        bytes[flags_at] = 8;
+        std::fs::write(&path, &bytes).unwrap();
+        let err = Reference::load(&path).unwrap_err();
+        assert_eq!((err.field.as_str(), err.value.as_str()), ("estimator", "8"));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
@@ -565,8 +729,24 @@ mod tests {
         );
         std::fs::write(&path, b"not a checkpoint").unwrap();
         assert_eq!(Reference::load(&path).unwrap_err().field, "magic");
-        let incomplete = Reference::merge(vec![r]).unwrap_err();
+        // A header that claims 60000×60000 pixels is refused before anything is allocated, both
+        // for the limit and for the bytes present.
+        let mut huge = bytes.clone();
+        huge[8..16].copy_from_slice(
+            &[&60_000u32.to_le_bytes()[..], &60_000u32.to_le_bytes()[..]].concat(),
+        );
+        let err = Reference::from_bytes(&huge, &path).unwrap_err();
+        assert_eq!(
+            (err.field.as_str(), err.value.as_str()),
+            ("width×height", "60000×60000")
+        );
+        let mut wide = bytes.clone();
+        wide[8..12].copy_from_slice(&(2 * gbuffer.width).to_le_bytes());
+        let err = Reference::from_bytes(&wide, &path).unwrap_err();
+        assert_eq!(err.field, "pixels", "{err}");
+        let incomplete = Reference::merge(vec![(path.clone(), r)]).unwrap_err();
         assert!(incomplete.reason.contains("incomplete"), "{incomplete}");
+        assert_eq!(incomplete.file, path);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -59,21 +59,9 @@ use crate::random_walk::{
 };
 use crate::scene::{GBuffer, GPixel, Scene};
 
-/// `purpose` of the per-sample streams (ASCII "SS" + 1).
-pub const PURPOSE_SINGLE_SCATTER: u32 = 0x5353_0001;
-
-/// Unscattered chords followed through internal reflections before the path is cut off.
-pub const DEFAULT_MAX_SEGMENTS: u32 = 256;
-
-/// How the channel of a distance sample is drawn.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum ChannelSelection {
-    /// `P_c = 1/3`.
-    Uniform,
-    /// `P_c = σs,c / Σ σs = σt,c α_c / Σ σt α` [000 "RGB variation in σt"] (uniform when the
-    /// medium does not scatter).
-    Scattering,
-}
+pub use crate::contract::single_scatter::{
+    ChannelSelection, DEFAULT_MAX_SEGMENTS, PURPOSE_SINGLE_SCATTER,
+};
 
 impl ChannelSelection {
     /// `P_c` for a medium with scattering coefficients `sigma_s`.

@@ -9,22 +9,7 @@ use super::fresnel::FresnelTransmission;
 use crate::InputError;
 use crate::profile::{Burley, ScaleFit, scale_factor};
 
-/// The interface that path-traced volumetric transport meets at the object's surface (the
-/// random walk, the single-scatter estimator's zero- and single-scattering paths); scene field
-/// `boundary`. The diffusion BSSRDF is not affected: its Fresnel terms always use `ior`
-/// ([`FresnelTransmission`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum BoundaryKind {
-    /// Fresnel-free Lambertian transmission both ways, no internal reflection; `ior` unused
-    /// (the convention of diffusion-profile renderers [000 slide 57]). The default.
-    #[default]
-    Diffuse,
-    /// A smooth dielectric of index `ior`: Fresnel reflection or refraction at entry and at every
-    /// internal boundary hit, total internal reflection.
-    Dielectric,
-    /// No interface: every crossing keeps its direction (as `ior = 1` with a smooth surface).
-    IndexMatched,
-}
+pub use crate::contract::material::BoundaryKind;
 
 /// A translucent material with the Burley normalized-diffusion BSSRDF (DESIGN §9).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -14,8 +14,7 @@
 
 use std::f32::consts::PI;
 
-/// The quantile of the radius CDF used as the truncation radius `r_max` (DESIGN §9).
-pub const R_MAX_QUANTILE: f32 = 0.999;
+pub use crate::contract::burley::R_MAX_QUANTILE;
 
 /// Burley normalized diffusion for one channel, shape parameter `d > 0` (scene units).
 #[derive(Clone, Copy, Debug, PartialEq)]

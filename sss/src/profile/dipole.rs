@@ -11,6 +11,9 @@
 
 use std::f32::consts::PI;
 
+use crate::contract::dipole::NEWTON_ITERATIONS;
+pub use crate::contract::dipole::Pole;
+
 /// Diffuse Fresnel reflectance `F_dr(η) = −1.440/η² + 0.710/η + 0.668 + 0.0636η` (Jensen et al.
 /// 2001's fit; η = relative index of refraction of the medium).
 pub fn fresnel_diffuse_reflectance(eta: f64) -> f64 {
@@ -52,19 +55,6 @@ pub fn reduced_albedo_from_reflectance(reflectance: f64, eta: f64) -> f64 {
 /// The largest `f32` below 1 (keeps remapped uniforms inside [0, 1)).
 const ONE_MINUS_EPSILON: f32 = 1.0 - 1.0 / 16_777_216.0;
 
-/// Iteration cap of the monotone Newton solve in [`Dipole::sample_pole`] (converged to f32 in
-/// the round-trip test).
-const NEWTON_ITERATIONS: usize = 32;
-
-/// One of the two sources of the dipole.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Pole {
-    /// The real source at depth `z_r = 1/σt′` below the surface.
-    Real,
-    /// The virtual (negative) source at height `z_v = z_r(1 + 4A/3)` above it.
-    Virtual,
-}
-
 /// The dipole of one channel, from reduced scattering `σs′`, absorption `σa` (inverse length)
 /// and relative IOR `η` [002 Table 1].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -89,11 +79,22 @@ impl Dipole {
         }
     }
 
-    fn depth(&self, pole: Pole) -> f32 {
+    /// The depth of `pole`: `z_r` below the surface or `z_v` above it.
+    pub fn depth(&self, pole: Pole) -> f32 {
         match pole {
             Pole::Real => self.z_r,
             Pole::Virtual => self.z_v,
         }
+    }
+
+    /// The reduced albedo `α′ = σs′/σt′`.
+    pub fn reduced_albedo(&self) -> f32 {
+        self.reduced_albedo
+    }
+
+    /// The effective transport coefficient `σ_tr = √(3 σa σt′)`.
+    pub fn sigma_tr(&self) -> f32 {
+        self.sigma_tr
     }
 
     /// `R_d(r) = α′/(4π) Σ_z z(1 + σ_tr s)e^{−σ_tr s}/s³` over both poles [002 Table 1].

@@ -15,6 +15,18 @@ pub use scale::{ScaleFit, scale_factor};
 pub use single_scattering::ScatteringOrders;
 pub use xie::Xie;
 
+pub use crate::contract::pt::ProfileKind;
+
+impl ProfileKind {
+    /// `burley` or `dipole`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ProfileKind::Burley => "burley",
+            ProfileKind::Dipole => "dipole",
+        }
+    }
+}
+
 /// Shared pieces of the sampling tests: keyed streams and binned expectations.
 #[cfg(test)]
 pub(crate) mod test_support {

@@ -9,12 +9,10 @@
 
 use std::f32::consts::PI;
 
+use crate::contract::xie::INVERSE_ITERATIONS;
+
 /// The damping constant `c` of [004 Eq. 21] (their least-squares optimum).
 pub const XIE_C: f32 = 2.5715;
-
-/// Iteration cap of the bracketed Newton solve behind [`Xie::cdf`] (converged to f32 in the
-/// round-trip test over ξ ∈ [1e-7, 1 − 2⁻²⁴]).
-const INVERSE_ITERATIONS: usize = 12;
 
 /// Xie's approximate Burley radius sampler for one channel with shape parameter `d > 0`.
 #[derive(Clone, Copy, Debug, PartialEq)]

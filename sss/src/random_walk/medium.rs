@@ -35,6 +35,15 @@ impl Interface {
             BoundaryKind::IndexMatched => Interface::IndexMatched,
         }
     }
+
+    /// The interface without its `η`: the code a GPU medium carries.
+    pub fn kind(self) -> BoundaryKind {
+        match self {
+            Interface::Diffuse => BoundaryKind::Diffuse,
+            Interface::Dielectric { .. } => BoundaryKind::Dielectric,
+            Interface::IndexMatched => BoundaryKind::IndexMatched,
+        }
+    }
 }
 
 /// A homogeneous medium: scattering and absorption coefficients per RGB channel (1/length), a
@@ -241,6 +250,7 @@ mod tests {
         let file = Path::new("scene.toml");
         let m = Medium::from_translucent(&material, file, "m").unwrap();
         assert_eq!(m.interface(), Interface::Dielectric { eta: 1.4 });
+        assert_eq!(m.interface().kind(), BoundaryKind::Dielectric);
         assert!(
             (m.sigma_t() - Vec3::new(1.0, 0.5, 0.25))
                 .abs()
@@ -265,6 +275,7 @@ mod tests {
                 Medium::from_translucent(&m, file, "m").unwrap().interface(),
                 interface
             );
+            assert_eq!(interface.kind(), boundary);
         }
         let bad = Translucent { g: 1.5, ..material };
         let err = Medium::from_translucent(&bad, file, "m").unwrap_err();

@@ -40,8 +40,8 @@ pub use lighting::{ExitLighting, LightSample};
 pub use medium::{Interface, Medium};
 pub use phase::{HenyeyGreenstein, PhaseFunction, PhaseSample};
 pub use walk::{
-    Crossing, DEFAULT_MAX_BOUNCES, Exit, ExitDirection, WalkEnd, WalkSettings, cross, roulette,
-    walk,
+    Crossing, CrossingKind, DEFAULT_MAX_BOUNCES, Exit, ExitDirection, WalkEnd, WalkEndKind,
+    WalkSettings, cross, roulette, walk,
 };
 
 #[cfg(test)]

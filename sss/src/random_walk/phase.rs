@@ -12,9 +12,7 @@ use glam::Vec3;
 /// `1/(4π)`: the isotropic phase function.
 pub const ISOTROPIC: f32 = 0.25 * FRAC_1_PI;
 
-/// Below this `|g|` the Henyey–Greenstein inverse CDF cancels catastrophically; directions are
-/// then drawn isotropically and weighted by `value / pdf` (exact, not an approximation).
-const SMALL_G: f32 = 1e-3;
+use crate::contract::random_walk::SMALL_G;
 
 /// A scattered direction with its phase value and the density it was drawn with (both per sr).
 #[derive(Clone, Copy, Debug, PartialEq)]

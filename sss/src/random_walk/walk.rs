@@ -24,8 +24,7 @@ use super::interface::{fresnel_dielectric, reflect, refract};
 use super::medium::{Interface, Medium};
 use super::phase::PhaseFunction;
 
-/// Segments (free flights) per walk before it is cut off and reported truncated.
-pub const DEFAULT_MAX_BOUNCES: u32 = 1 << 16;
+pub use crate::contract::random_walk::{CrossingKind, DEFAULT_MAX_BOUNCES, WalkEndKind};
 
 /// Knobs of the walk kernel.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -80,6 +79,17 @@ pub enum WalkEnd {
     Truncated,
 }
 
+impl WalkEnd {
+    /// The end without its exit: the code a GPU walk returns.
+    pub fn kind(&self) -> WalkEndKind {
+        match self {
+            WalkEnd::Exited(_) => WalkEndKind::Exited,
+            WalkEnd::Terminated => WalkEndKind::Terminated,
+            WalkEnd::Truncated => WalkEndKind::Truncated,
+        }
+    }
+}
+
 /// Where a path inside the medium meets the boundary.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Crossing {
@@ -87,6 +97,17 @@ pub enum Crossing {
     Leaves(ExitDirection),
     /// It is reflected back inside along this direction (Fresnel or total internal reflection).
     Reflected(Vec3),
+}
+
+impl Crossing {
+    /// The crossing without its direction: the code a GPU crossing returns.
+    pub fn kind(&self) -> CrossingKind {
+        match self {
+            Crossing::Leaves(ExitDirection::Specular(_)) => CrossingKind::LeavesSpecular,
+            Crossing::Leaves(ExitDirection::Diffuse) => CrossingKind::LeavesDiffuse,
+            Crossing::Reflected(_) => CrossingKind::Reflected,
+        }
+    }
 }
 
 /// The boundary event of a path travelling along `dir` that meets the boundary where its unit
@@ -239,7 +260,9 @@ mod tests {
         let (mut exited, mut truncated) = (0, 0);
         for i in 0..1_000 {
             let mut stream = StreamKey::new(i, 0, 0, 0x7A).stream(1);
-            match walk(&sphere, &medium, Vec3::Z, -Vec3::Z, &settings, &mut stream) {
+            let end = walk(&sphere, &medium, Vec3::Z, -Vec3::Z, &settings, &mut stream);
+            assert_ne!(end.kind(), WalkEndKind::Terminated);
+            match end {
                 WalkEnd::Exited(exit) => {
                     exited += 1;
                     assert!(exit.scatter_count <= 2, "{exit:?}");
@@ -251,6 +274,29 @@ mod tests {
         assert!(
             truncated > 500 && exited > 0,
             "{exited} exited, {truncated} truncated of 1 000"
+        );
+    }
+
+    /// The codes a GPU crossing returns: index-matched leaves specularly, diffuse diffusely, and
+    /// a dielectric (η = 1.5) reflects a path at sin θ = 0.99, beyond the critical 1/1.5.
+    #[test]
+    fn crossings_have_their_kinds() {
+        let mut stream = StreamKey::new(0, 0, 0, 0x7A).stream(1);
+        let dir = Vec3::new(0.0, 0.6, 0.8);
+        let kind =
+            |interface, dir, stream: &mut Stream| cross(interface, dir, Vec3::Z, stream).kind();
+        assert_eq!(
+            kind(Interface::IndexMatched, dir, &mut stream),
+            CrossingKind::LeavesSpecular
+        );
+        assert_eq!(
+            kind(Interface::Diffuse, dir, &mut stream),
+            CrossingKind::LeavesDiffuse
+        );
+        let grazing = Vec3::new(0.99, 0.0, (1.0f32 - 0.99 * 0.99).sqrt());
+        assert_eq!(
+            kind(Interface::Dielectric { eta: 1.5 }, grazing, &mut stream),
+            CrossingKind::Reflected
         );
     }
 

@@ -3,7 +3,12 @@
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-use super::Scene;
+use super::{Camera, Scene};
+
+/// Reprojection checks ([`GBuffer::reproject`]): the earlier pixel must show the same object at a
+/// view distance within this relative tolerance, with geometric normals at least this aligned.
+pub const REPROJECTION_DEPTH_TOLERANCE: f32 = 0.1;
+pub const REPROJECTION_NORMAL_COSINE: f32 = 0.9;
 
 /// The primary hit of one pixel.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -53,6 +58,21 @@ impl GBuffer {
             frame,
             pixels,
         }
+    }
+
+    /// The pixel of this (earlier) frame that shows the primary hit `x` of a later frame:
+    /// `floor(camera.project(self.frame, x))`, accepted if it shows the same object at a similar
+    /// distance and normal (the constants above); `None` otherwise (a disocclusion). The rule of
+    /// temporal reuse (engine's `reuse::temporal`) and of the adaptive sampler's history.
+    pub fn reproject(&self, camera: &Camera, x: &GPixel) -> Option<u32> {
+        let c = camera.project(self.frame, x.position)?;
+        let (qx, qy) = (c.x as u32, c.y as u32);
+        let earlier = self.get(qx, qy)?;
+        let depth = (x.position - camera.eye(self.frame)).length();
+        let same_surface = earlier.object == x.object
+            && (earlier.depth - depth).abs() <= REPROJECTION_DEPTH_TOLERANCE * depth
+            && earlier.geometric_normal.dot(x.geometric_normal) >= REPROJECTION_NORMAL_COSINE;
+        same_surface.then_some(qy * self.width + qx)
     }
 
     /// The pixel at column `px`, row `py` (`None` outside the image or on a miss).
@@ -199,6 +219,65 @@ intensity = [1.0, 1.0, 1.0]
         assert!(
             counts.iter().all(|&c| c > 50),
             "every case is exercised: {counts:?}"
+        );
+    }
+
+    /// With the camera at rest (frames 15 and 16 of bumpy: only the jitter moves) every accepted
+    /// pixel reprojects onto itself, and a rejected one fails one of the checks (the jitter moved it
+    /// across a silhouette or onto a facet of another normal: 5% of the pixels here). Along the
+    /// moving trajectory (frame 5 → 4) an accepted pixel shows the same object, on the bumpy
+    /// object within 1.5 pixel footprints of x1 for 97% of the pixels where it is not seen at a
+    /// grazing angle (the rest: a bump that hides x1 in frame 4 passes the 10% depth check), and
+    /// the moved camera disoccludes some pixels.
+    #[test]
+    fn reprojection_finds_the_same_surface() {
+        let mut scene = Scene::builtin("bumpy").expect("built-in scene");
+        scene.camera = scene.camera.with_resolution(64, 48);
+        let (g15, g16) = (GBuffer::render(&scene, 15), GBuffer::render(&scene, 16));
+        let (mut same, mut total) = (0, 0);
+        for (p, x) in g16.pixels.iter().enumerate() {
+            let Some(x) = x else { continue };
+            total += 1;
+            match g15.reproject(&scene.camera, x) {
+                Some(q) => {
+                    assert_eq!(q as usize, p, "a resting camera moves pixel {p}");
+                    same += 1;
+                }
+                None => assert!(g15.pixels[p].is_none_or(|e| e.object != x.object
+                    || (e.depth - x.depth).abs() > 0.1 * x.depth
+                    || e.geometric_normal.dot(x.geometric_normal) < 0.9)),
+            }
+        }
+        assert!(same as f64 > 0.9 * total as f64, "{same} of {total}");
+
+        let (g4, g5) = (GBuffer::render(&scene, 4), GBuffer::render(&scene, 5));
+        let (mut accepted, mut rejected, mut near, mut checked) = (0, 0, 0, 0);
+        for x in g5.pixels.iter().flatten() {
+            let Some(q) = g4.reproject(&scene.camera, x) else {
+                rejected += 1;
+                continue;
+            };
+            accepted += 1;
+            let e = g4.pixels[q as usize].unwrap();
+            assert_eq!(e.object, x.object);
+            // The footprint on the bumpy object where it is not seen at a grazing angle (the plate
+            // is a thin box: a pixel may show another of its faces).
+            let cos = e.geometric_normal.dot(e.view);
+            if x.object == 0 && cos > 0.5 {
+                let footprint =
+                    2.0 * scene.camera.tan_half_fov() * e.depth / (g4.height as f32 * cos);
+                checked += 1;
+                near += ((e.position - x.position).length() < 1.5 * footprint) as u32;
+            }
+        }
+        assert!(
+            accepted > 1500 && rejected > 0,
+            "{accepted} accepted, {rejected} rejected"
+        );
+        // A bump that hides x1 in the earlier frame passes the depth check: a few far matches.
+        assert!(
+            near as f64 > 0.97 * checked as f64,
+            "{near} of {checked} near x1"
         );
     }
 

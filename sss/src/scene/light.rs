@@ -16,9 +16,7 @@ use glam::Vec3;
 
 use crate::geometry::Frame;
 
-/// Distance from a shading point at which a directional light's vertex x3 is placed (scene
-/// units); scenes are a few units across, so the vertex lies outside any of them.
-pub const DIRECTIONAL_DISTANCE: f32 = 1.0e4;
+pub use crate::contract::light::DIRECTIONAL_DISTANCE;
 
 /// Rec. 709 luminance.
 pub fn luminance(c: Vec3) -> f32 {

@@ -8,18 +8,19 @@ use glam::{Affine3A, Quat, Vec3};
 
 use super::format::{
     BoundaryDesc, CameraDesc, FitDesc, LightDesc, ManyLightsDesc, MaterialDesc, ObjectDesc,
-    ScaleDesc, SceneFile, ShapeDesc, TransformDesc,
+    ScaleDesc, ShapeDesc, TransformDesc,
 };
 use super::light::{Light, Lights};
 use super::many_lights::ManyLights;
+use super::parse::parse;
 use super::{Camera, Object, Scene};
 use crate::InputError;
 use crate::geometry::{Geometry, TriangleMesh, load_mesh, shapes};
+use crate::limits::{
+    self, MAX_COORDINATE, MAX_EMISSION, MAX_LIGHTS, MAX_SCENE_TRIANGLES, MAX_SHAPE_TRIANGLES,
+};
 use crate::material::{BoundaryKind, Lambert, MEASURED_NAMES, Material, Translucent, measured};
 use crate::profile::ScaleFit;
-
-/// Largest triangle count of one procedural shape (guards against typos in tessellation fields).
-const MAX_SHAPE_TRIANGLES: u64 = 1 << 22;
 
 /// Parses and builds a scene; `origin` names the file in errors and anchors relative mesh paths.
 pub fn scene_from_toml(text: &str, origin: &Path) -> Result<Scene, InputError> {
@@ -28,9 +29,16 @@ pub fn scene_from_toml(text: &str, origin: &Path) -> Result<Scene, InputError> {
     let camera = ctx.camera(&file.camera)?;
     let (materials, material_ids) = ctx.materials(&file.materials)?;
     let (objects, meshes, dropped_degenerate) = ctx.objects(&file.objects, &material_ids)?;
+    if file.lights.len() as u64 > MAX_LIGHTS {
+        return Err(ctx.err(
+            "lights",
+            format!("{} lights", file.lights.len()),
+            format!("more than {MAX_LIGHTS} lights"),
+        ));
+    }
     let mut lights = ctx.lights(&file.lights)?;
     if let Some(many) = &file.many_lights {
-        lights.extend(ctx.many_lights(many)?.generate());
+        lights.extend(ctx.many_lights(many, lights.len())?.generate());
     }
     if lights.is_empty() {
         return Err(ctx.err(
@@ -69,76 +77,6 @@ pub fn scene_from_toml(text: &str, origin: &Path) -> Result<Scene, InputError> {
     })
 }
 
-/// TOML text → [`SceneFile`]. Syntax errors name the line; type and unknown-field errors name the
-/// field path (via `serde_path_to_error`) and show the value found there.
-fn parse(text: &str, origin: &Path) -> Result<SceneFile, InputError> {
-    let table: toml::Table = toml::from_str(text).map_err(|e| {
-        let (field, value) = match e.span() {
-            Some(span) => {
-                let before = text.get(..span.start).unwrap_or(text);
-                let line = before.matches('\n').count();
-                let column = before.rsplit('\n').next().unwrap_or("").chars().count();
-                let source = text.lines().nth(line).unwrap_or("").trim();
-                (
-                    format!("line {}, column {}", line + 1, column + 1),
-                    format!("`{source}`"),
-                )
-            }
-            None => ("(document)".to_string(), "…".to_string()),
-        };
-        InputError::new(
-            origin,
-            field,
-            value,
-            format!("malformed TOML: {}", e.message().trim()),
-        )
-    })?;
-    let root = toml::Value::Table(table);
-    serde_path_to_error::deserialize::<_, SceneFile>(root.clone()).map_err(|e| {
-        let path = e.path().to_string();
-        let value = value_at(&root, e.path()).map_or_else(|| "(missing)".to_string(), render_value);
-        InputError::new(origin, path, value, e.inner().message().trim().to_string())
-    })
-}
-
-/// The value at a serde path in the TOML tree, as far as the path can be followed.
-fn value_at<'a>(
-    root: &'a toml::Value,
-    path: &serde_path_to_error::Path,
-) -> Option<&'a toml::Value> {
-    use serde_path_to_error::Segment;
-    let mut at = root;
-    for segment in path.iter() {
-        at = match segment {
-            Segment::Map { key } => at.get(key.as_str())?,
-            Segment::Seq { index } => at.get(*index)?,
-            Segment::Enum { .. } => at,
-            Segment::Unknown => return Some(at),
-        };
-    }
-    Some(at)
-}
-
-/// A TOML value on one line, shortened to 160 characters.
-fn render_value(value: &toml::Value) -> String {
-    let text = match value {
-        toml::Value::Table(t) => {
-            let fields: Vec<String> = t
-                .iter()
-                .map(|(k, v)| format!("{k} = {}", render_value(v)))
-                .collect();
-            format!("{{ {} }}", fields.join(", "))
-        }
-        other => other.to_string(),
-    };
-    let text = text.replace('\n', " ");
-    if text.chars().count() > 160 {
-        format!("{}…", text.chars().take(160).collect::<String>())
-    } else {
-        text
-    }
-}
-
 /// Validation context: the file named in every error.
 struct Ctx<'a> {
     file: &'a Path,
@@ -146,6 +84,10 @@ struct Ctx<'a> {
 
 fn finite3(v: [f32; 3]) -> bool {
     v.iter().all(|x| x.is_finite())
+}
+
+fn within_coordinates(v: [f32; 3]) -> bool {
+    v.iter().all(|x| x.abs() <= MAX_COORDINATE)
 }
 
 impl Ctx<'_> {
@@ -158,45 +100,48 @@ impl Ctx<'_> {
         InputError::new(self.file, field, value, reason)
     }
 
-    /// A finite 3-vector or an error at `field`.
+    /// A finite 3-vector within [`MAX_COORDINATE`] or an error at `field`.
     fn vec3(&self, field: &str, v: [f32; 3]) -> Result<Vec3, InputError> {
-        if finite3(v) {
-            Ok(Vec3::from_array(v))
-        } else {
-            Err(self.err(field, format!("{v:?}"), "must be finite"))
-        }
-    }
-
-    /// A finite, positive number or an error at `field`.
-    fn positive(&self, field: &str, x: f32) -> Result<f32, InputError> {
-        if x.is_finite() && x > 0.0 {
-            Ok(x)
-        } else {
-            Err(self.err(field, x.to_string(), "must be finite and > 0"))
-        }
-    }
-
-    /// An emitted quantity: finite, non-negative per channel, not all zero.
-    fn emission(&self, field: &str, v: [f32; 3]) -> Result<Vec3, InputError> {
-        if finite3(v) && v.iter().all(|&x| x >= 0.0) && v.iter().any(|&x| x > 0.0) {
+        if finite3(v) && within_coordinates(v) {
             Ok(Vec3::from_array(v))
         } else {
             Err(self.err(
                 field,
                 format!("{v:?}"),
-                "each channel must be finite and ≥ 0, and one > 0",
+                format!("must be finite, each |component| ≤ {MAX_COORDINATE:e}"),
+            ))
+        }
+    }
+
+    /// A positive number (a length) no larger than [`MAX_COORDINATE`], or an error at `field`.
+    fn positive(&self, field: &str, x: f32) -> Result<f32, InputError> {
+        if x > 0.0 && x <= MAX_COORDINATE {
+            Ok(x)
+        } else {
+            Err(self.err(
+                field,
+                x.to_string(),
+                format!("must be > 0 and ≤ {MAX_COORDINATE:e}"),
+            ))
+        }
+    }
+
+    /// An emitted quantity: each channel in [0, [`MAX_EMISSION`]], not all zero.
+    fn emission(&self, field: &str, v: [f32; 3]) -> Result<Vec3, InputError> {
+        if v.iter().all(|x| (0.0..=MAX_EMISSION).contains(x)) && v.iter().any(|&x| x > 0.0) {
+            Ok(Vec3::from_array(v))
+        } else {
+            Err(self.err(
+                field,
+                format!("{v:?}"),
+                format!("each channel must lie in [0, {MAX_EMISSION:e}], and one be > 0"),
             ))
         }
     }
 
     fn camera(&self, c: &CameraDesc) -> Result<Camera, InputError> {
-        if c.resolution.contains(&0) {
-            return Err(self.err(
-                "camera.resolution",
-                format!("{:?}", c.resolution),
-                "width and height must be ≥ 1",
-            ));
-        }
+        let [width, height] = c.resolution;
+        limits::resolution(self.file, "camera.resolution", width, height)?;
         if !(c.vfov > 0.0 && c.vfov < 180.0) {
             return Err(self.err(
                 "camera.vfov",
@@ -348,7 +293,7 @@ impl Ctx<'_> {
         let mut names = HashMap::new();
         let mut objects = Vec::with_capacity(descs.len());
         let mut meshes = Vec::with_capacity(descs.len());
-        let mut dropped = 0;
+        let (mut dropped, mut triangles) = (0, 0u64);
         for (i, desc) in descs.iter().enumerate() {
             let field = format!("objects[{i}]");
             if names.insert(desc.name.as_str(), i).is_some() {
@@ -378,14 +323,33 @@ impl Ctx<'_> {
                     ));
                 }
             };
-            let mut mesh =
-                local.transformed(&self.transform(&desc.transform, &format!("{field}.transform"))?);
+            let transform = format!("{field}.transform");
+            let mut mesh = local.transformed(&self.transform(&desc.transform, &transform)?);
+            if let Some(p) = mesh
+                .positions
+                .iter()
+                .find(|p| !(p.is_finite() && within_coordinates(p.to_array())))
+            {
+                return Err(self.err(
+                    transform,
+                    format!("{:?}", p.to_array()),
+                    format!("moves a vertex beyond |coordinate| ≤ {MAX_COORDINATE:e}"),
+                ));
+            }
             dropped += mesh.drop_degenerate();
             if mesh.indices.is_empty() {
                 return Err(self.err(
                     &field,
                     format!("{:?}", desc.name),
                     "no non-degenerate triangles",
+                ));
+            }
+            triangles += mesh.triangle_count() as u64;
+            if triangles > MAX_SCENE_TRIANGLES {
+                return Err(self.err(
+                    &field,
+                    format!("{triangles} triangles so far"),
+                    format!("the scene has more than {MAX_SCENE_TRIANGLES} triangles"),
                 ));
             }
             objects.push(Object {
@@ -643,10 +607,10 @@ impl Ctx<'_> {
             .collect()
     }
 
-    fn many_lights(&self, m: &ManyLightsDesc) -> Result<ManyLights, InputError> {
-        if m.count == 0 {
-            return Err(self.err("many_lights.count", "0", "must be ≥ 1"));
-        }
+    /// The `[many_lights]` generator; `lights` lights are already defined.
+    fn many_lights(&self, m: &ManyLightsDesc, lights: usize) -> Result<ManyLights, InputError> {
+        let room = MAX_LIGHTS.saturating_sub(lights as u64).max(1);
+        limits::count(self.file, "many_lights.count", m.count as u64, 1, room)?;
         let min = self.vec3("many_lights.region.min", m.region.min)?;
         let max = self.vec3("many_lights.region.max", m.region.max)?;
         if !min.cmple(max).all() {
@@ -657,21 +621,34 @@ impl Ctx<'_> {
             ));
         }
         let color = self.emission("many_lights.color", m.color.unwrap_or([1.0; 3]))?;
-        Ok(ManyLights {
+        let many = ManyLights {
             count: m.count,
             seed: m.seed,
             min,
             max,
             radius: self.positive("many_lights.radius", m.radius)?,
-            total_power: self.positive("many_lights.total_power", m.total_power)?,
+            total_power: m.total_power,
             color,
-        })
+        };
+        let radiance = many.radiance();
+        if !(m.total_power > 0.0 && radiance.is_finite() && radiance.max_element() <= MAX_EMISSION)
+        {
+            return Err(self.err(
+                "many_lights.total_power",
+                m.total_power.to_string(),
+                format!(
+                    "must be > 0 and give each light a radiance ≤ {MAX_EMISSION:e} (gives {radiance})"
+                ),
+            ));
+        }
+        Ok(many)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::error::MAX_MESSAGE_CHARS;
     use crate::scene::Scene;
 
     const ORIGIN: &str = "tests/minimal.toml";
@@ -778,11 +755,17 @@ intensity = [1.0, 1.0, 1.0]
             };
             assert_eq!(m.boundary, kind, "{value}");
         }
-        assert_rejected(
-            &edit("mfp = [", "boundary = \"smooth\"\nmfp = ["),
-            "materials[0]",
-            "boundary = \"smooth\"",
-        );
+        // The value is the whole material table, which the one-line message elides in its
+        // middle; serde's reason still names the rejected variant.
+        let Err(err) = load(&edit("mfp = [", "boundary = \"smooth\"\nmfp = [")) else {
+            panic!("boundary = \"smooth\" accepted")
+        };
+        let message = err.to_string();
+        assert_eq!(err.field, "materials[0]", "{message}");
+        assert!(err.value.contains("boundary = \"smooth\""), "{message}");
+        for part in [ORIGIN, "materials[0]", "unknown variant `smooth`"] {
+            assert!(message.contains(part), "{message:?} does not name {part:?}");
+        }
     }
 
     #[test]
@@ -881,7 +864,7 @@ intensity = [1.0, 1.0, 1.0]
         assert_rejected(
             &edit("resolution = [32, 24]", "resolution = [0, 24]"),
             "camera.resolution",
-            "[0, 24]",
+            "0×24",
         );
         assert_rejected(
             &edit("intensity = [1.0, 1.0, 1.0]", "intensity = [0.0, 0.0, 0.0]"),
@@ -897,6 +880,68 @@ intensity = [1.0, 1.0, 1.0]
             &edit("target = [0.0, 0.0, 0.0]", "target = [0.0, 0.0, 3.0]"),
             "camera.target",
             "[0, 0, 3]",
+        );
+    }
+
+    /// Sizes that would allocate without bound and values that would overflow downstream are
+    /// rejected at their field, before anything is built.
+    #[test]
+    fn sizes_and_absurd_values_are_rejected() {
+        assert_rejected(
+            &edit("resolution = [32, 24]", "resolution = [100000, 100000]"),
+            "camera.resolution",
+            "100000×100000",
+        );
+        assert_rejected(
+            &edit("resolution = [32, 24]", "resolution = [16384, 16384]"),
+            "camera.resolution",
+            "16384×16384",
+        );
+        assert_rejected(
+            &edit(
+                "intensity = [1.0, 1.0, 1.0]",
+                "intensity = [1e38, 1.0, 1.0]",
+            ),
+            "lights[0].intensity",
+            "1e38",
+        );
+        assert_rejected(
+            &edit("eye = [0.0, 0.0, 3.0]", "eye = [0.0, 0.0, 3e30]"),
+            "camera.eye",
+            "3e30",
+        );
+        assert_rejected(
+            &edit("radius = 0.5", "radius = 0.5 }\ntransform = { scale = 1e30"),
+            "objects[0].transform",
+            "5e29",
+        );
+        let many = |count: &str, radius: &str| {
+            format!(
+                "{MINIMAL}\n[many_lights]\ncount = {count}\nseed = 1\nradius = {radius}\n\
+                 total_power = 10.0\nregion = {{ min = [0.0, 0.0, 0.0], max = [1.0, 1.0, 1.0] }}\n"
+            )
+        };
+        assert!(load(&many("16", "0.01")).is_ok());
+        assert_rejected(
+            &many("4000000000", "0.01"),
+            "many_lights.count",
+            "4000000000",
+        );
+        assert_rejected(&many("16", "1e-20"), "many_lights.total_power", "10");
+    }
+
+    /// A syntax error deep inside a 200 000-character line shows the text around the error,
+    /// and the whole message is one line of at most 200 characters.
+    #[test]
+    fn syntax_errors_in_long_lines_show_an_excerpt() {
+        let deep = format!("vfov = {}x", "[".repeat(200_000));
+        let error = load(&edit("vfov = 40.0", &deep)).err().expect("rejected");
+        assert!(error.value.chars().count() < 100, "{}", error.value);
+        let message = error.to_string();
+        assert!(message.chars().count() <= MAX_MESSAGE_CHARS, "{message}");
+        assert!(
+            message.starts_with(ORIGIN) && message.contains("line 4"),
+            "{message}"
         );
     }
 

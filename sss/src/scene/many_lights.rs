@@ -25,13 +25,16 @@ pub struct ManyLights {
 }
 
 impl ManyLights {
+    /// The radiance of every light: power of a sphere light Φ = π · 4πr² · luminance(L).
+    pub fn radiance(&self) -> Vec3 {
+        let per_light = self.total_power / self.count as f32;
+        self.color / luminance(self.color) * per_light / (4.0 * PI * PI * self.radius * self.radius)
+    }
+
     /// The lights; light `i` depends only on `(seed, i)`. Inputs must be validated (positive
     /// radius, power and colour luminance).
     pub fn generate(&self) -> Vec<Light> {
-        // Power of a sphere light: Φ = π · 4πr² · luminance(L).
-        let per_light = self.total_power / self.count as f32;
-        let radiance = self.color / luminance(self.color) * per_light
-            / (4.0 * PI * PI * self.radius * self.radius);
+        let radiance = self.radiance();
         (0..self.count)
             .map(|i| {
                 let mut rng = StreamKey::new(i, 0, 0, MANY_LIGHTS_PURPOSE).stream(self.seed);

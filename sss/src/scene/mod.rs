@@ -9,16 +9,18 @@ mod gbuffer;
 mod light;
 mod load;
 mod many_lights;
+mod parse;
 
 use std::path::{Path, PathBuf};
 
 pub use camera::{Camera, FRAMES};
-pub use gbuffer::{GBuffer, GPixel};
+pub use gbuffer::{GBuffer, GPixel, REPROJECTION_DEPTH_TOLERANCE, REPROJECTION_NORMAL_COSINE};
 pub use light::{DIRECTIONAL_DISTANCE, Light, LightSample, Lights, luminance};
 pub use many_lights::ManyLights;
 
 use crate::InputError;
 use crate::geometry::Geometry;
+use crate::limits::{MAX_SCENE_FILE_BYTES, read_file};
 use crate::material::Material;
 
 /// A scene object; its index in [`Scene::objects`] is its object id in [`Scene::geometry`].
@@ -50,14 +52,16 @@ impl Scene {
     /// The built-in scenes: `(name, one-line description)`.
     pub const BUILTIN: &[(&str, &str)] = builtin::BUILTIN;
 
-    /// Loads a scene file; mesh paths are relative to its folder.
+    /// Loads a scene file (at most [`MAX_SCENE_FILE_BYTES`]); mesh paths are relative to its
+    /// folder.
     pub fn load(path: &Path) -> Result<Scene, InputError> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
+        let bytes = read_file(path, MAX_SCENE_FILE_BYTES)?;
+        let text = String::from_utf8(bytes).map_err(|e| {
             InputError::new(
                 path,
                 "(file)",
-                format!("{:?}", path.display().to_string()),
-                e.to_string(),
+                format!("byte {}", e.utf8_error().valid_up_to()),
+                "not UTF-8 text",
             )
         })?;
         Scene::from_toml_str(&text, path)

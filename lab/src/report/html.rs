@@ -1,0 +1,263 @@
+//! `report.html`: one self-contained page per comparison (every image embedded as a base64
+//! data URI, no script, no external resource) with the run's settings, the efficiency verdicts
+//! over the baseline, the inset figure, the convergence plot, the error maps and the full table,
+//! all read from [`Results`] and the images it names.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use crate::error::Error;
+use crate::method_result::Measured;
+use crate::report::results::{AreaEntry, Results};
+use crate::uncertainty::Interval;
+
+use super::tables::{sig, verdict_word, with_ci};
+
+const STYLE: &str = "body{font-family:sans-serif;margin:24px;color:#111;max-width:1500px}\
+    table{border-collapse:collapse;margin:12px 0}td,th{border:1px solid #bbb;padding:3px 8px;\
+    text-align:right;font-size:13px}th{background:#eee}td:first-child,th:first-child{text-align:left}\
+    .better{background:#cdeccd}.worse{background:#f6cfcf}.inconclusive{background:#f3f3d8}\
+    img{max-width:100%;border:1px solid #ddd}.maps img{width:260px}\
+    .note{color:#555;font-size:13px}";
+
+/// RFC 4648 base64 of `bytes`, with padding.
+pub fn base64(bytes: &[u8]) -> String {
+    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
+    for chunk in bytes.chunks(3) {
+        let n = chunk
+            .iter()
+            .enumerate()
+            .fold(0u32, |n, (i, &b)| n | (b as u32) << (16 - 8 * i));
+        for i in 0..4 {
+            if i <= chunk.len() {
+                out.push(ALPHABET[(n >> (18 - 6 * i) & 63) as usize] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
+/// `text` with `& < > "` escaped.
+pub fn escape(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// An `<img>` of the PNG `file` in `out`, embedded.
+fn image(out: &Path, file: &str, alt: &str) -> Result<String, Error> {
+    let path = out.join(file);
+    let bytes = std::fs::read(&path).map_err(|e| Error::Io(format!("{}: {e}", path.display())))?;
+    Ok(format!(
+        "<img src=\"data:image/png;base64,{}\" alt=\"{}\">",
+        base64(&bytes),
+        escape(alt)
+    ))
+}
+
+fn measured(value: Option<f64>, ci: Option<Interval>) -> Option<Measured> {
+    value.map(|value| Measured { value, ci })
+}
+
+/// The page of `results`, whose images lie in `out`.
+pub fn report(results: &Results, out: &Path) -> Result<String, Error> {
+    let r = results;
+    let mut page = format!(
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\
+         <title>reshift compare: {scene}</title><style>{STYLE}</style></head><body>\n\
+         <h1>reshift compare: {scene}</h1>\n",
+        scene = escape(&r.scene)
+    );
+    let frame_spp: Vec<String> = r
+        .frame_references
+        .iter()
+        .filter(|f| f.frame != r.frame)
+        .map(|f| f.spp.to_string())
+        .collect();
+    let _ = writeln!(
+        page,
+        "<p>{w}×{h}, {frames} frames (tables: frame {frame}), {k} replicas per method, backend \
+         {backend}, budget {mode}. Reference of frame {frame}: {spp} spp in {batches} batches; \
+         earlier frames: {earlier}. Intervals: {conf}% confidence, {how}. Bias: {bconf}% \
+         Student-t over replicas.{stopped}</p>",
+        w = r.width,
+        h = r.height,
+        frames = r.frames,
+        frame = r.frame,
+        k = r.replicas,
+        backend = escape(&r.backend),
+        mode = r.budget.mode,
+        spp = r.reference.spp,
+        batches = r.reference.batches,
+        earlier = if frame_spp.is_empty() {
+            "not measured".to_string()
+        } else {
+            format!("{} spp each", frame_spp[0])
+        },
+        conf = 100.0 * r.confidence,
+        how = escape(&r.interval_method),
+        bconf = 100.0 * r.bias_confidence,
+        stopped = if r.interrupted {
+            " <b>Interrupted: partial results.</b>"
+        } else {
+            ""
+        },
+    );
+    verdicts(&mut page, r);
+    let _ = writeln!(
+        page,
+        "<h2>Figure</h2>{}",
+        image(out, &r.figures.figure, "figure")?
+    );
+    let _ = writeln!(
+        page,
+        "<h2>Convergence over frames</h2>{}",
+        image(out, &r.figures.convergence, "convergence")?
+    );
+    page.push_str("<h2>Error maps (last frame, replica 0)</h2>\n<table class=\"maps\">");
+    for m in &r.methods {
+        let _ = writeln!(
+            page,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            escape(&m.method),
+            image(out, &m.images.final_png, &m.method)?,
+            image(out, &m.images.abs_error_png, "absolute error")?,
+            image(out, &m.images.rel_error_png, "relative error")?
+        );
+    }
+    page.push_str("</table>\n");
+    full_table(&mut page, r);
+    page.push_str(
+        "<p class=\"note\">Data: <a href=\"results.json\">results.json</a>, \
+         <a href=\"table.csv\">table.csv</a>, <a href=\"convergence.csv\">convergence.csv</a> \
+         (docs/results-schema.md).</p>\n</body></html>\n",
+    );
+    Ok(page)
+}
+
+/// The efficiency ratio over the baseline per method and area, coloured by its verdict.
+fn verdicts(page: &mut String, r: &Results) {
+    let Some(baseline) = &r.baseline else {
+        page.push_str("<p>No baseline among the methods: no efficiency ratios.</p>\n");
+        return;
+    };
+    let areas: Vec<&str> = r
+        .methods
+        .iter()
+        .find(|m| &m.method == baseline)
+        .map(|m| m.areas.iter().map(|a| a.area.as_str()).collect())
+        .unwrap_or_default();
+    let _ = write!(
+        page,
+        "<h2>Efficiency over {b}</h2><p>Ratio of 1/(MSE·s) per frame to {b}'s, with its \
+         {c}% interval; green: better (interval above 1), red: worse, yellow: inconclusive.</p>\
+         <table><tr><th>method</th>",
+        b = escape(baseline),
+        c = 100.0 * r.confidence
+    );
+    for a in &areas {
+        let _ = write!(page, "<th>{a}</th>");
+    }
+    page.push_str("</tr>\n");
+    for m in r.methods.iter().filter(|m| &m.method != baseline) {
+        let _ = write!(page, "<tr><td>{}</td>", escape(&m.method));
+        for a in &areas {
+            let cell = m
+                .areas
+                .iter()
+                .find(|e| e.area == *a)
+                .and_then(|e| measured(e.efficiency_ratio, e.efficiency_ratio_ci));
+            match cell {
+                Some(x) => {
+                    let word = verdict_word(&x);
+                    let _ = write!(
+                        page,
+                        "<td class=\"{word}\">{} {word}</td>",
+                        with_ci(Some(x))
+                    );
+                }
+                None => page.push_str("<td>-</td>"),
+            }
+        }
+        page.push_str("</tr>\n");
+    }
+    page.push_str("</table>\n");
+}
+
+/// Every method and area with every number and its interval.
+fn full_table(page: &mut String, r: &Results) {
+    let _ = write!(
+        page,
+        "<h2>All numbers (frame {})</h2><table><tr><th>method</th><th>spp</th><th>area</th>\
+         <th>px</th><th>MSE</th><th>relMSE</th><th>bias ± 99%</th><th>ms/frame</th>\
+         <th>efficiency</th><th>eff. ratio</th><th>MSE ratio</th></tr>\n",
+        r.frame
+    );
+    for m in &r.methods {
+        let ms = measured(
+            Some(1e3 * m.seconds_per_frame),
+            m.seconds_per_frame_ci.map(|i| Interval {
+                lo: 1e3 * i.lo,
+                hi: 1e3 * i.hi,
+            }),
+        );
+        for a in &m.areas {
+            let AreaEntry {
+                area,
+                pixels,
+                bias,
+                bias_ci99,
+                ..
+            } = a;
+            let bias = match bias_ci99 {
+                Some(ci) => format!("{} ± {}", sig(*bias), sig(*ci)),
+                None => sig(*bias),
+            };
+            let _ = writeln!(
+                page,
+                "<tr><td>{}</td><td>{}</td><td>{area}</td><td>{pixels}</td><td>{}</td><td>{}</td>\
+                 <td>{bias}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                escape(&m.method),
+                m.spp,
+                with_ci(measured(Some(a.mse), a.mse_ci)),
+                with_ci(measured(Some(a.rel_mse), a.rel_mse_ci)),
+                with_ci(ms),
+                with_ci(measured(a.efficiency, a.efficiency_ci)),
+                with_ci(measured(a.efficiency_ratio, a.efficiency_ratio_ci)),
+                with_ci(measured(a.mse_ratio, a.mse_ratio_ci)),
+            );
+        }
+    }
+    page.push_str("</table>\n");
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// RFC 4648 §10 test vectors.
+    #[test]
+    fn base64_matches_the_rfc_vectors() {
+        for (plain, coded) in [
+            ("", ""),
+            ("f", "Zg=="),
+            ("fo", "Zm8="),
+            ("foo", "Zm9v"),
+            ("foob", "Zm9vYg=="),
+            ("fooba", "Zm9vYmE="),
+            ("foobar", "Zm9vYmFy"),
+        ] {
+            assert_eq!(base64(plain.as_bytes()), coded, "{plain:?}");
+        }
+        assert_eq!(base64(&[0xff, 0xfe]), "//4=");
+    }
+
+    #[test]
+    fn markup_is_escaped() {
+        assert_eq!(escape("a<b>&\"c\""), "a&lt;b&gt;&amp;&quot;c&quot;");
+    }
+}

@@ -1,0 +1,148 @@
+//! `report.html` opens in a browser and shows something: a small comparison writes it, headless
+//! Chromium renders it to a screenshot, and the screenshot must not be blank (enough non-white
+//! pixels and distinct colours). A blank page, rendered the same way, must fail the same check.
+//!
+//! Needs Debian's `chromium` (`scripts/test` installs it when run as root; `RESHIFT_CHROMIUM`
+//! names another binary). Without it the test says why and passes, unless
+//! `RESHIFT_REQUIRE_BROWSER=1` (set by `.ci/run` wherever Chromium is or can be installed),
+//! when it fails.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use engine::Backend;
+use lab::compare::{Plan, parse_methods, run};
+use lab::progress::Silent;
+use lab::reference_cache::ReferenceSource;
+use lab::scenes::with_resolution;
+use sss::scene::Scene;
+
+/// Window of the screenshot.
+const WINDOW: (u32, u32) = (1280, 1600);
+
+/// The Chromium binary, or why there is none.
+fn chromium() -> Result<PathBuf, String> {
+    let names = std::env::var("RESHIFT_CHROMIUM")
+        .map(|n| vec![n])
+        .unwrap_or_else(|_| vec!["chromium".into(), "chromium-browser".into()]);
+    let path = std::env::var_os("PATH").unwrap_or_default();
+    names
+        .iter()
+        .flat_map(|n| {
+            let n = PathBuf::from(n);
+            if n.is_absolute() {
+                vec![n]
+            } else {
+                std::env::split_paths(&path).map(|d| d.join(&n)).collect()
+            }
+        })
+        .find(|p| p.is_file())
+        .ok_or_else(|| format!("no Chromium found (tried {names:?} on PATH)"))
+}
+
+/// Renders `page` headless into a PNG screenshot in `dir` and decodes it.
+fn screenshot(browser: &Path, page: &Path, dir: &Path) -> image::RgbImage {
+    let shot = dir.join(format!(
+        "{}.png",
+        page.file_stem().unwrap().to_string_lossy()
+    ));
+    let profile = dir.join(format!(
+        "profile-{}",
+        page.file_stem().unwrap().to_string_lossy()
+    ));
+    let output = Command::new(browser)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--hide-scrollbars",
+        ])
+        .arg(format!("--user-data-dir={}", profile.display()))
+        .arg(format!("--screenshot={}", shot.display()))
+        .arg(format!("--window-size={},{}", WINDOW.0, WINDOW.1))
+        .arg(format!("file://{}", page.display()))
+        .output()
+        .expect("run chromium");
+    assert!(
+        shot.is_file(),
+        "no screenshot; chromium exited {:?}: {}",
+        output.status,
+        String::from_utf8_lossy(&output.stderr)
+    );
+    image::open(&shot).expect("screenshot decodes").to_rgb8()
+}
+
+/// `(fraction of non-white pixels, distinct colours)` of a screenshot.
+fn content(shot: &image::RgbImage) -> (f64, usize) {
+    let pixels = shot.pixels().count() as f64;
+    let coloured = shot.pixels().filter(|p| p.0 != [255, 255, 255]).count() as f64;
+    let distinct: std::collections::HashSet<[u8; 3]> = shot.pixels().map(|p| p.0).collect();
+    (coloured / pixels, distinct.len())
+}
+
+/// The screenshot shows a page with images: ≥ 10% non-white pixels and ≥ 500 distinct colours
+/// (text alone anti-aliases to a few hundred greys; the figures bring thousands).
+fn not_blank(shot: &image::RgbImage) -> Result<(), String> {
+    let (fraction, colours) = content(shot);
+    if fraction >= 0.10 && colours >= 500 {
+        Ok(())
+    } else {
+        Err(format!(
+            "{:.1}% non-white pixels, {colours} colours",
+            100.0 * fraction
+        ))
+    }
+}
+
+#[test]
+fn the_report_renders_in_a_browser() {
+    let browser = match chromium() {
+        Ok(b) => b,
+        Err(reason) if std::env::var("RESHIFT_REQUIRE_BROWSER").as_deref() != Ok("1") => {
+            eprintln!("skipped: {reason}; set RESHIFT_REQUIRE_BROWSER=1 to fail instead");
+            return;
+        }
+        Err(reason) => panic!("RESHIFT_REQUIRE_BROWSER=1: {reason}"),
+    };
+    let dir = std::env::temp_dir().join(format!("reshift-report-html-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let plan = Plan {
+        scene: with_resolution(Scene::builtin("bumpy").unwrap(), Some((48, 36))),
+        scene_key: "bumpy".into(),
+        methods: parse_methods(&["pt", "restir:hybrid"]).unwrap(),
+        baseline: "pt".into(),
+        replicas: 3,
+        frames: 3,
+        equal_time: None,
+        reference: ReferenceSource::Cache {
+            dir: dir.join("cache"),
+            spp: 16,
+            batch_spp: 8,
+        },
+        frame_reference_spp: Some(16),
+        out: dir.join("out"),
+        backend: Backend::Cpu,
+    };
+    let outcome = run(&plan, &mut Silent).unwrap();
+    let page = outcome.out.join("report.html");
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert!(
+        !html.contains("src=\"http") && !html.contains("<script"),
+        "self-contained, no script"
+    );
+    assert_eq!(html.matches("data:image/png;base64,").count(), 2 + 3 * 2);
+    let shot = screenshot(&browser, &page, &dir);
+    assert_eq!(shot.dimensions(), WINDOW);
+    not_blank(&shot).unwrap();
+    // Negative control: a blank page fails the same check.
+    let blank = dir.join("blank.html");
+    std::fs::write(&blank, "<!DOCTYPE html><html><body></body></html>").unwrap();
+    let blank_shot = screenshot(&browser, &blank, &dir);
+    assert!(not_blank(&blank_shot).is_err(), "a blank page passed");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -849,6 +849,53 @@ fn ground_truth_and_model_gap_run_small() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `ablation` at a tiny size: one row per knob with its efficiency over pt and a verdict,
+/// `results.json` with every row; `--methods` is refused by an experiment with its own methods
+/// and must name ReSTIR methods here.
+#[test]
+fn ablation_runs_small() {
+    let dir = scratch("ablation");
+    let out = dir.join("ablation");
+    let args = [
+        "experiment",
+        "ablation",
+        "--resolution",
+        "8x6",
+        "--replicas",
+        "2",
+        "--reference-spp",
+        "256",
+        "--scene",
+        "bumpy",
+        "--methods",
+        "restir:reconnection",
+        "--out",
+        out.to_str().unwrap(),
+        "--cache",
+        dir.join("cache").to_str().unwrap(),
+    ];
+    let text = ok(&reshift(&args));
+    for row in [
+        "| temporal cap 20 | restir:reconnection/cap=20 | moving | 8×6 |",
+        "| static camera, no jitter | restir:reconnection | static-unjittered | 8×6 |",
+        "| 24×18 | restir:reconnection | moving | 24×18 |",
+    ] {
+        assert!(text.contains(row), "{row}: {text}");
+    }
+    assert!(text.contains("not a knob yet"), "{text}");
+    let json: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    assert_eq!(json["schema"], "reshift-ablation/1");
+    assert_eq!(json["rows"].as_array().unwrap().len(), 14);
+    assert!(out.join("table.md").is_file() && out.join("moving-8x6/table.md").is_file());
+    fails_with(
+        &["experiment", "hybrid-map", "--methods", "restir:hybrid"],
+        "--methods",
+    );
+    fails_with(&[&args[..4], &["--methods", "pt"]].concat(), "not one");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// GPU options without `--backend vulkan` are input errors, not ignored; an unknown backend is
 /// a usage error.
 #[test]

@@ -210,6 +210,29 @@ impl Preset {
         self
     }
 
+    /// The preset with every spatial pass's confidence cap set to `cap` (each neighbour's
+    /// `c ≤ cap · c_receiver`; the registered presets leave it uncapped; validated by
+    /// [`Preset::validate`]).
+    pub fn with_spatial_cap(mut self, cap: f32) -> Preset {
+        for pass in &mut self.passes {
+            if let PassSpec::Spatial { confidence_cap, .. } = pass {
+                *confidence_cap = Some(cap);
+            }
+        }
+        self
+    }
+
+    /// The preset with every spatial pass taking `count` neighbours (validated by
+    /// [`Preset::validate`]).
+    pub fn with_neighbours(mut self, count: u32) -> Preset {
+        for pass in &mut self.passes {
+            if let PassSpec::Spatial { neighbours, .. } = pass {
+                *neighbours = count;
+            }
+        }
+        self
+    }
+
     /// The registered preset `name` ([`PRESETS`]), or `None`.
     pub fn named(name: &str) -> Option<Preset> {
         let (_, build) = PRESETS.iter().find(|(n, _)| *n == name)?;
@@ -344,6 +367,26 @@ mod tests {
             }
         ));
         assert_eq!(seed_001.passes[2], hybrid.passes[2]);
+        let capped = hybrid.clone().with_spatial_cap(2.0).with_neighbours(8);
+        assert!(matches!(
+            capped.passes[2],
+            PassSpec::Spatial {
+                neighbours: 8,
+                confidence_cap: Some(2.0),
+                ..
+            }
+        ));
+        assert_eq!(capped.passes[..2], hybrid.passes[..2]);
+        let seq = Preset::named("sequential").unwrap().with_neighbours(3);
+        let counts: Vec<u32> = seq
+            .passes
+            .iter()
+            .filter_map(|p| match p {
+                PassSpec::Spatial { neighbours, .. } => Some(*neighbours),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(counts, [3, 3]);
         let seq = Preset::named("sequential").unwrap();
         let labels: Vec<String> = seq.passes.iter().map(PassSpec::label).collect();
         assert_eq!(
@@ -377,6 +420,10 @@ mod tests {
         assert_eq!(p.validate().unwrap_err().pass, 1);
         let p = Preset::named("hybrid").unwrap().with_temporal_cap(0.0);
         assert_eq!(p.validate().unwrap_err().pass, 1);
+        let p = Preset::named("hybrid").unwrap().with_spatial_cap(-1.0);
+        assert_eq!(p.validate().unwrap_err().pass, 2);
+        let p = Preset::named("hybrid").unwrap().with_neighbours(0);
+        assert_eq!(p.validate().unwrap_err().pass, 2);
         let p = Preset {
             name: "m0".into(),
             passes: vec![PassSpec::Candidates {

@@ -42,20 +42,25 @@ impl ValueEnum for Name {
 #[derive(Args, Clone, Debug)]
 pub struct ExperimentArgs {
     pub name: Name,
-    /// Independent replicas per method [default: 16].
+    /// Independent replicas per method [default: 16; ablation 4].
     #[arg(long)]
     pub replicas: Option<u32>,
     /// Image size WxH [default: 128x96; ground-truth and model-gap 32x24].
     #[arg(long)]
     pub resolution: Option<String>,
-    /// Samples per pixel of the references [default: 8192]; ground-truth: of the random walk
-    /// [4096]; model-gap: of each estimator over all replicas [256].
+    /// Samples per pixel of the references [default: 8192; ablation 1024]; ground-truth: of the
+    /// random walk [4096]; model-gap: of each estimator over all replicas [256].
     #[arg(long)]
     pub reference_spp: Option<u32>,
     /// Comma-separated scenes, for ground-truth [default: every built-in scene and
-    /// sphere-<material> for every measured material] and model-gap [7 scenes].
-    #[arg(long, value_delimiter = ',')]
+    /// sphere-<material> for every measured material] and model-gap [7 scenes]; ablation takes
+    /// one [bumpy].
+    #[arg(long, visible_alias = "scene", value_delimiter = ',')]
     pub scenes: Vec<String>,
+    /// Comma-separated ReSTIR methods, for ablation: each is varied one knob at a time
+    /// [default: restir:hybrid].
+    #[arg(long, value_delimiter = ',')]
+    pub methods: Vec<String>,
     /// Output folder [default: out/experiment-<name>].
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -80,6 +85,15 @@ pub fn command(args: &ExperimentArgs) -> CliResult<()> {
         )
         .into());
     }
+    if !args.methods.is_empty() && !args.name.0.takes_methods() {
+        return Err(InputError::new(
+            "(command line)",
+            "--methods",
+            args.methods.join(","),
+            format!("experiment {} runs its own methods", args.name.0.name()),
+        )
+        .into());
+    }
     let replicas = args.replicas.unwrap_or(defaults.replicas);
     limits::replicas(command_line(), "--replicas", replicas)?;
     let resolution = match &args.resolution {
@@ -94,6 +108,7 @@ pub fn command(args: &ExperimentArgs) -> CliResult<()> {
         cache: args.cache.clone(),
         backend: args.backend.open()?,
         scenes: args.scenes.clone(),
+        methods: args.methods.clone(),
     };
     let report = args.name.0.run(&settings, &mut Bars::default())?;
     if args.json {

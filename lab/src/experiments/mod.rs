@@ -5,6 +5,7 @@
 //! method against the volumetric random walk [000]. docs/experiments.md has the protocol
 //! and measured results.
 
+mod ablation;
 mod figures;
 pub mod ground_truth;
 mod materials;
@@ -30,6 +31,7 @@ pub enum Experiment {
     TemporalShift,
     GroundTruth,
     ModelGap,
+    Ablation,
 }
 
 /// An experiment's default replicas, resolution and reference spp (the command line's).
@@ -41,7 +43,7 @@ pub struct Defaults {
 }
 
 impl Experiment {
-    pub const ALL: [Experiment; 9] = [
+    pub const ALL: [Experiment; 10] = [
         Experiment::ShiftComparison,
         Experiment::ManyLights,
         Experiment::Materials,
@@ -51,6 +53,7 @@ impl Experiment {
         Experiment::TemporalShift,
         Experiment::GroundTruth,
         Experiment::ModelGap,
+        Experiment::Ablation,
     ];
 
     /// The name on the command line and of the default output folder `out/experiment-<name>`.
@@ -65,6 +68,7 @@ impl Experiment {
             Experiment::TemporalShift => "temporal-shift",
             Experiment::GroundTruth => "ground-truth",
             Experiment::ModelGap => "model-gap",
+            Experiment::Ablation => "ablation",
         }
     }
 
@@ -98,14 +102,18 @@ impl Experiment {
             Experiment::ModelGap => {
                 "the random walk minus the diffusion BSSRDF, split by scattering order, profile and boundary (000)"
             }
+            Experiment::Ablation => {
+                "issue 10: one ReSTIR preset varied one knob at a time, efficiency over pt per region"
+            }
         }
     }
 
     /// Its defaults: `ground-truth` (21 scenes, every registry method, the walk as reference; 32×24, 16
     /// replicas, a 4096-spp walk: about 5 minutes on the shared 2-core machine) and `model-gap`
     /// (7 scenes × 3 boundaries, 8 estimators per sample; `reference_spp` is every estimator's
-    /// total over the replicas) run small; the figures at 128×96, 16 replicas, 8192-spp
-    /// references.
+    /// total over the replicas) run small; `ablation` (16 rows in 6 comparisons, up to
+    /// 384×288) at 128×96 with 4 replicas and 1024-spp references; the figures at 128×96, 16
+    /// replicas, 8192-spp references.
     pub fn defaults(self) -> Defaults {
         match self {
             Experiment::GroundTruth => Defaults {
@@ -118,6 +126,11 @@ impl Experiment {
                 resolution: (32, 24),
                 reference_spp: 256,
             },
+            Experiment::Ablation => Defaults {
+                replicas: 4,
+                resolution: (128, 96),
+                reference_spp: 1024,
+            },
             _ => Defaults {
                 replicas: 16,
                 resolution: (128, 96),
@@ -128,7 +141,15 @@ impl Experiment {
 
     /// Whether it runs a list of scenes that [`Settings::scenes`] may replace.
     pub fn takes_scenes(self) -> bool {
-        matches!(self, Experiment::GroundTruth | Experiment::ModelGap)
+        matches!(
+            self,
+            Experiment::GroundTruth | Experiment::ModelGap | Experiment::Ablation
+        )
+    }
+
+    /// Whether [`Settings::methods`] may replace the methods it runs.
+    pub fn takes_methods(self) -> bool {
+        self == Experiment::Ablation
     }
 
     /// Runs the experiment, writing its tables, findings and images into its folder.
@@ -147,6 +168,7 @@ impl Experiment {
             Experiment::TemporalShift => figures::temporal_shift(settings, progress),
             Experiment::GroundTruth => ground_truth::run(settings, progress),
             Experiment::ModelGap => model_gap::run(settings, progress),
+            Experiment::Ablation => ablation::run(settings, progress),
         }
     }
 }

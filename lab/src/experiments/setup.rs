@@ -38,6 +38,9 @@ pub struct Settings {
     /// The scenes of an experiment that runs several ([`super::Experiment::takes_scenes`]);
     /// empty: its own list.
     pub scenes: Vec<String>,
+    /// The methods of an experiment that takes them ([`super::Experiment::takes_methods`]);
+    /// empty: its own.
+    pub methods: Vec<String>,
 }
 
 /// What an experiment produced.

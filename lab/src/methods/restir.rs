@@ -1,8 +1,10 @@
-//! `restir:<preset>[/temporal=<shift>][/cap=<κ>][/shade=<selected|all>]`: the ReSTIR SSS frame
-//! pipeline with a registered preset [001 §5.1] (DESIGN §6). Every frame of the trajectory is
-//! rendered (temporal reuse) and the last one is kept; `/temporal=<shift>` swaps the shift of the
-//! temporal pass [001 Fig. 10], `/cap=<κ>` sets its confidence cap, `/shade=all` shades with
-//! all inputs of the last reuse pass (`Shade::AllInputs`).
+//! `restir:<preset>[/temporal=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/shade=<selected|all>]`:
+//! the ReSTIR SSS frame pipeline with a registered preset [001 §5.1] (DESIGN §6). Every frame of
+//! the trajectory is rendered (temporal reuse) and the last one is kept; `/temporal=<shift>`
+//! swaps the shift of the temporal pass [001 Fig. 10], `/cap=<κ>` sets its confidence cap,
+//! `/spatial-cap=<κ>` caps every spatial neighbour's confidence at κ × the receiver's,
+//! `/neighbours=<n>` sets every spatial pass's neighbour count, `/shade=all` shades with all
+//! inputs of the last reuse pass (`Shade::AllInputs`).
 //!
 //! The only file of the lab that names presets and shift kinds: when presets move crates, the
 //! import below is the one to change.
@@ -15,10 +17,12 @@ use super::estimator::{Entry, Estimator, Frame, Method, Trajectory};
 
 pub const ENTRY: Entry = Entry {
     family: "restir",
-    usage: "restir:<reconnection|delayed|hybrid|sequential|sequential-exact>[/temporal=<shift>][/cap=<κ>][/shade=<selected|all>]",
+    usage: "restir:<reconnection|delayed|hybrid|sequential|sequential-exact>[/temporal=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/shade=<selected|all>]",
     about: "ReSTIR SSS with spatiotemporal reuse and the preset's shift mapping [001 §5.1]; \
             `/temporal=<shift>` swaps the temporal pass's shift (001 Fig. 10); \
             `/cap=<κ>` sets the temporal confidence cap (default 3; seed 001 uses 20); \
+            `/spatial-cap=<κ>` caps spatial neighbours' confidence (default none); \
+            `/neighbours=<n>` sets the spatial passes' neighbour count; \
             `/shade=all` paints the last reuse pass's Rao-Blackwellised value over all its inputs \
             (CPU backend only)",
     build: |arg| Ok(Method::new(Restir(preset(arg)?))),
@@ -30,7 +34,8 @@ pub struct Restir(pub Preset);
 
 /// The preset of `restir:<preset>[/modifier=value]…`: a registered preset, optionally modified by
 /// `/temporal=<shift>` (the temporal pass's shift becomes the [`ShiftKind`] named `<shift>`),
-/// `/cap=<κ>` (the temporal confidence cap, finite and > 0) and `/shade=<selected|all>`
+/// `/cap=<κ>` (the temporal confidence cap, finite and > 0), `/spatial-cap=<κ>` (every spatial
+/// pass's cap), `/neighbours=<n>` (every spatial pass's count) and `/shade=<selected|all>`
 /// ([`Shade`]). A modified preset is named `arg`.
 pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
     let arg = arg.ok_or("needs a preset, e.g. restir:hybrid")?;
@@ -45,13 +50,13 @@ pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
     for modifier in parts {
         preset = match modifier.split_once('=') {
             Some(("temporal", wanted)) => with_temporal_shift(preset, wanted)?,
-            Some(("cap", value)) => {
-                let cap = value
-                    .parse::<f32>()
-                    .ok()
-                    .filter(|c| c.is_finite() && *c > 0.0)
-                    .ok_or_else(|| format!("cap {value:?} is not a number > 0"))?;
-                preset.with_temporal_cap(cap)
+            Some(("cap", value)) => preset.with_temporal_cap(positive(value)?),
+            Some(("spatial-cap", value)) => preset.with_spatial_cap(positive(value)?),
+            Some(("neighbours", value)) => {
+                let count = value
+                    .parse::<u32>()
+                    .map_err(|_| format!("neighbours {value:?} is not a whole number"))?;
+                preset.with_neighbours(count)
             }
             Some(("shade", "selected")) => Preset {
                 shade: Shade::Selected,
@@ -72,7 +77,17 @@ pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
 }
 
 /// The modifiers [`preset`] knows, for its error message.
-const MODIFIERS: &str = "temporal=<shift>, cap=<κ>, shade=<selected|all>";
+const MODIFIERS: &str =
+    "temporal=<shift>, cap=<κ>, spatial-cap=<κ>, neighbours=<n>, shade=<selected|all>";
+
+/// A confidence cap: a finite number > 0.
+fn positive(value: &str) -> Result<f32, String> {
+    value
+        .parse::<f32>()
+        .ok()
+        .filter(|c| c.is_finite() && *c > 0.0)
+        .ok_or_else(|| format!("cap {value:?} is not a number > 0"))
+}
 
 /// `preset` with the shift of its temporal pass replaced by the [`ShiftKind`] named `wanted`.
 fn with_temporal_shift(mut preset: Preset, wanted: &str) -> Result<Preset, String> {
@@ -209,7 +224,20 @@ mod tests {
             preset(Some("hybrid/shade=selected")).unwrap().shade,
             Shade::Selected
         );
+        let ablated = preset(Some("hybrid/spatial-cap=2/neighbours=8")).unwrap();
+        assert_eq!(
+            ablated.passes,
+            Preset::named("hybrid")
+                .unwrap()
+                .with_spatial_cap(2.0)
+                .with_neighbours(8)
+                .passes
+        );
         for bad in [
+            "restir:hybrid/spatial-cap=0",
+            "restir:hybrid/neighbours=0",
+            "restir:hybrid/neighbours=2.5",
+            "restir:hybrid/neighbours=99",
             "restir:hybrid/shade=some",
             "restir:hybrid/cap=0",
             "restir:hybrid/cap=-1",

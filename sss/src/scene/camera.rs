@@ -66,6 +66,24 @@ impl Camera {
         }
     }
 
+    /// The same camera at rest at its trajectory's end pose for every frame (the pose of frame
+    /// `FRAMES − 1`, so that frame renders as before); the jitter is kept.
+    pub fn at_rest(&self) -> Camera {
+        Camera {
+            eye: [self.eye[1]; 2],
+            target: [self.target[1]; 2],
+            ..self.clone()
+        }
+    }
+
+    /// The same camera with jitter on or off.
+    pub fn with_jitter(&self, jitter: bool) -> Camera {
+        Camera {
+            jitter,
+            ..self.clone()
+        }
+    }
+
     pub fn width(&self) -> u32 {
         self.width
     }
@@ -213,6 +231,27 @@ mod tests {
     fn hit_plane(ray: &Ray, z0: f32) -> Vec3 {
         let t = (z0 - ray.origin.z) / ray.dir.z;
         Vec3::from(ray.at(t))
+    }
+
+    /// At rest, every frame has the moving camera's last pose (the last frame's rays are the
+    /// same bits) and jitter is kept; without jitter the rays go through pixel centres.
+    /// Control: the moving camera's first frame differs from its last.
+    #[test]
+    fn a_camera_at_rest_keeps_the_last_pose_and_jitter_toggles() {
+        let cam = moving_camera();
+        let rest = cam.at_rest();
+        let last = FRAMES - 1;
+        for frame in [0, 7, last] {
+            assert_eq!(rest.eye(frame), cam.eye(last));
+            assert_eq!(rest.forward(frame), cam.forward(last));
+            assert_eq!(rest.jitter(frame), cam.jitter(frame));
+        }
+        assert_eq!(rest.ray(last, 5, 9), cam.ray(last, 5, 9));
+        assert_ne!(cam.eye(0), cam.eye(last), "control: the camera moves");
+        let still = cam.with_jitter(false);
+        assert!(!still.jittered() && cam.with_jitter(true).jittered());
+        assert_eq!(still.jitter(3), Vec2::ZERO);
+        assert_ne!(still.ray(3, 5, 9), cam.ray(3, 5, 9));
     }
 
     #[test]

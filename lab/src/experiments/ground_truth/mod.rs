@@ -252,6 +252,7 @@ mod tests {
             cache: dir.clone(),
             backend: Backend::Cpu,
             scenes: vec![],
+            methods: vec![],
         };
         let loaded = load_scene("sphere-skin1").unwrap();
         let scene = with_resolution(loaded.scene, Some(settings.resolution));

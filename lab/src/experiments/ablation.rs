@@ -1,0 +1,480 @@
+//! `ablation` (issue 10): one ReSTIR preset varied one knob at a time — temporal cap, spatial
+//! cap, neighbours, Rao-Blackwellised shading, camera motion, jitter, resolution (2× and 3× the
+//! run's) — each row's
+//! efficiency `1/(MSE·s)` over 1-spp `pt` per region with its 95% interval (the delta method
+//! over replicas, paired by seed, [`crate::uncertainty`]), and over the unmodified preset where
+//! both ran on the same images. Rows sharing a camera and a resolution are one
+//! [`compare::run`] (`<out>/<group>/`), so their ratios pair by seed.
+
+use serde_json::{Value, json};
+use sss::scene::Scene;
+
+use crate::compare::{self, DEFAULT_BASELINE, Plan, parse_methods};
+use crate::error::Error;
+use crate::method_result::{Measured, MethodResult};
+use crate::metrics::Area;
+use crate::progress::Progress;
+use crate::reference_cache::ReferenceSource;
+use crate::regions::Region;
+use crate::report::output_dir;
+use crate::report::tables::{verdict_word, with_ci};
+use crate::scenes::{load_scene, with_resolution};
+use crate::uncertainty::INTERVAL_METHOD;
+
+use super::setup::{FRAMES, Report, Settings};
+
+/// The ReSTIR method ablated unless `--methods` names others.
+pub const DEFAULT_BASE: &str = "restir:hybrid";
+
+/// The built-in scene ablated unless `--scene` names another.
+pub const DEFAULT_SCENE: &str = "bumpy";
+
+/// The resolution rows: the run's resolution times these factors (128×96 → 256×192, 384×288).
+pub const RESOLUTION_FACTORS: [u32; 2] = [2, 3];
+
+/// Samples per pixel of one reference batch.
+const REFERENCE_BATCH_SPP: u32 = 128;
+
+/// Knobs of issue 10's list that the engine does not have: named in the table's notes.
+pub const NOT_KNOBS: [(&str, &str); 2] = [
+    (
+        "spatial radius rule",
+        "not a knob yet: `Camera::spatial_radius_px` always clamps the projected 2·max d to [5, 30] px",
+    ),
+    (
+        "target p̂",
+        "not a knob yet: p̂ is the luminance of the contribution f (`SssDomain::target`) in both backends",
+    ),
+];
+
+/// How the camera moves over the trajectory.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Framing {
+    /// The scene's trajectory; `false`: at rest at its last pose (`Camera::at_rest`).
+    pub moving: bool,
+    /// Sub-pixel jitter per frame.
+    pub jitter: bool,
+}
+
+impl Framing {
+    /// The scene's own camera: moving and jittered (seed 001's setup).
+    pub const SCENE: Framing = Framing {
+        moving: true,
+        jitter: true,
+    };
+
+    /// `scene` with this framing; the scene's own camera is returned unchanged.
+    pub fn apply(self, mut scene: Scene) -> Scene {
+        if !self.moving {
+            scene.camera = scene.camera.at_rest();
+        }
+        if !self.jitter {
+            scene.camera = scene.camera.with_jitter(false);
+        }
+        scene
+    }
+
+    /// `moving`, `static`, with `-unjittered` when jitter is off.
+    pub fn name(self) -> String {
+        let motion = if self.moving { "moving" } else { "static" };
+        let jitter = if self.jitter { "" } else { "-unjittered" };
+        format!("{motion}{jitter}")
+    }
+}
+
+/// One row of the ablation: a method spec on a camera at a resolution.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Variation {
+    /// What varies, e.g. `temporal cap 1`.
+    pub label: String,
+    /// The method, e.g. `restir:hybrid/cap=1`.
+    pub spec: String,
+    pub framing: Framing,
+    pub resolution: (u32, u32),
+}
+
+impl Variation {
+    /// The rows' group: one comparison per camera and resolution.
+    fn group(&self) -> String {
+        let (w, h) = self.resolution;
+        format!("{}-{w}x{h}", self.framing.name())
+    }
+}
+
+/// The rows for `base` at `resolution`: the unmodified preset, then one knob changed per row.
+pub fn variations(base: &str, resolution: (u32, u32)) -> Vec<Variation> {
+    let row = |label: String, modifier: &str, framing, resolution| Variation {
+        label,
+        spec: format!("{base}{modifier}"),
+        framing,
+        resolution,
+    };
+    let here =
+        |label: &str, modifier: &str| row(label.into(), modifier, Framing::SCENE, resolution);
+    let mut rows = vec![
+        here("default (temporal cap 3)", ""),
+        here("temporal cap 1", "/cap=1"),
+        here("temporal cap 5", "/cap=5"),
+        here("temporal cap 20", "/cap=20"),
+        here("spatial cap 1", "/spatial-cap=1"),
+        here("spatial cap 3", "/spatial-cap=3"),
+        here("neighbours 2", "/neighbours=2"),
+        here("neighbours 8", "/neighbours=8"),
+        here("shade=all", "/shade=all"),
+    ];
+    for (label, moving, jitter) in [
+        ("static camera", false, true),
+        ("no jitter", true, false),
+        ("static camera, no jitter", false, false),
+    ] {
+        rows.push(row(
+            label.into(),
+            "",
+            Framing { moving, jitter },
+            resolution,
+        ));
+    }
+    for k in RESOLUTION_FACTORS {
+        let (w, h) = (resolution.0 * k, resolution.1 * k);
+        rows.push(row(format!("{w}×{h}"), "", Framing::SCENE, (w, h)));
+    }
+    rows
+}
+
+/// The efficiency ratio of every row over `pt` and over its base's default row per region.
+struct Measurement {
+    variation: Variation,
+    over_pt: Vec<Option<Measured>>,
+    /// `None` where the default row ran on other images (another camera or resolution).
+    over_default: Option<Vec<Option<Measured>>>,
+}
+
+pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, Error> {
+    let scene_name = match settings.scenes.as_slice() {
+        [] => DEFAULT_SCENE,
+        [one] => one.as_str(),
+        more => {
+            return Err(Error::Invalid(format!(
+                "ablation runs one scene, not {}",
+                more.join(",")
+            )));
+        }
+    };
+    let bases: Vec<&str> = if settings.methods.is_empty() {
+        vec![DEFAULT_BASE]
+    } else {
+        settings.methods.iter().map(String::as_str).collect()
+    };
+    if let Some(bad) = bases.iter().find(|b| !b.starts_with("restir:")) {
+        return Err(Error::Invalid(format!(
+            "ablation varies ReSTIR methods; {bad} is not one (restir:<preset>[/modifier…])"
+        )));
+    }
+    let root = output_dir(&settings.out_dir("ablation"))?;
+    let rows: Vec<Variation> = bases
+        .iter()
+        .flat_map(|b| variations(b, settings.resolution))
+        .collect();
+    let mut groups: Vec<String> = rows.iter().map(Variation::group).collect();
+    groups.dedup();
+    groups.sort();
+    groups.dedup();
+    let mut measured = Vec::new();
+    let mut runs = Vec::new();
+    for group in &groups {
+        let members: Vec<&Variation> = rows.iter().filter(|v| &v.group() == group).collect();
+        let first = members[0];
+        let plan = group_plan(settings, scene_name, first, &members, &root.join(group))?;
+        let outcome = compare::run(&plan, progress)?;
+        let pt = outcome.rows.iter().find(|r| r.method == DEFAULT_BASELINE);
+        for v in members {
+            let Some(row) = outcome.rows.iter().find(|r| r.method == v.spec) else {
+                continue;
+            };
+            let base = bases
+                .iter()
+                .filter(|b| v.spec.starts_with(**b))
+                .max_by_key(|b| b.len());
+            let default = base.and_then(|b| outcome.rows.iter().find(|r| r.method == *b));
+            let own_group = v.framing == Framing::SCENE && v.resolution == settings.resolution;
+            measured.push(Measurement {
+                variation: v.clone(),
+                over_pt: ratios(row, pt),
+                over_default: own_group.then(|| ratios(row, default)),
+            });
+        }
+        runs.push(json!({ "group": group, "results": outcome.results.to_json() }));
+    }
+    // Table order: the rows' own order.
+    measured.sort_by_key(|m| rows.iter().position(|v| *v == m.variation));
+    let table = markdown(&measured, scene_name, settings);
+    let findings = findings(&measured);
+    let json = json!({
+        "schema": "reshift-ablation/1",
+        "scene": scene_name,
+        "replicas": settings.replicas,
+        "frames": FRAMES,
+        "reference_spp": settings.reference_spp,
+        "interval": INTERVAL_METHOD,
+        "confidence": crate::uncertainty::CONFIDENCE,
+        "rows": measured.iter().map(row_json).collect::<Vec<_>>(),
+        "not_knobs": NOT_KNOBS.iter().map(|(k, why)| json!({ "knob": k, "note": why })).collect::<Vec<_>>(),
+        "runs": runs,
+    });
+    let report = Report {
+        table,
+        findings,
+        out: root,
+        json,
+    }
+    .write()?;
+    crate::report::write_text(
+        &report.out.join("results.json"),
+        &serde_json::to_string_pretty(&report.json).expect("JSON values"),
+    )?;
+    Ok(report)
+}
+
+/// The comparison of `members` (one camera and resolution) and `pt` at equal spp, measuring
+/// the last frame against a cached reference of the camera's own images.
+fn group_plan(
+    settings: &Settings,
+    scene_name: &str,
+    first: &Variation,
+    members: &[&Variation],
+    out: &std::path::Path,
+) -> Result<Plan, Error> {
+    let loaded = load_scene(scene_name)?;
+    let scene = first
+        .framing
+        .apply(with_resolution(loaded.scene, Some(first.resolution)));
+    let key = match first.framing {
+        Framing::SCENE => loaded.key,
+        other => format!("{}-{}", loaded.key, other.name()),
+    };
+    let mut specs = vec![DEFAULT_BASELINE.to_string()];
+    specs.extend(members.iter().map(|v| v.spec.clone()));
+    Ok(Plan {
+        scene,
+        scene_key: key,
+        methods: parse_methods(&specs)?,
+        baseline: DEFAULT_BASELINE.into(),
+        replicas: settings.replicas,
+        frames: FRAMES,
+        equal_time: None,
+        reference: ReferenceSource::Cache {
+            dir: settings.cache.clone(),
+            spp: settings.reference_spp,
+            batch_spp: REFERENCE_BATCH_SPP,
+        },
+        frame_reference_spp: None,
+        out: out.to_path_buf(),
+        backend: settings.backend.clone(),
+    })
+}
+
+/// `row`'s efficiency ratio over `baseline` per region of [`Region::ALL`].
+fn ratios(row: &MethodResult, baseline: Option<&MethodResult>) -> Vec<Option<Measured>> {
+    Region::ALL
+        .iter()
+        .map(|&r| baseline.and_then(|b| row.efficiency_ratio(b, Area::Region(r))))
+        .collect()
+}
+
+/// `ratio [lo, hi] verdict`, or `-`.
+fn cell(m: &Option<Measured>) -> String {
+    match m {
+        Some(m) => format!("{} {}", with_ci(Some(*m)), verdict_word(m)),
+        None => "-".into(),
+    }
+}
+
+fn markdown(measured: &[Measurement], scene: &str, settings: &Settings) -> String {
+    let (w, h) = settings.resolution;
+    let header = "| variation | method | camera | size | translucent | lit | penumbra | shadowed |\n\
+                  |---|---|---|---|---:|---:|---:|---:|\n";
+    let mut over_pt = format!(
+        "Efficiency 1/(MSE·s) over 1-spp `pt`, frame {} of `{scene}`, {} replicas, reference {} spp; \
+         95% intervals by the delta method over replicas (paired by seed, log scale); verdict \
+         *better* / *worse* when the interval excludes 1, else *inconclusive*.\n\n{header}",
+        FRAMES - 1,
+        settings.replicas,
+        settings.reference_spp
+    );
+    let mut over_default = format!(
+        "\nEfficiency over the unmodified preset (same camera, {w}×{h}, paired by seed):\n\n{header}"
+    );
+    for m in measured {
+        let v = &m.variation;
+        let lead = format!(
+            "| {} | {} | {} | {}×{} |",
+            v.label,
+            v.spec,
+            v.framing.name(),
+            v.resolution.0,
+            v.resolution.1
+        );
+        let cells = |ms: &[Option<Measured>]| ms.iter().map(cell).collect::<Vec<_>>().join(" | ");
+        over_pt.push_str(&format!("{lead} {} |\n", cells(&m.over_pt)));
+        if let Some(d) = &m.over_default {
+            over_default.push_str(&format!("{lead} {} |\n", cells(d)));
+        }
+    }
+    let mut notes = String::from("\nNot varied:\n\n");
+    for (knob, why) in NOT_KNOBS {
+        notes.push_str(&format!("- {knob}: {why}\n"));
+    }
+    format!("{over_pt}{over_default}{notes}")
+}
+
+/// What the intervals decide: per region, the rows more or less efficient than the unmodified
+/// preset, and whether issue 10's bar is met (lower bound ≥ 5 over `pt` in penumbra and
+/// shadow, > 1 over all translucent pixels).
+fn findings(measured: &[Measurement]) -> String {
+    let mut out = String::from(
+        "| region | better than the default | worse than the default | rows whose lower bound over pt clears the bar |\n|---|---|---|---|\n",
+    );
+    for (i, region) in Region::ALL.iter().enumerate() {
+        let bar = match region {
+            Region::Penumbra | Region::Shadowed => 5.0,
+            _ => 1.0,
+        };
+        let decided = |word: &str| {
+            let labels: Vec<&str> = measured
+                .iter()
+                .filter(|m| {
+                    m.over_default
+                        .as_ref()
+                        .and_then(|d| d[i].as_ref())
+                        .is_some_and(|r| verdict_word(r) == word)
+                })
+                .map(|m| m.variation.label.as_str())
+                .collect();
+            list(&labels)
+        };
+        let clear: Vec<&str> = measured
+            .iter()
+            .filter(|m| {
+                m.over_pt[i]
+                    .and_then(|r| r.ci)
+                    .is_some_and(|ci| if bar > 1.0 { ci.lo >= bar } else { ci.lo > bar })
+            })
+            .map(|m| m.variation.label.as_str())
+            .collect();
+        let sign = if bar > 1.0 { "≥" } else { ">" };
+        out.push_str(&format!(
+            "| {region} | {} | {} | {sign} {bar}: {} |\n",
+            decided("better"),
+            decided("worse"),
+            list(&clear)
+        ));
+    }
+    out
+}
+
+fn list(labels: &[&str]) -> String {
+    if labels.is_empty() {
+        "none".into()
+    } else {
+        labels.join(", ")
+    }
+}
+
+fn measured_json(m: &Option<Measured>) -> Value {
+    match m {
+        Some(m) => json!({
+            "value": m.value,
+            "lo": m.ci.map(|i| i.lo),
+            "hi": m.ci.map(|i| i.hi).filter(|h| h.is_finite()),
+            "verdict": verdict_word(m),
+        }),
+        None => Value::Null,
+    }
+}
+
+fn row_json(m: &Measurement) -> Value {
+    let by_region = |ms: &[Option<Measured>]| {
+        Region::ALL
+            .iter()
+            .zip(ms)
+            .map(|(r, m)| (r.name().to_string(), measured_json(m)))
+            .collect::<serde_json::Map<_, _>>()
+    };
+    let v = &m.variation;
+    json!({
+        "variation": v.label,
+        "method": v.spec,
+        "camera": v.framing.name(),
+        "width": v.resolution.0,
+        "height": v.resolution.1,
+        "efficiency_over_pt": by_region(&m.over_pt),
+        "efficiency_over_default": m.over_default.as_deref().map(by_region),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::methods::Method;
+
+    /// The rows: the default first, every knob of issue 10 that exists once, each method spec
+    /// parses, framings and resolutions differ from the default only where the label says so,
+    /// and the resolution rows scale the run's resolution.
+    #[test]
+    fn the_rows_cover_every_knob_once() {
+        let rows = variations("restir:hybrid", (128, 96));
+        assert_eq!(rows[0].spec, "restir:hybrid");
+        assert_eq!(rows[0].group(), "moving-128x96");
+        let labels: Vec<&str> = rows.iter().map(|v| v.label.as_str()).collect();
+        for wanted in [
+            "temporal cap 1",
+            "temporal cap 5",
+            "temporal cap 20",
+            "spatial cap 1",
+            "neighbours 2",
+            "neighbours 8",
+            "shade=all",
+            "static camera",
+            "no jitter",
+            "256×192",
+            "384×288",
+        ] {
+            assert_eq!(
+                labels.iter().filter(|l| **l == wanted).count(),
+                1,
+                "{wanted}"
+            );
+        }
+        for v in &rows {
+            Method::parse(&v.spec).unwrap_or_else(|e| panic!("{}: {e}", v.spec));
+            let modified = v.spec != "restir:hybrid";
+            let elsewhere = v.framing != Framing::SCENE || v.resolution != (128, 96);
+            assert!(
+                modified != elsewhere || v == &rows[0],
+                "{}: changes one thing",
+                v.label
+            );
+        }
+        let groups: std::collections::BTreeSet<String> =
+            rows.iter().map(Variation::group).collect();
+        assert_eq!(groups.len(), 6, "{groups:?}");
+        let small = variations("restir:sequential", (8, 6));
+        let sizes: Vec<(u32, u32)> = small.iter().map(|v| v.resolution).collect();
+        assert!(sizes.contains(&(16, 12)) && sizes.contains(&(24, 18)));
+    }
+
+    /// A framing changes the camera as named: at rest every frame has the last pose.
+    #[test]
+    fn framings_apply_to_the_camera() {
+        let camera = Scene::builtin("bumpy").unwrap().camera;
+        let still = Framing {
+            moving: false,
+            jitter: false,
+        }
+        .apply(Scene::builtin("bumpy").unwrap());
+        assert_eq!(still.camera.eye(0), camera.eye(FRAMES - 1));
+        assert!(!still.camera.jittered());
+        let same = Framing::SCENE.apply(Scene::builtin("bumpy").unwrap());
+        assert_eq!(same.camera, camera);
+    }
+}

@@ -887,7 +887,18 @@ fn ablation_runs_small() {
         serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
     assert_eq!(json["schema"], "reshift-ablation/1");
     assert_eq!(json["rows"].as_array().unwrap().len(), 14);
-    assert!(out.join("table.md").is_file() && out.join("moving-8x6/table.md").is_file());
+    for file in [
+        "table.md",
+        "telemetry.md",
+        "findings.md",
+        "moving-8x6/table.md",
+    ] {
+        assert!(out.join(file).is_file(), "{file}");
+    }
+    assert!(
+        json["rows"][0]["telemetry"][0]["passes"].is_array(),
+        "{json}"
+    );
     fails_with(
         &["experiment", "hybrid-map", "--methods", "restir:hybrid"],
         "--methods",

@@ -20,10 +20,10 @@ use shifts::PixelReservoir;
 use shifts::preset::{PassSpec, Preset, Shade};
 
 use crate::candidates::{self, ProbeCounts};
-use crate::diagnostics::{Counters, HybridChoice};
+use crate::diagnostics::{Counters, HybridChoice, Recorder};
 use crate::image::Image;
 use crate::plan::{PassKernel, Plan, Resource, Role, Rotation, Slot, Step};
-use crate::reuse::{self, PassInput, Previous, Reused, ShiftCounts};
+use crate::reuse::{self, PassInput, Previous, Reused, ShiftCounts, StepTelemetry};
 use crate::{PassTiming, PipelineError, Run, RunConfig, purpose};
 
 /// Fills `out` (row-major, rows of `width`) with `kernel(pixel)` in parallel over rows; the
@@ -57,6 +57,7 @@ struct Cell {
     probes: ProbeCounts,
     hybrid: HybridChoice,
     shifts: ShiftCounts,
+    telemetry: StepTelemetry,
     rao_blackwellised: Option<Vec3>,
 }
 
@@ -90,10 +91,15 @@ pub(crate) fn run(
         counters: config
             .collect_diagnostics
             .then(|| Counters::new(width, height, reuse_labels.collect())),
+        recorder: None,
     };
+    let pass_labels: Vec<String> = preset.passes.iter().map(PassSpec::label).collect();
     let mut frames = Vec::with_capacity(config.frames as usize);
     let mut nan_count = 0;
     for frame in 0..config.frames {
+        if config.collect_diagnostics && frame + 1 == config.frames {
+            frame_state.recorder = Some(Recorder::new(width, height, frame, pass_labels.clone()));
+        }
         for (step, seconds) in plan.steps.iter().zip(&mut seconds) {
             let start = Instant::now();
             if let Some((image, nans)) = frame_state.step(frame, step)? {
@@ -115,10 +121,14 @@ pub(crate) fn run(
         })
         .collect();
     let last = frame_state.rotation.buffer(Slot::Previous);
+    let mut diagnostics = frame_state.counters.as_ref().map(Counters::finish);
+    if let (Some(d), Some(recorder)) = (&mut diagnostics, frame_state.recorder.take()) {
+        d.telemetry = Some(recorder.finish(&frame_state.reservoirs[last]));
+    }
     Ok(Run {
         frames,
         timings,
-        diagnostics: frame_state.counters.map(|c| c.finish()),
+        diagnostics,
         nan_count,
         reservoirs: std::mem::take(&mut frame_state.reservoirs[last]),
     })
@@ -140,6 +150,8 @@ struct Frame<'a> {
     gbuffer: Option<GBuffer>,
     previous_gbuffer: Option<GBuffer>,
     counters: Option<Counters>,
+    /// The reuse telemetry, during the last frame of a run with diagnostics.
+    recorder: Option<Recorder>,
 }
 
 impl Frame<'_> {
@@ -216,6 +228,16 @@ impl Frame<'_> {
                 counters.add_candidates(&probes);
             }
         }
+        if let Some(recorder) = &mut self.recorder {
+            if spec.shift().is_some() {
+                let observed = cells
+                    .iter()
+                    .map(|c| (&c.reservoir, &c.telemetry, c.shifts.shifted));
+                recorder.reuse(step.pass, observed);
+            } else {
+                recorder.candidates(cells.iter().map(|c| &c.reservoir));
+            }
+        }
         Ok(None)
     }
 }
@@ -282,11 +304,13 @@ fn run_pass(
                     let Reused {
                         reservoir,
                         shifts,
+                        telemetry,
                         rao_blackwellised,
                     } = result.map_err(|e| PixelError::Resample(pixel, e))?;
                     *cell = Cell {
                         reservoir,
                         shifts,
+                        telemetry,
                         rao_blackwellised,
                         ..Cell::default()
                     };
@@ -532,6 +556,90 @@ mod tests {
                     preset.name
                 );
             }
+        }
+    }
+
+    /// Reuse telemetry on a tiny scene: it leaves every frame and the final reservoirs
+    /// bit-identical (diagnostics on vs off); its counts are consistent (origins account for
+    /// every pixel with a sample, failures by kind ≤ shifts, `m_0 ∈ [0, 1]`, `Σ 1/sharing` =
+    /// the number of distinct x2); every origin occurs. Control: reconnection copies x2, so
+    /// pixels share samples (mean sharing > 1), and the failure kinds sum to the diagnostics'
+    /// failure count of the last frame (a one-frame run, where both see the same frame).
+    #[test]
+    fn telemetry_observes_without_changing_the_output() {
+        let scene = scene("bumpy", 24);
+        let quiet = RunConfig {
+            seed: 9,
+            frames: 4,
+            collect_diagnostics: false,
+        };
+        let loud = RunConfig {
+            collect_diagnostics: true,
+            ..quiet
+        };
+        for name in ["hybrid", "reconnection", "sequential"] {
+            let preset = Preset::named(name).unwrap();
+            let (a, b) = (
+                run(&scene, &preset, &quiet).unwrap(),
+                run(&scene, &preset, &loud).unwrap(),
+            );
+            assert_eq!(bits(&a), bits(&b), "{name}: telemetry changed the output");
+            let t = b.diagnostics.unwrap().telemetry.unwrap();
+            assert_eq!((t.frame, t.passes.len()), (3, preset.passes.len() - 1));
+            let with_sample = b.reservoirs.iter().filter(|r| r.has_sample != 0).count();
+            let mut origins = vec![0usize; preset.passes.len()];
+            for o in t.origin.iter().flatten() {
+                origins[*o as usize] += 1;
+            }
+            assert_eq!(origins.iter().sum::<usize>(), with_sample, "{name}");
+            assert!(origins.iter().all(|&n| n > 0), "{name}: {origins:?}");
+            for p in &t.passes {
+                for (shifted, failed) in p.shifted.iter().zip(&p.failed_by) {
+                    assert!(failed.iter().sum::<u32>() <= *shifted);
+                }
+                assert!(
+                    p.canonical_mis
+                        .iter()
+                        .flatten()
+                        .all(|m| (0.0..=1.0).contains(m))
+                );
+            }
+            let distinct: f64 = t
+                .sharing
+                .iter()
+                .filter(|&&k| k > 0)
+                .map(|&k| 1.0 / k as f64)
+                .sum();
+            let keys: std::collections::HashSet<_> = b
+                .reservoirs
+                .iter()
+                .filter(|r| r.has_sample != 0)
+                .map(|r| (r.y.prim(), r.y.bary().x.to_bits(), r.y.bary().y.to_bits()))
+                .collect();
+            assert!((distinct - keys.len() as f64).abs() < 1e-6, "{name}");
+            let mean_sharing =
+                t.sharing.iter().map(|&k| k as f64).sum::<f64>() / with_sample as f64;
+            println!("{name}: origins {origins:?}, mean sharing {mean_sharing:.3}");
+            if name == "reconnection" {
+                assert!(mean_sharing > 1.0, "control: {mean_sharing}");
+            }
+        }
+        let one = RunConfig { frames: 1, ..loud };
+        let d = run(&scene, &Preset::named("hybrid").unwrap(), &one)
+            .unwrap()
+            .diagnostics
+            .unwrap();
+        let t = d.telemetry.as_ref().unwrap();
+        for (pass, f) in t.passes.iter().zip(&d.failures) {
+            let by_kind: u64 = pass.failed_by.iter().flatten().map(|&n| n as u64).sum();
+            let shifted: u64 = pass.shifted.iter().map(|&n| n as u64).sum();
+            assert_eq!(shifted, f.shifted, "{}", f.label);
+            assert_eq!(
+                by_kind as f64,
+                (f.rate * f.shifted as f64).round(),
+                "{}",
+                f.label
+            );
         }
     }
 

@@ -1,6 +1,12 @@
 //! Diagnostic images of a run (seed 001 Fig. 4, 5, 10): which shift the hybrid criterion picks,
 //! the fraction of shifted samples that beat the canonical one, shift-failure rates per pass,
-//! and intersections per probe. Counters are summed over all frames.
+//! and intersections per probe. Counters are summed over all frames; the reuse [`Telemetry`]
+//! records the last frame.
+
+mod telemetry;
+
+pub(crate) use telemetry::Recorder;
+pub use telemetry::{FAIL_KINDS, PassTelemetry, Telemetry};
 
 use glam::Vec3;
 
@@ -127,6 +133,7 @@ impl Counters {
             hits_per_probe,
             mean_hits_per_probe: ratio(total_hits, total_probes),
             probes: total_probes,
+            telemetry: None,
         }
     }
 }
@@ -160,6 +167,8 @@ pub struct Diagnostics {
     pub mean_hits_per_probe: f64,
     /// BSSRDF samples (probes) traced, over all pixels and frames.
     pub probes: u64,
+    /// The reuse telemetry of the last frame (CPU backend; `None` on the Vulkan backend).
+    pub telemetry: Option<Telemetry>,
 }
 
 impl Diagnostics {

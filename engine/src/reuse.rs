@@ -6,10 +6,10 @@
 
 use glam::{Vec2, Vec3};
 use restir::mis::MisScheme;
-use restir::resample::{ResampleError, Source, resample_observed};
+use restir::resample::{Observed, ResampleError, Source, resample_observed};
 use restir::reservoir::{Reservoir, cap_confidence};
 use restir::rng::StreamKey;
-use restir::shift::{Domain, Shift};
+use restir::shift::{Domain, Fail, Shift};
 use shifts::{SssDomain, SssSample, resolve_deferred_index};
 use sss::scene::{GBuffer, GPixel, Scene};
 
@@ -35,11 +35,25 @@ pub struct ShiftCounts {
     pub improved: u32,
 }
 
+/// What the reuse telemetry records of one pixel in one reuse pass
+/// ([`crate::diagnostics::Telemetry`]); observing draws no random number.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StepTelemetry {
+    /// The input the pass selected: 0 the pixel's own reservoir, `i` neighbour `i − 1`; `None`
+    /// when nothing was selected or the pass left the reservoir unchanged.
+    pub selected: Option<usize>,
+    /// The MIS weight `m_0(y_0)` of the pixel's own sample, when it had a positive weight.
+    pub canonical_mis: Option<f32>,
+    /// Failed shifts by [`Fail`] kind (index `code − 1`), only when diagnostics are collected.
+    pub failed_by: [u32; Fail::ALL.len()],
+}
+
 /// One pixel's output of a reuse pass.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Reused {
     pub reservoir: PixelReservoir,
     pub shifts: ShiftCounts,
+    pub telemetry: StepTelemetry,
     /// For [`Shade::AllInputs`], the step's Rao-Blackwellised value `Σ_i f(y_i)·m_i·W_i·J_i`
     /// over its inputs (`restir::resample::resample_observed`); `None` for [`Shade::Selected`]
     /// and where the pass left the reservoir unchanged.
@@ -110,10 +124,17 @@ impl<'a> Step<'_, 'a> {
         let receiver = &self.receiver;
         let all_inputs = self.shade == Shade::AllInputs;
         let mut sum = Vec3::ZERO;
-        // Σ_i f(y_i) · m_i W_i J_i = E[f(Y)·W | inputs]   [001 Eq. 6]
-        let mut observe = |y: &SssSample, factor: f32| {
+        let mut telemetry = StepTelemetry::default();
+        let mut observe = |o: Observed<'_, SssSample>| {
+            // Σ_i f(y_i) · m_i W_i J_i = E[f(Y)·W | inputs]   [001 Eq. 6]
             if all_inputs {
-                sum += receiver.contribution(y) * factor;
+                sum += receiver.contribution(o.y) * o.factor;
+            }
+            if o.selected {
+                telemetry.selected = Some(o.source);
+            }
+            if o.source == 0 {
+                telemetry.canonical_mis = Some(o.mis_weight);
             }
         };
         let sources: Vec<Source<'_, SssDomain<'a>>> = neighbours
@@ -147,35 +168,48 @@ impl<'a> Step<'_, 'a> {
             let counts = if self.input.collect_diagnostics {
                 self.count_shifts(shift, neighbours)
             } else {
-                ShiftCounts::default()
+                (ShiftCounts::default(), [0; Fail::ALL.len()])
             };
             Ok::<_, ResampleError>((out, counts))
         })?;
+        let (shifts, failed_by) = shifts;
+        if out.y.is_none() {
+            telemetry.selected = None;
+        }
         Ok(Reused {
             reservoir: PixelReservoir::from(&out),
             shifts,
+            telemetry: StepTelemetry {
+                failed_by,
+                ..telemetry
+            },
             rao_blackwellised: all_inputs.then_some(sum),
         })
     }
 
-    /// Re-applies the shift to each neighbour sample to count failures and improvements (only
-    /// when diagnostics are collected; the resampling itself is not affected).
+    /// Re-applies the shift to each neighbour sample to count failures (also by [`Fail`] kind)
+    /// and improvements (only when diagnostics are collected; the resampling itself is not
+    /// affected).
     fn count_shifts(
         &self,
         shift: &dyn for<'s> Shift<SssDomain<'s>>,
         neighbours: &[(SssDomain<'a>, Reservoir<SssSample>)],
-    ) -> ShiftCounts {
+    ) -> (ShiftCounts, [u32; Fail::ALL.len()]) {
         let canonical_target = self.canonical.y.map_or(0.0, |y| self.receiver.target(&y));
         let mut counts = ShiftCounts::default();
+        let mut failed_by = [0; Fail::ALL.len()];
         for (domain, reservoir) in neighbours {
             let Some(x) = &reservoir.y else { continue };
             counts.shifted += 1;
             match shift.shift(x, domain, &self.receiver) {
                 Ok(s) => counts.improved += (self.receiver.target(&s.y) > canonical_target) as u32,
-                Err(_) => counts.failed += 1,
+                Err(fail) => {
+                    counts.failed += 1;
+                    failed_by[fail.code() as usize - 1] += 1;
+                }
             }
         }
-        counts
+        (counts, failed_by)
     }
 }
 

@@ -20,6 +20,7 @@ pub mod reference_cache;
 pub mod regions;
 pub mod report;
 pub mod scenes;
+pub mod telemetry;
 pub mod uncertainty;
 
 pub use error::Error;

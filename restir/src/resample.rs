@@ -145,11 +145,26 @@ where
     T: Shift<D> + ?Sized,
     M: MisScheme + ?Sized,
 {
-    resample_observed(receiver, neighbours, shift, mis, rng, &mut |_, _| {})
+    resample_observed(receiver, neighbours, shift, mis, rng, &mut |_| {})
 }
 
-/// [`resample`] that also calls `observe(y_i, m_i(y_i) · W_i · J_i)` for every input streamed
-/// with a positive resampling weight; that factor is `w_i / p̂_r(y_i)`.
+/// One input of a resampling step as [`resample_observed`] reports it.
+#[derive(Clone, Copy, Debug)]
+pub struct Observed<'a, S> {
+    /// 0 for the receiver's own (canonical) reservoir, `i` for neighbour `i − 1`.
+    pub source: usize,
+    /// The input's sample in the receiver's domain, `y_i = T_{i→r}(x_i)`.
+    pub y: &'a S,
+    /// Its MIS weight `m_i(y_i)`.
+    pub mis_weight: f32,
+    /// `m_i(y_i) · W_i · J_i = w_i / p̂_r(y_i)`.
+    pub factor: f32,
+    /// Whether the stream selected it; the last input observed with `selected` is `Y`.
+    pub selected: bool,
+}
+
+/// [`resample`] that also calls `observe` ([`Observed`]) for every input streamed with a
+/// positive resampling weight. Observing draws no random number and changes nothing.
 ///
 /// `Σ_i f(y_i) · m_i(y_i) W_i J_i` over the observed inputs is the Rao-Blackwellised estimate of
 /// the step: `E[f(Y)·W | inputs]`, with the same expectation `∫f` as `f(Y)·W` and without the
@@ -162,7 +177,7 @@ pub fn resample_observed<D, T, M>(
     shift: &T,
     mis: &M,
     rng: &mut Stream,
-    observe: &mut dyn FnMut(&D::Sample, f32),
+    observe: &mut dyn FnMut(Observed<'_, D::Sample>),
 ) -> Result<Reservoir<D::Sample>, ResampleError>
 where
     D: Domain,
@@ -251,7 +266,13 @@ where
         ris.update(y, target, weight, input.confidence, u)
             .map_err(wrap)?;
         if weight > 0.0 {
-            observe(&y, m * input.ucw * jacobian);
+            observe(Observed {
+                source: i,
+                y: &y,
+                mis_weight: m,
+                factor: m * input.ucw * jacobian,
+                selected: ris.took(weight, u),
+            });
         }
     }
     Ok(ris.finish())
@@ -421,6 +442,7 @@ mod tests {
     /// variance is below that of `f(Y)·W` (the selection's variance is gone). Negative control:
     /// the same sum with `f` evaluated in the neighbour's domain instead of the receiver's is
     /// found biased, and so is the Rao-Blackwellised sum scaled by `1 + 1.5δ` (power at δ).
+    /// The last input observed as `selected` is the output's `Y` in every replica.
     #[test]
     fn observed_inputs_give_the_rao_blackwellised_estimate() {
         let receiver = pixel([0.3, 0.6]);
@@ -431,6 +453,7 @@ mod tests {
             let canonical = generate_candidates(&receiver, &LinearSampler, 1, &mut key(0)).unwrap();
             let other = generate_candidates(&neighbour, &LinearSampler, 4, &mut key(1)).unwrap();
             let (mut sum, mut p_sum, mut wrong) = (0.0f64, 0.0f64, 0.0f64);
+            let mut chosen = None;
             let r = resample_observed(
                 Source {
                     domain: &receiver,
@@ -443,14 +466,19 @@ mod tests {
                 &Translation,
                 &Gbh,
                 &mut key(2),
-                &mut |y, factor| {
-                    sum += receiver.integrand(y) as f64 * factor as f64;
-                    p_sum += receiver.target(y) as f64 * factor as f64;
+                &mut |o| {
+                    let factor = o.factor as f64;
+                    sum += receiver.integrand(o.y) as f64 * factor;
+                    p_sum += receiver.target(o.y) as f64 * factor;
                     // The control: f evaluated in the neighbour's domain, not the receiver's.
-                    wrong += neighbour.integrand(y) as f64 * factor as f64;
+                    wrong += neighbour.integrand(o.y) as f64 * factor;
+                    if o.selected {
+                        chosen = Some(*o.y);
+                    }
                 },
             )
             .unwrap();
+            assert_eq!(chosen, r.y, "replica {i}: the observed selection is Y");
             let value =
                 r.y.map_or(0.0, |y| receiver.integrand(&y) as f64 * r.ucw as f64);
             let w_sum =

@@ -119,7 +119,7 @@ impl<S: Copy> Ris<S> {
                 return Err(InvalidCandidate::Weight(weight));
             }
             self.w_sum = w_sum;
-            if u * w_sum < weight {
+            if self.took(weight, u) {
                 self.selected = Some((y, target));
             }
         }
@@ -135,6 +135,12 @@ impl<S: Copy> Ris<S> {
         } else {
             Err(InvalidCandidate::Confidence(confidence))
         }
+    }
+
+    /// Whether the candidate of positive `weight` just streamed with number `u` was selected:
+    /// `u · w_sum < w` [001 Alg. 1], `w_sum` including it.
+    pub fn took(&self, weight: f32, u: f32) -> bool {
+        u * self.w_sum < weight
     }
 
     pub fn w_sum(&self) -> f32 {

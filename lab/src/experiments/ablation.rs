@@ -4,21 +4,26 @@
 //! efficiency `1/(MSE·s)` over 1-spp `pt` per region with its 95% interval (the delta method
 //! over replicas, paired by seed, [`crate::uncertainty`]), and over the unmodified preset where
 //! both ran on the same images. Rows sharing a camera and a resolution are one
-//! [`compare::run`] (`<out>/<group>/`), so their ratios pair by seed.
+//! [`compare::run`] (`<out>/<group>/`), so their ratios pair by seed. Every row's reuse
+//! telemetry ([`crate::telemetry`], CPU backend) comes from separate runs of the same seeds
+//! with diagnostics on (which cost time, so they are not the timed runs): `telemetry.md`.
 
+use engine::RunConfig;
 use serde_json::{Value, json};
-use sss::scene::Scene;
+use sss::scene::{GBuffer, Scene};
 
 use crate::compare::{self, DEFAULT_BASELINE, Plan, parse_methods};
 use crate::error::Error;
 use crate::method_result::{Measured, MethodResult};
+use crate::methods::restir;
 use crate::metrics::Area;
 use crate::progress::Progress;
-use crate::reference_cache::ReferenceSource;
-use crate::regions::Region;
-use crate::report::output_dir;
+use crate::reference_cache::{REFERENCE_SEED, ReferenceSource};
+use crate::regions::{Region, Regions};
 use crate::report::tables::{verdict_word, with_ci};
+use crate::report::{output_dir, write_text};
 use crate::scenes::{load_scene, with_resolution};
+use crate::telemetry::{self, RegionSummary};
 use crate::uncertainty::INTERVAL_METHOD;
 
 use super::setup::{FRAMES, Report, Settings};
@@ -147,6 +152,8 @@ struct Measurement {
     over_pt: Vec<Option<Measured>>,
     /// `None` where the default row ran on other images (another camera or resolution).
     over_default: Option<Vec<Option<Measured>>>,
+    /// `None` on a backend without telemetry.
+    telemetry: Option<Vec<RegionSummary>>,
 }
 
 pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, Error> {
@@ -176,7 +183,6 @@ pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, E
         .flat_map(|b| variations(b, settings.resolution))
         .collect();
     let mut groups: Vec<String> = rows.iter().map(Variation::group).collect();
-    groups.dedup();
     groups.sort();
     groups.dedup();
     let mut measured = Vec::new();
@@ -187,6 +193,8 @@ pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, E
         let plan = group_plan(settings, scene_name, first, &members, &root.join(group))?;
         let outcome = compare::run(&plan, progress)?;
         let pt = outcome.rows.iter().find(|r| r.method == DEFAULT_BASELINE);
+        let last = GBuffer::render(&plan.scene, FRAMES - 1);
+        let regions = Regions::classify(&plan.scene, &last, REFERENCE_SEED);
         for v in members {
             let Some(row) = outcome.rows.iter().find(|r| r.method == v.spec) else {
                 continue;
@@ -196,11 +204,16 @@ pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, E
                 .filter(|b| v.spec.starts_with(**b))
                 .max_by_key(|b| b.len());
             let default = base.and_then(|b| outcome.rows.iter().find(|r| r.method == *b));
-            let own_group = v.framing == Framing::SCENE && v.resolution == settings.resolution;
+            // The default row against itself says nothing: it is left out.
+            let own_group = v.framing == Framing::SCENE
+                && v.resolution == settings.resolution
+                && Some(&row.method) != default.map(|d| &d.method);
             measured.push(Measurement {
                 variation: v.clone(),
                 over_pt: ratios(row, pt),
                 over_default: own_group.then(|| ratios(row, default)),
+                telemetry: reuse_telemetry(settings, &plan.scene, &v.spec)?
+                    .map(|runs| telemetry::summarise(&runs, &regions)),
             });
         }
         runs.push(json!({ "group": group, "results": outcome.results.to_json() }));
@@ -221,6 +234,7 @@ pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, E
         "not_knobs": NOT_KNOBS.iter().map(|(k, why)| json!({ "knob": k, "note": why })).collect::<Vec<_>>(),
         "runs": runs,
     });
+    write_text(&root.join("telemetry.md"), &telemetry_markdown(&measured))?;
     let report = Report {
         table,
         findings,
@@ -228,7 +242,7 @@ pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, E
         json,
     }
     .write()?;
-    crate::report::write_text(
+    write_text(
         &report.out.join("results.json"),
         &serde_json::to_string_pretty(&report.json).expect("JSON values"),
     )?;
@@ -271,6 +285,58 @@ fn group_plan(
         out: out.to_path_buf(),
         backend: settings.backend.clone(),
     })
+}
+
+/// The reuse telemetry of the last frame of replicas `0..K` of ReSTIR method `spec` (runs with
+/// diagnostics on); `None` on a backend that records none.
+fn reuse_telemetry(
+    settings: &Settings,
+    scene: &Scene,
+    spec: &str,
+) -> Result<Option<Vec<engine::diagnostics::Telemetry>>, Error> {
+    let preset = restir::preset(spec.strip_prefix("restir:"))
+        .map_err(|reason| Error::Invalid(format!("{spec}: {reason}")))?;
+    let mut runs = Vec::new();
+    for seed in 0..settings.replicas as u64 {
+        let config = RunConfig {
+            seed,
+            frames: FRAMES,
+            collect_diagnostics: true,
+        };
+        let run = settings.backend.run(scene, &preset, &config)?;
+        match run.diagnostics.and_then(|d| d.telemetry) {
+            Some(t) => runs.push(t),
+            None => return Ok(None),
+        }
+    }
+    Ok(Some(runs))
+}
+
+/// One telemetry table per row ([`telemetry::markdown`]).
+fn telemetry_markdown(measured: &[Measurement]) -> String {
+    let mut out = String::from(
+        "Reuse telemetry of the last frame per region: means over replicas with 95% intervals \
+         (delta method). Runs with diagnostics on, same seeds as the timed runs (CPU backend \
+         only). \"moved in last by\": the pass that last replaced the pixel's sample; \
+         \"m₀\": the MIS weight of the pixel's own sample in that pass; \"pixels sharing x2\": \
+         the mean number of pixels whose final sample has the pixel's entry point.\n",
+    );
+    for m in measured {
+        let v = &m.variation;
+        out.push_str(&format!(
+            "\n### {} (`{}`, {}, {}×{})\n\n",
+            v.label,
+            v.spec,
+            v.framing.name(),
+            v.resolution.0,
+            v.resolution.1
+        ));
+        match &m.telemetry {
+            Some(t) => out.push_str(&telemetry::markdown(t)),
+            None => out.push_str("No telemetry: the backend records none (CPU backend only).\n"),
+        }
+    }
+    out
 }
 
 /// `row`'s efficiency ratio over `baseline` per region of [`Region::ALL`].
@@ -409,6 +475,7 @@ fn row_json(m: &Measurement) -> Value {
         "height": v.resolution.1,
         "efficiency_over_pt": by_region(&m.over_pt),
         "efficiency_over_default": m.over_default.as_deref().map(by_region),
+        "telemetry": m.telemetry.as_deref().map(telemetry::json),
     })
 }
 

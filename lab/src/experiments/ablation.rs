@@ -152,6 +152,11 @@ struct Measurement {
     over_pt: Vec<Option<Measured>>,
     /// `None` where the default row ran on other images (another camera or resolution).
     over_default: Option<Vec<Option<Measured>>>,
+    /// Milliseconds per frame of the row and of its `pt`.
+    milliseconds: (Measured, Option<Measured>),
+    /// MSE over the default row per region at equal spp, and seconds per frame over the default
+    /// row (both paired by seed); `None` like `over_default`.
+    mse_over_default: Option<(Vec<Option<Measured>>, Option<Measured>)>,
     /// `None` on a backend without telemetry.
     telemetry: Option<Vec<RegionSummary>>,
 }
@@ -212,6 +217,12 @@ pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, E
                 variation: v.clone(),
                 over_pt: ratios(row, pt),
                 over_default: own_group.then(|| ratios(row, default)),
+                milliseconds: (milliseconds(row), pt.map(milliseconds)),
+                mse_over_default: default.filter(|_| own_group).map(|d| {
+                    let time = row.seconds.ln().zip(d.seconds.ln());
+                    let time = time.and_then(|(a, b)| a.minus(&b));
+                    (mse_ratios(row, d), time.as_ref().map(Measured::of_log))
+                }),
                 telemetry: reuse_telemetry(settings, &plan.scene, &v.spec)?
                     .map(|runs| telemetry::summarise(&runs, &regions)),
             });
@@ -347,6 +358,37 @@ fn ratios(row: &MethodResult, baseline: Option<&MethodResult>) -> Vec<Option<Mea
         .collect()
 }
 
+/// `row`'s MSE over `other`'s per region of [`Region::ALL`] (equal spp, paired by seed).
+fn mse_ratios(row: &MethodResult, other: &MethodResult) -> Vec<Option<Measured>> {
+    Region::ALL
+        .iter()
+        .map(|&r| row.mse_ratio(other, Area::Region(r)))
+        .collect()
+}
+
+/// Milliseconds per frame over replicas.
+fn milliseconds(row: &MethodResult) -> Measured {
+    let s = Measured::of(&row.seconds);
+    Measured {
+        value: 1e3 * s.value,
+        ci: s.ci.map(|i| crate::uncertainty::Interval {
+            lo: 1e3 * i.lo,
+            hi: 1e3 * i.hi,
+        }),
+    }
+}
+
+/// `ratio [lo, hi] lower|higher|inconclusive` for a ratio where below 1 is lower, or `-`.
+fn ratio_cell(m: &Option<Measured>) -> String {
+    let Some(m) = m else { return "-".into() };
+    let word = match m.ci {
+        Some(i) if i.below(1.0) => "lower",
+        Some(i) if i.above(1.0) => "higher",
+        _ => "inconclusive",
+    };
+    format!("{} {word}", with_ci(Some(*m)))
+}
+
 /// `ratio [lo, hi] verdict`, or `-`.
 fn cell(m: &Option<Measured>) -> String {
     match m {
@@ -362,13 +404,22 @@ fn markdown(measured: &[Measurement], scene: &str, settings: &Settings) -> Strin
     let mut over_pt = format!(
         "Efficiency 1/(MSE·s) over 1-spp `pt`, frame {} of `{scene}`, {} replicas, reference {} spp; \
          95% intervals by the delta method over replicas (paired by seed, log scale); verdict \
-         *better* / *worse* when the interval excludes 1, else *inconclusive*.\n\n{header}",
+         *better* / *worse* when the interval excludes 1, else *inconclusive*. Wall times on a \
+         shared machine: their intervals hold the spread within the run, not a load change \
+         between methods.\n\n| variation | method | camera | size | translucent | lit | penumbra | shadowed | ms/frame (pt) |\n\
+         |---|---|---|---|---:|---:|---:|---:|---:|\n",
         FRAMES - 1,
         settings.replicas,
         settings.reference_spp
     );
     let mut over_default = format!(
         "\nEfficiency over the unmodified preset (same camera, {w}×{h}, paired by seed):\n\n{header}"
+    );
+    let mut mse_over_default = format!(
+        "\nMSE over the unmodified preset at equal spp (same camera, {w}×{h}, paired by seed; the \
+         MSEs are deterministic, the times are not), and time per frame over it:\n\n\
+         | variation | method | camera | size | translucent | lit | penumbra | shadowed | time/frame |\n\
+         |---|---|---|---|---:|---:|---:|---:|---:|\n"
     );
     for m in measured {
         let v = &m.variation;
@@ -381,16 +432,30 @@ fn markdown(measured: &[Measurement], scene: &str, settings: &Settings) -> Strin
             v.resolution.1
         );
         let cells = |ms: &[Option<Measured>]| ms.iter().map(cell).collect::<Vec<_>>().join(" | ");
-        over_pt.push_str(&format!("{lead} {} |\n", cells(&m.over_pt)));
+        let (ms, pt_ms) = &m.milliseconds;
+        over_pt.push_str(&format!(
+            "{lead} {} | {} ({}) |\n",
+            cells(&m.over_pt),
+            with_ci(Some(*ms)),
+            with_ci(*pt_ms)
+        ));
         if let Some(d) = &m.over_default {
             over_default.push_str(&format!("{lead} {} |\n", cells(d)));
+        }
+        if let Some((mse, time)) = &m.mse_over_default {
+            let mse: Vec<String> = mse.iter().map(ratio_cell).collect();
+            mse_over_default.push_str(&format!(
+                "{lead} {} | {} |\n",
+                mse.join(" | "),
+                ratio_cell(time)
+            ));
         }
     }
     let mut notes = String::from("\nNot varied:\n\n");
     for (knob, why) in NOT_KNOBS {
         notes.push_str(&format!("- {knob}: {why}\n"));
     }
-    format!("{over_pt}{over_default}{notes}")
+    format!("{over_pt}{over_default}{mse_over_default}{notes}")
 }
 
 /// What the intervals decide: per region, the rows more or less efficient than the unmodified
@@ -446,24 +511,30 @@ fn list(labels: &[&str]) -> String {
     }
 }
 
-fn measured_json(m: &Option<Measured>) -> Value {
+/// `{value, lo, hi}` and, for an efficiency ratio, its verdict.
+fn measured_json(m: &Option<Measured>, efficiency: bool) -> Value {
     match m {
-        Some(m) => json!({
-            "value": m.value,
-            "lo": m.ci.map(|i| i.lo),
-            "hi": m.ci.map(|i| i.hi).filter(|h| h.is_finite()),
-            "verdict": verdict_word(m),
-        }),
+        Some(m) => {
+            let mut v = json!({
+                "value": m.value,
+                "lo": m.ci.map(|i| i.lo),
+                "hi": m.ci.map(|i| i.hi).filter(|h| h.is_finite()),
+            });
+            if efficiency {
+                v["verdict"] = json!(verdict_word(m));
+            }
+            v
+        }
         None => Value::Null,
     }
 }
 
 fn row_json(m: &Measurement) -> Value {
-    let by_region = |ms: &[Option<Measured>]| {
+    let by_region = |ms: &[Option<Measured>], efficiency: bool| {
         Region::ALL
             .iter()
             .zip(ms)
-            .map(|(r, m)| (r.name().to_string(), measured_json(m)))
+            .map(|(r, m)| (r.name().to_string(), measured_json(m, efficiency)))
             .collect::<serde_json::Map<_, _>>()
     };
     let v = &m.variation;
@@ -473,8 +544,12 @@ fn row_json(m: &Measurement) -> Value {
         "camera": v.framing.name(),
         "width": v.resolution.0,
         "height": v.resolution.1,
-        "efficiency_over_pt": by_region(&m.over_pt),
-        "efficiency_over_default": m.over_default.as_deref().map(by_region),
+        "efficiency_over_pt": by_region(&m.over_pt, true),
+        "efficiency_over_default": m.over_default.as_deref().map(|d| by_region(d, true)),
+        "ms_per_frame": measured_json(&Some(m.milliseconds.0), false),
+        "pt_ms_per_frame": measured_json(&m.milliseconds.1, false),
+        "mse_over_default": m.mse_over_default.as_ref().map(|(mse, _)| by_region(mse, false)),
+        "time_over_default": m.mse_over_default.as_ref().map(|(_, t)| measured_json(t, false)),
         "telemetry": m.telemetry.as_deref().map(telemetry::json),
     })
 }

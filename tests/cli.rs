@@ -855,7 +855,7 @@ fn ground_truth_and_model_gap_run_small() {
 #[test]
 fn ablation_runs_small() {
     let dir = scratch("ablation");
-    let out = dir.join("ablation");
+    let (out, cache) = (dir.join("ablation"), dir.join("cache"));
     let args = [
         "experiment",
         "ablation",
@@ -872,7 +872,7 @@ fn ablation_runs_small() {
         "--out",
         out.to_str().unwrap(),
         "--cache",
-        dir.join("cache").to_str().unwrap(),
+        cache.to_str().unwrap(),
     ];
     let text = ok(&reshift(&args));
     for row in [

@@ -463,7 +463,7 @@ fn markdown(measured: &[Measurement], scene: &str, settings: &Settings) -> Strin
 /// shadow, > 1 over all translucent pixels).
 fn findings(measured: &[Measurement]) -> String {
     let mut out = String::from(
-        "| region | better than the default | worse than the default | rows whose lower bound over pt clears the bar |\n|---|---|---|---|\n",
+        "| region | more efficient than the unmodified preset | less efficient | rows whose lower bound over pt clears the bar |\n|---|---|---|---|\n",
     );
     for (i, region) in Region::ALL.iter().enumerate() {
         let bar = match region {
@@ -479,19 +479,20 @@ fn findings(measured: &[Measurement]) -> String {
                         .and_then(|d| d[i].as_ref())
                         .is_some_and(|r| verdict_word(r) == word)
                 })
-                .map(|m| m.variation.label.as_str())
+                .map(|m| m.variation.spec.as_str())
                 .collect();
             list(&labels)
         };
-        let clear: Vec<&str> = measured
+        let clear: Vec<String> = measured
             .iter()
             .filter(|m| {
                 m.over_pt[i]
                     .and_then(|r| r.ci)
                     .is_some_and(|ci| if bar > 1.0 { ci.lo >= bar } else { ci.lo > bar })
             })
-            .map(|m| m.variation.label.as_str())
+            .map(|m| format!("{} ({})", m.variation.spec, m.variation.label))
             .collect();
+        let clear: Vec<&str> = clear.iter().map(String::as_str).collect();
         let sign = if bar > 1.0 { "≥" } else { ">" };
         out.push_str(&format!(
             "| {region} | {} | {} | {sign} {bar}: {} |\n",

@@ -907,6 +907,45 @@ fn ablation_runs_small() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `experiment ablation --backend vulkan` (8×6, 2 replicas) leaves out the `shade=all` rows
+/// (no Vulkan kernel) and says so, and writes no telemetry (CPU only); without Vulkan it is a
+/// one-line error.
+#[test]
+fn ablation_on_the_vulkan_backend_leaves_out_what_it_cannot_run() {
+    let dir = scratch("ablation-vulkan");
+    let (out, cache) = (dir.join("ablation"), dir.join("cache"));
+    let args = [
+        "experiment",
+        "ablation",
+        "--backend",
+        "vulkan",
+        "--resolution",
+        "8x6",
+        "--replicas",
+        "2",
+        "--reference-spp",
+        "256",
+        "--methods",
+        "restir:reconnection",
+        "--out",
+        out.to_str().unwrap(),
+        "--cache",
+        cache.to_str().unwrap(),
+    ];
+    match vulkan_or_reason("ablation_on_the_vulkan_backend_leaves_out_what_it_cannot_run") {
+        Err(reason) => fails_with(&args, &reason),
+        Ok(_) => {
+            let text = ok(&reshift(&args));
+            assert!(text.contains("| temporal cap 20 |"), "{text}");
+            assert!(!text.contains("| shade=all |"), "{text}");
+            assert!(text.contains("shade=all: left out"), "{text}");
+            let telemetry = std::fs::read_to_string(out.join("telemetry.md")).unwrap();
+            assert!(telemetry.contains("No telemetry"), "{telemetry}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// GPU options without `--backend vulkan` are input errors, not ignored; an unknown backend is
 /// a usage error.
 #[test]

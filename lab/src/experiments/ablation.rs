@@ -183,9 +183,12 @@ pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, E
         )));
     }
     let root = output_dir(&settings.out_dir("ablation"))?;
+    // Rao-Blackwellised shading has no Vulkan kernel: its rows run on the CPU backend only.
+    let cpu = matches!(settings.backend, engine::Backend::Cpu);
     let rows: Vec<Variation> = bases
         .iter()
         .flat_map(|b| variations(b, settings.resolution))
+        .filter(|v| cpu || !v.spec.contains("/shade=all"))
         .collect();
     let mut groups: Vec<String> = rows.iter().map(Variation::group).collect();
     groups.sort();
@@ -454,6 +457,9 @@ fn markdown(measured: &[Measurement], scene: &str, settings: &Settings) -> Strin
     let mut notes = String::from("\nNot varied:\n\n");
     for (knob, why) in NOT_KNOBS {
         notes.push_str(&format!("- {knob}: {why}\n"));
+    }
+    if !matches!(settings.backend, engine::Backend::Cpu) {
+        notes.push_str("- shade=all: left out, it has no Vulkan kernel (CPU backend only)\n");
     }
     format!("{over_pt}{over_default}{mse_over_default}{notes}")
 }

@@ -849,14 +849,10 @@ fn ground_truth_and_model_gap_run_small() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// `ablation` at a tiny size: one row per knob with its efficiency over pt and a verdict,
-/// `results.json` with every row; `--methods` is refused by an experiment with its own methods
-/// and must name ReSTIR methods here.
-#[test]
-fn ablation_runs_small() {
-    let dir = scratch("ablation");
-    let (out, cache) = (dir.join("ablation"), dir.join("cache"));
-    let args = [
+/// `experiment ablation` of `restir:reconnection` at 8×6, 2 replicas, 256-spp references, then
+/// `extra`.
+fn ablation_args(out: &Path, cache: &Path, extra: &[&str]) -> Vec<String> {
+    let mut args = vec![
         "experiment",
         "ablation",
         "--resolution",
@@ -865,8 +861,6 @@ fn ablation_runs_small() {
         "2",
         "--reference-spp",
         "256",
-        "--scene",
-        "bumpy",
         "--methods",
         "restir:reconnection",
         "--out",
@@ -874,6 +868,19 @@ fn ablation_runs_small() {
         "--cache",
         cache.to_str().unwrap(),
     ];
+    args.extend_from_slice(extra);
+    args.into_iter().map(String::from).collect()
+}
+
+/// `ablation` at a tiny size: one row per knob with its efficiency over pt and a verdict,
+/// `results.json` with every row; `--methods` is refused by an experiment with its own methods
+/// and must name ReSTIR methods here.
+#[test]
+fn ablation_runs_small() {
+    let dir = scratch("ablation");
+    let (out, cache) = (dir.join("ablation"), dir.join("cache"));
+    let args = ablation_args(&out, &cache, &["--scene", "bumpy"]);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
     let text = ok(&reshift(&args));
     for row in [
         "| temporal cap 20 | restir:reconnection/cap=20 | moving | 8×6 |",
@@ -914,24 +921,8 @@ fn ablation_runs_small() {
 fn ablation_on_the_vulkan_backend_leaves_out_what_it_cannot_run() {
     let dir = scratch("ablation-vulkan");
     let (out, cache) = (dir.join("ablation"), dir.join("cache"));
-    let args = [
-        "experiment",
-        "ablation",
-        "--backend",
-        "vulkan",
-        "--resolution",
-        "8x6",
-        "--replicas",
-        "2",
-        "--reference-spp",
-        "256",
-        "--methods",
-        "restir:reconnection",
-        "--out",
-        out.to_str().unwrap(),
-        "--cache",
-        cache.to_str().unwrap(),
-    ];
+    let args = ablation_args(&out, &cache, &["--backend", "vulkan"]);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
     match vulkan_or_reason("ablation_on_the_vulkan_backend_leaves_out_what_it_cannot_run") {
         Err(reason) => fails_with(&args, &reason),
         Ok(_) => {

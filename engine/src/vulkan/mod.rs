@@ -14,6 +14,7 @@ mod decode;
 mod device;
 mod error;
 mod frame;
+mod image_space;
 mod memory;
 mod pass_params;
 mod pt;
@@ -32,6 +33,10 @@ pub use decode::decode_error;
 pub use device::{Context, DEVICE_ENV, DeviceInfo, DeviceKind, choose_device};
 pub use error::VulkanError;
 pub use frame::{CANDIDATES, SPATIAL, TEMPORAL};
+pub use image_space::{
+    GpuDipole, GpuGatherProfile, IMAGE_SPACE, ImageSpaceImage, render_image_space,
+    scene_gather_profiles,
+};
 pub use memory::Buffer;
 pub use pt::{DeviceImage, FrameInput, PT, SHADE, render_pt, render_pt_hits, shade};
 pub use random_walk::{

@@ -43,7 +43,7 @@ pub struct DeviceImage {
 
 /// The frame's bindings (scene, `FrameParams`, G-buffer) followed by `extra`, after checking
 /// that the G-buffer covers the frame.
-fn bindings<'a>(
+pub(super) fn bindings<'a>(
     frame: &FrameInput<'a>,
     extra: &[&'a Buffer],
 ) -> Result<Vec<&'a Buffer>, VulkanError> {
@@ -65,7 +65,7 @@ fn bindings<'a>(
 }
 
 /// Reads a `vec4` output back as an image and the count of its texels with `w ≠ 0` summed.
-fn read_image(frame: &FrameInput, output: &Buffer) -> Result<DeviceImage, VulkanError> {
+pub(super) fn read_image(frame: &FrameInput, output: &Buffer) -> Result<DeviceImage, VulkanError> {
     let texels = output.read::<[f32; 4]>()?;
     Ok(DeviceImage {
         image: Image {

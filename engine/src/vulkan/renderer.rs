@@ -6,11 +6,13 @@
 use std::collections::HashMap;
 use std::collections::hash_map::Entry;
 
+use sss::integrator::image_space::ImageSpaceSettings;
 use sss::scene::Scene;
 
 use super::device::Context;
 use super::error::VulkanError;
 use super::frame::FrameRun;
+use super::image_space::{IMAGE_SPACE, render_image_space, scene_gather_profiles};
 use super::memory::Buffer;
 use super::random_walk::{RANDOM_WALK, render_random_walk, scene_media};
 use super::scene::{GBUFFER, GpuScene};
@@ -160,6 +162,36 @@ impl Renderer {
                 shader: RANDOM_WALK.name,
                 count: out.cut,
             }));
+        }
+        Ok((out.image.image, out.image.left_out))
+    }
+
+    /// The `image-space:spp` method at `frame` with the default sample counts
+    /// ([`ImageSpaceSettings::default`]): the image and the pass values left out.
+    pub fn image_space(
+        &mut self,
+        scene: &Scene,
+        frame: u32,
+        seed: u64,
+        spp: u32,
+    ) -> Result<(Image, u64), VulkanError> {
+        let settings = ImageSpaceSettings::default();
+        let profiles = scene_gather_profiles(scene, &settings);
+        let (gbuffer, params) = self.gbuffer(scene, frame, seed)?;
+        let (context, kernel, gpu) = self.parts(IMAGE_SPACE)?;
+        let input = FrameInput {
+            scene: gpu,
+            params: &params,
+            gbuffer: &gbuffer,
+            width: scene.camera.width(),
+            height: scene.camera.height(),
+        };
+        let out = render_image_space(context, kernel, &input, &profiles, &settings, spp)?;
+        if out.cut > 0 {
+            return Err(VulkanError::LoopsCut {
+                shader: IMAGE_SPACE.name,
+                count: out.cut,
+            });
         }
         Ok((out.image.image, out.image.left_out))
     }

@@ -8,6 +8,7 @@
 //! [`VulkanError`] that says in one line what to install; nothing here panics for that.
 //! The buffer structs below are `#[repr(C)]` + `bytemuck` twins of std430 structs of the GLSL.
 
+mod adaptive;
 mod bvh;
 mod compute;
 mod decode;
@@ -27,6 +28,7 @@ mod timing;
 
 use bytemuck::{Pod, Zeroable};
 
+pub use adaptive::{ADAPTIVE, AdaptiveImage, GpuHistory, render_adaptive_frame};
 pub use bvh::{BVH_MAX_HITS, BvhRayInput, BvhRayOutput, GpuBvh};
 pub use compute::{Dispatch, Kernel, groups_for};
 pub use decode::decode_error;

@@ -6,9 +6,11 @@
 use std::collections::HashMap;
 use std::collections::hash_map::Entry;
 
+use sss::integrator::adaptive::AdaptiveParams;
 use sss::integrator::image_space::ImageSpaceSettings;
 use sss::scene::Scene;
 
+use super::adaptive::{ADAPTIVE, AdaptiveImage, render_adaptive_frame};
 use super::device::Context;
 use super::error::VulkanError;
 use super::frame::FrameRun;
@@ -194,6 +196,45 @@ impl Renderer {
             });
         }
         Ok((out.image.image, out.image.left_out))
+    }
+
+    /// The `adaptive` method with controller `params` (validated) over frames `0..frames` of
+    /// `scene`'s trajectory, each handed to `each` as it is done (the twin of
+    /// `sss::integrator::adaptive::run`); returns the last (`None` for no frames). A frame whose
+    /// loops the device cut short is an error.
+    pub fn adaptive(
+        &mut self,
+        scene: &Scene,
+        params: &AdaptiveParams,
+        seed: u64,
+        frames: u32,
+        mut each: impl FnMut(&AdaptiveImage),
+    ) -> Result<Option<AdaptiveImage>, VulkanError> {
+        let mut previous: Option<(Buffer, Buffer)> = None;
+        let mut last = None;
+        for frame in 0..frames {
+            let (gbuffer, frame_params) = self.gbuffer(scene, frame, seed)?;
+            let (context, kernel, gpu) = self.parts(ADAPTIVE)?;
+            let input = FrameInput {
+                scene: gpu,
+                params: &frame_params,
+                gbuffer: &gbuffer,
+                width: scene.camera.width(),
+                height: scene.camera.height(),
+            };
+            let carried = previous.as_ref().map(|(g, h)| (g, h));
+            let (out, history) = render_adaptive_frame(context, kernel, &input, carried, params)?;
+            if out.cut > 0 {
+                return Err(VulkanError::LoopsCut {
+                    shader: ADAPTIVE.name,
+                    count: out.cut,
+                });
+            }
+            each(&out);
+            previous = Some((gbuffer, history));
+            last = Some(out);
+        }
+        Ok(last)
     }
 
     /// Renders `config.frames` frames of `scene` with `preset` (validated by the caller) on

@@ -5,7 +5,7 @@
 //! Without Vulkan each test prints why it is skipped and passes, unless
 //! `RESHIFT_REQUIRE_VULKAN=1`, which makes it fail.
 
-use engine::vulkan::testing::backend_or_skip;
+use engine::vulkan::testing::{backend_or_skip, rel_mse_pixels};
 use glam::Vec3;
 use sss::integrator::adaptive::{AdaptiveParams, run};
 use sss::scene::Scene;
@@ -32,6 +32,11 @@ fn scene(name: &str) -> Scene {
 /// Every frame's image and per-pixel counts.
 type Frames = Vec<(Vec<Vec3>, Vec<u32>)>;
 
+/// relMSE over all pixels.
+fn rel_mse(a: &[Vec3], b: &[Vec3]) -> f64 {
+    rel_mse_pixels(a, b, 0..b.len())
+}
+
 fn cpu(scene: &Scene, params: &AdaptiveParams, seed: u64) -> Frames {
     let mut frames = Vec::new();
     run(scene, params, seed, FRAMES, |f| {
@@ -51,17 +56,6 @@ fn gpu(backend: &engine::Backend, scene: &Scene, params: &AdaptiveParams, seed: 
         })
         .unwrap();
     frames
-}
-
-/// `Σ ‖a − b‖² / Σ ‖b‖²` over all pixels.
-fn rel_mse(a: &[Vec3], b: &[Vec3]) -> f64 {
-    let (mut num, mut den) = (0.0, 0.0);
-    for (x, y) in a.iter().zip(b) {
-        let (x, y) = (x.as_dvec3(), y.as_dvec3());
-        num += (x - y).length_squared();
-        den += y.length_squared();
-    }
-    if den > 0.0 { num / den } else { 0.0 }
 }
 
 /// Pixels whose sample counts differ.

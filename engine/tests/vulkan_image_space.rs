@@ -4,7 +4,7 @@
 //! Without Vulkan each test prints why it is skipped and passes, unless
 //! `RESHIFT_REQUIRE_VULKAN=1`, which makes it fail.
 
-use engine::vulkan::testing::{UploadedFrame, kernel_or_skip};
+use engine::vulkan::testing::{UploadedFrame, kernel_or_skip, rel_mse_pixels};
 use engine::vulkan::{IMAGE_SPACE, render_image_space, scene_gather_profiles};
 use glam::Vec3;
 use sss::integrator::image_space::{EntryCounts, ImageSpaceSettings, render};
@@ -24,17 +24,6 @@ fn scene(name: &str) -> Scene {
     let mut scene = Scene::builtin(name).expect("built-in scene");
     scene.camera = scene.camera.with_resolution(WIDTH, HEIGHT);
     scene
-}
-
-/// `Σ ‖a − b‖² / Σ ‖b‖²` over `pixels`.
-fn rel_mse(a: &[Vec3], b: &[Vec3], pixels: &[usize]) -> f64 {
-    let (mut num, mut den) = (0.0, 0.0);
-    for &p in pixels {
-        let (x, y) = (a[p].as_dvec3(), b[p].as_dvec3());
-        num += (x - y).length_squared();
-        den += y.length_squared();
-    }
-    if den > 0.0 { num / den } else { 0.0 }
 }
 
 /// The largest difference of one kind of [`EntryCounts`] between `a` and `b`, as a fraction of
@@ -121,10 +110,10 @@ fn image_space_method_matches_the_cpu() {
             .iter()
             .filter(|&&p| gpu_pixels[p] == cpu_pixels[p])
             .count();
-        let noise = rel_mse(&replica_pixels, &cpu_pixels, &gather_pixels);
-        let ratio = rel_mse(gpu_pixels, &cpu_pixels, &gather_pixels) / noise;
-        let pt_ratio = rel_mse(gpu_pixels, &cpu_pixels, &pt_pixels)
-            / rel_mse(&replica_pixels, &cpu_pixels, &pt_pixels);
+        let noise = rel_mse_pixels(&replica_pixels, &cpu_pixels, gather_pixels.iter().copied());
+        let ratio = rel_mse_pixels(gpu_pixels, &cpu_pixels, gather_pixels.iter().copied()) / noise;
+        let pt_ratio = rel_mse_pixels(gpu_pixels, &cpu_pixels, pt_pixels.iter().copied())
+            / rel_mse_pixels(&replica_pixels, &cpu_pixels, pt_pixels.iter().copied());
         let entries = entry_difference(&gpu.entries, &cpu.entries);
         eprintln!(
             "{name}: {} translucent pixels ({exact} bit-identical), relMSE ratio {ratio:.2e} \
@@ -164,8 +153,11 @@ fn image_space_method_matches_the_cpu() {
             SPP,
         )
         .unwrap();
-        let control_ratio =
-            rel_mse(&control.image.image.pixels, &cpu_pixels, &gather_pixels) / noise;
+        let control_ratio = rel_mse_pixels(
+            &control.image.image.pixels,
+            &cpu_pixels,
+            gather_pixels.iter().copied(),
+        ) / noise;
         eprintln!("{name}: control (seed {OTHER_SEED}): relMSE ratio {control_ratio:.2e}");
         assert!(
             control_ratio > RATIO,

@@ -6,24 +6,12 @@
 //! Without Vulkan the test says why it is skipped and passes, unless `RESHIFT_REQUIRE_VULKAN=1`,
 //! which makes it fail.
 
-use engine::Image;
-use engine::vulkan::testing::backend_or_skip;
+use engine::vulkan::testing::{backend_or_skip, rel_mse_pixels};
 use lab::methods::Method;
 use sss::scene::Scene;
 
 const WIDTH: u32 = 24;
 const HEIGHT: u32 = 18;
-
-/// `Σ ‖a − b‖² / Σ ‖b‖²` over the image (0 for a black `b`).
-fn rel_mse(a: &Image, b: &Image) -> f64 {
-    let (mut num, mut den) = (0.0, 0.0);
-    for (x, y) in a.pixels.iter().zip(&b.pixels) {
-        let (x, y) = (x.as_dvec3(), y.as_dvec3());
-        num += (x - y).length_squared();
-        den += y.length_squared();
-    }
-    if den > 0.0 { num / den } else { num }
-}
 
 /// The images' criterion, as in the per-pixel parity tests: relMSE(GPU, CPU same seed) at most
 /// this fraction of relMSE(CPU other seed, CPU same seed) (their headers say why the twins are
@@ -64,8 +52,9 @@ fn seed_methods_render_every_scene_on_both_backends() {
                     "{name} {spec} on {on}"
                 );
             }
-            let error = rel_mse(&gpu.image, &cpu.image);
-            let noise = rel_mse(&other.image, &cpu.image);
+            let n = cpu.image.pixels.len();
+            let error = rel_mse_pixels(&gpu.image.pixels, &cpu.image.pixels, 0..n);
+            let noise = rel_mse_pixels(&other.image.pixels, &cpu.image.pixels, 0..n);
             eprintln!("{name} {spec}: relMSE(GPU, CPU) {error:.2e}, CPU seeds {noise:.2e}");
             assert!(
                 error <= RATIO * noise,

@@ -5,6 +5,7 @@
 use glam::Vec3;
 
 use sss::integrator::pt::HitPolicy;
+use sss::scene::Scene;
 
 use super::{
     Buffer, Context, GpuPixel, GpuScene, Kernel, PassParams, Shader, VulkanError, groups_for,
@@ -29,6 +30,24 @@ pub struct FrameInput<'a> {
     pub gbuffer: &'a Buffer,
     pub width: u32,
     pub height: u32,
+}
+
+impl<'a> FrameInput<'a> {
+    /// The input of a frame of `scene` at its camera's resolution.
+    pub fn new(
+        scene: &Scene,
+        gpu: &'a GpuScene,
+        params: &'a Buffer,
+        gbuffer: &'a Buffer,
+    ) -> FrameInput<'a> {
+        FrameInput {
+            scene: gpu,
+            params,
+            gbuffer,
+            width: scene.camera.width(),
+            height: scene.camera.height(),
+        }
+    }
 }
 
 /// An image read back from the device, and how many samples (`method_pt`) or pixels

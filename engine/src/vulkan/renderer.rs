@@ -129,13 +129,7 @@ impl Renderer {
     ) -> Result<(Image, u64), VulkanError> {
         let (gbuffer, params) = self.gbuffer(scene, frame, seed)?;
         let (context, kernel, gpu) = self.parts(PT)?;
-        let input = FrameInput {
-            scene: gpu,
-            params: &params,
-            gbuffer: &gbuffer,
-            width: scene.camera.width(),
-            height: scene.camera.height(),
-        };
+        let input = FrameInput::new(scene, gpu, &params, &gbuffer);
         let out = render_pt(context, kernel, &input, spp)?;
         Ok((out.image, out.left_out))
     }
@@ -151,13 +145,7 @@ impl Renderer {
         let media = scene_media(scene)?;
         let (gbuffer, params) = self.gbuffer(scene, frame, seed)?;
         let (context, kernel, gpu) = self.parts(RANDOM_WALK)?;
-        let input = FrameInput {
-            scene: gpu,
-            params: &params,
-            gbuffer: &gbuffer,
-            width: scene.camera.width(),
-            height: scene.camera.height(),
-        };
+        let input = FrameInput::new(scene, gpu, &params, &gbuffer);
         let out = render_random_walk(context, kernel, &input, &media, spp)?;
         if out.cut > 0 {
             return Err(PipelineError::Vulkan(VulkanError::LoopsCut {
@@ -181,13 +169,7 @@ impl Renderer {
         let profiles = scene_gather_profiles(scene, &settings);
         let (gbuffer, params) = self.gbuffer(scene, frame, seed)?;
         let (context, kernel, gpu) = self.parts(IMAGE_SPACE)?;
-        let input = FrameInput {
-            scene: gpu,
-            params: &params,
-            gbuffer: &gbuffer,
-            width: scene.camera.width(),
-            height: scene.camera.height(),
-        };
+        let input = FrameInput::new(scene, gpu, &params, &gbuffer);
         let out = render_image_space(context, kernel, &input, &profiles, &settings, spp)?;
         if out.cut > 0 {
             return Err(VulkanError::LoopsCut {
@@ -215,13 +197,7 @@ impl Renderer {
         for frame in 0..frames {
             let (gbuffer, frame_params) = self.gbuffer(scene, frame, seed)?;
             let (context, kernel, gpu) = self.parts(ADAPTIVE)?;
-            let input = FrameInput {
-                scene: gpu,
-                params: &frame_params,
-                gbuffer: &gbuffer,
-                width: scene.camera.width(),
-                height: scene.camera.height(),
-            };
+            let input = FrameInput::new(scene, gpu, &frame_params, &gbuffer);
             let carried = previous.as_ref().map(|(g, h)| (g, h));
             let (out, history) = render_adaptive_frame(context, kernel, &input, carried, params)?;
             if out.cut > 0 {

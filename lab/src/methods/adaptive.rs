@@ -6,13 +6,14 @@
 //! map ([`SampleCounts`]). CPU only for now.
 //!
 //! Options, each at most once, the paper's defaults otherwise [004 Fig. 1]: `kappa` (κ ∈ [0, 1],
-//! 0.2), `target_variance` (σ0² > 0, 0.001), `b_min` and `b_max` (1 ≤ b_min ≤ b_max, 8 and 64).
+//! 0.2), `target_variance` (σ0² > 0, 0.001), `b_min` and `b_max` (1 ≤ b_min ≤ b_max ≤ `MAX_SPP`, 8 and 64).
 //! The canonical name lists the options that differ from the defaults, in that order. With
 //! `b_min = b_max = n` every pixel takes `n` samples: the fixed-count baseline of the same
 //! estimator (`pt` with `g(ξ)` radii at `n` spp, bit for bit).
 
 use engine::{Backend, PipelineError};
 use sss::integrator::adaptive::{self, AdaptiveParams};
+use sss::limits::MAX_SPP;
 use sss::scene::Scene;
 
 use super::estimator::{Entry, Estimator, Frame, Method, SampleCounts};
@@ -60,6 +61,10 @@ pub fn params(arg: Option<&str>) -> Result<AdaptiveParams, String> {
     params
         .validate()
         .map_err(|e| format!("{} = {}: {}", e.field, e.value, e.reason))?;
+    if params.b_max > MAX_SPP {
+        // As for `pt:N`: the most samples per pixel and frame of one method (on Vulkan, dispatches).
+        return Err(format!("b_max = {} exceeds {MAX_SPP}", params.b_max));
+    }
     Ok(params)
 }
 
@@ -183,6 +188,7 @@ mod tests {
             ("adaptive:b_min=9/b_max=4", "b_min"),
             ("adaptive:b_min=x", "b_min"),
             ("adaptive:target_variance=0", "target_variance"),
+            ("adaptive:b_max=2000000", "b_max"),
         ] {
             let e = Method::parse(bad).expect_err(bad).to_string();
             assert!(e.contains(names) && !e.contains('\n'), "{bad}: {e}");

@@ -6,8 +6,8 @@
 //! map ([`SampleCounts`]). CPU only for now.
 //!
 //! Options, each at most once, the paper's defaults otherwise [004 Fig. 1]: `kappa` (κ ∈ [0, 1],
-//! 0.2), `target_variance` (σ0² > 0, 0.001), `b_min` and `b_max` (1 ≤ b_min ≤ b_max ≤ `MAX_SPP`, 8 and 64).
-//! The canonical name lists the options that differ from the defaults, in that order. With
+//! 0.2), `target_variance` (σ0² > 0, 0.001), `b_min` and `b_max` (1 ≤ b_min ≤ b_max ≤ `MAX_SPP`,
+//! 8 and 64). The canonical name lists the options that differ from the defaults, in that order. With
 //! `b_min = b_max = n` every pixel takes `n` samples: the fixed-count baseline of the same
 //! estimator (`pt` with `g(ξ)` radii at `n` spp, bit for bit).
 

@@ -3,7 +3,8 @@
 //! reference) and the single-pass variance-guided sample count per pixel and frame
 //! (`sss::integrator::adaptive`, [004 Eq. 6–17]). Every frame of the trajectory is rendered (the
 //! per-pixel history is carried by reprojection) and the last one is kept, with its sample-count
-//! map ([`SampleCounts`]). CPU only for now.
+//! map ([`SampleCounts`]). On Vulkan its twin `method_adaptive.glsl`
+//! (`engine::vulkan::Renderer::adaptive`).
 //!
 //! Options, each at most once, the paper's defaults otherwise [004 Fig. 1]: `kappa` (κ ∈ [0, 1],
 //! 0.2), `target_variance` (σ0² > 0, 0.001), `b_min` and `b_max` (1 ≤ b_min ≤ b_max ≤ `MAX_SPP`,

@@ -2,7 +2,8 @@
 //! the Jensen dipole (`sss::integrator::image_space`): per pass, the irradiance of every
 //! translucent pixel from the eye [002 Eq. 5], then a gather of `R_d · E` over the image on each
 //! pixel's tangent plane [002 Eq. 4, 8–9]; `spp` passes are averaged. Lambert pixels take the
-//! path tracer's samples. Memoryless: only the final frame is rendered. CPU only for now.
+//! path tracer's samples. Memoryless: only the final frame is rendered. On Vulkan its twin
+//! `method_image_space.glsl` (`engine::vulkan::render_image_space`).
 //!
 //! Its reference is the path tracer with the dipole profile of the same materials
 //! (`ProfileKind::Dipole`, [`Estimator::reference`]): `reshift bias` measures it against that, so

@@ -81,6 +81,20 @@ pub fn rel_mse_pixels(a: &[Vec3], b: &[Vec3], pixels: impl IntoIterator<Item = u
     if den > 0.0 { num / den } else { num }
 }
 
+/// The largest difference of a channel of `got` from `want`, over `want`'s largest channel (so
+/// that a dark channel is not over-weighted); 0 for equal pixels, ∞ where `want` is black and
+/// `got` is not.
+pub fn pixel_error(got: Vec3, want: Vec3) -> f64 {
+    let scale = want.max_element() as f64;
+    if got == want {
+        0.0
+    } else if scale > 0.0 {
+        (got - want).abs().max_element() as f64 / scale
+    } else {
+        f64::INFINITY
+    }
+}
+
 /// Relative error of `got` against `want`; equal values (0 included) give 0, a 0 or
 /// non-finite value on one side only gives ∞.
 pub fn rel_error(got: f32, want: f32) -> f64 {

@@ -79,9 +79,9 @@ const RATIO: f64 = 0.01;
 
 /// Per pixel: a pixel's error (`testing::pixel_error`) may exceed this on at most a fraction
 /// `RATIO` of the pixels of a frame. Where the samples follow the CPU's, only the transcendentals'
-/// few-ulp differences remain: at most 1.3e-5 here but on one pixel of one frame (1.6e-4, a
-/// sample whose few-ulp difference a near-grazing term amplified); a flipped sample or count moves
-/// a pixel by a sizeable fraction of its value.
+/// few-ulp differences remain: at most 1.3e-5 here but on one pixel of one frame (1.6e-4; which
+/// term amplified it is not traced); a flipped sample or count moves a pixel by a sizeable
+/// fraction of its value.
 const PIXEL_TOLERANCE: f64 = 1e-4;
 
 /// `method_adaptive` over 6 frames of `bumpy` and `materials` (32×24, the paper's controller)

@@ -86,13 +86,7 @@ void main() {
         Stream rng = pt_sample_stream(pixel, frame_params.frame, j, scene_seed());
         uint overflow = pt_hit_overflow;
         vec3 value = pt_estimate_with(g, PT_HITS_ALL, options, rng);
-        if (any(isnan(value)) || any(isinf(value)) || pt_hit_overflow != overflow) {
-            carried.left_out++;
-        } else {
-            precise dvec3 sum = dvec3(carried.sum[0], carried.sum[1], carried.sum[2])
-                + dvec3(value);
-            carried.sum = double[3](sum.x, sum.y, sum.z);
-        }
+        pt_accumulate(value, overflow, carried.sum, carried.left_out);
     }
     if (!loop_budget_intact(min(frame_params.width, 1u))) {
         carried.cut++;

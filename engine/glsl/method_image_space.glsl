@@ -92,12 +92,7 @@ void gather_stage(uint pixel, GPixel g, inout ImageSpaceState carried) {
         Stream rng = pt_sample_stream(pixel, frame_params.frame, params.pass, scene_seed());
         value = pt_estimate(g, PT_HITS_ALL, rng);
     }
-    if (any(isnan(value)) || any(isinf(value)) || pt_hit_overflow != overflow) {
-        carried.left_out++;
-    } else {
-        precise dvec3 sum = dvec3(carried.sum[0], carried.sum[1], carried.sum[2]) + dvec3(value);
-        carried.sum = double[3](sum.x, sum.y, sum.z);
-    }
+    pt_accumulate(value, overflow, carried.sum, carried.left_out);
 }
 
 void main() {

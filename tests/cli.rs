@@ -123,6 +123,21 @@ fn bad_input_is_one_line_and_non_zero() {
         &["compare", "--methods", "pt,restir:nope", "--out", out],
         "unknown preset",
     );
+    // Issue 11: a chain that replays numbers an earlier pass moved is refused, the reason whole.
+    fails_with(
+        &[
+            "bias",
+            "--scene",
+            "bumpy",
+            "--method",
+            "restir:sequential/temporal=reconnection",
+            "--replicas",
+            "1000",
+            "--resolution",
+            "32x24",
+        ],
+        "pass 3: spatial2:delayed replays numbers pass 1 (temporal:reconnection) moved across pixels: biased; make pass 1 inverting-reconnection-exact",
+    );
     // A malformed scene file.
     let broken = dir.join("broken.toml");
     std::fs::write(&broken, "[camera\nresolution = [").unwrap();

@@ -13,8 +13,8 @@
 //! other processes share the machine. Without Vulkan it says why and exits cleanly.
 
 use engine::vulkan::{
-    CANDIDATES, Context, GBUFFER, Kernel, PT, RANDOM_WALK, Renderer, SHADE, SPATIAL, Shader,
-    TEMPORAL,
+    ADAPTIVE, CANDIDATES, Context, GBUFFER, IMAGE_SPACE, Kernel, PT, RANDOM_WALK, Renderer, SHADE,
+    SPATIAL, Shader, TEMPORAL,
 };
 use engine::{Preset, RunConfig};
 use sss::scene::Scene;
@@ -46,7 +46,7 @@ fn mean_sd(v: &[f64]) -> String {
     format!("{mean:.2} ± {:.2}", var.sqrt())
 }
 
-const SHADERS: [Shader; 7] = [
+const SHADERS: [Shader; 9] = [
     GBUFFER,
     CANDIDATES,
     TEMPORAL,
@@ -54,6 +54,8 @@ const SHADERS: [Shader; 7] = [
     SHADE,
     PT,
     RANDOM_WALK,
+    IMAGE_SPACE,
+    ADAPTIVE,
 ];
 const PRESETS: [&str; 2] = ["sequential", "hybrid"];
 

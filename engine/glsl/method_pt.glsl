@@ -48,22 +48,17 @@ void main() {
     if (s == 0u) {
         carried = PtState(double[3](0.0, 0.0, 0.0), 0u, 0u);
     }
-    precise dvec3 sum = dvec3(carried.sum[0], carried.sum[1], carried.sum[2]);
     Stream rng = pt_sample_stream(pixel, frame_params.frame, s, scene_seed());
     uint overflow = pt_hit_overflow;
     vec3 value = pt_estimate(x1, params.hits, rng);
-    if (any(isnan(value)) || any(isinf(value)) || pt_hit_overflow != overflow) {
-        carried.left_out++;
-    } else {
-        sum = sum + dvec3(value);
-    }
+    pt_accumulate(value, overflow, carried.sum, carried.left_out);
     if (!loop_budget_intact(min(frame_params.width, 1u))) {
         carried.cut++;
     }
-    carried.sum = double[3](sum.x, sum.y, sum.z);
     state[pixel] = carried;
     if (s + 1u == params.spp) {
-        precise dvec3 mean = sum / double(params.spp);
+        precise dvec3 mean = dvec3(carried.sum[0], carried.sum[1], carried.sum[2])
+            / double(params.spp);
         image[pixel] = vec4(vec3(mean), float(carried.left_out));
     }
 }

@@ -182,6 +182,77 @@ twin::contract! {
         pub pad: [u32; 7],
     }
 
+    /// `ImageSpaceParams::stage`: which half of a pass of `method_image_space` a dispatch runs.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub enum ImageSpaceStage in IMAGE_SPACE_STAGE {
+        /// `E` of every translucent pixel into the irradiance buffer [002 Eq. 5].
+        Irradiance,
+        /// The gather of every translucent pixel, the path tracer's sample elsewhere [002 Eq. 4].
+        Gather,
+    }
+
+    /// Push constants of `method_image_space`: the pass (`sss::integrator::image_space`'s stream
+    /// key `pass`), its stage and `ImageSpaceSettings`' sample counts (its `P(c)` is folded into
+    /// the uploaded gather profiles).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+    pub struct ImageSpaceParams in push_constant params {
+        pub spp: u32,
+        pub pass: u32,
+        /// An `ImageSpaceStage` code.
+        pub stage: u32,
+        pub irradiance_samples: u32,
+        pub importance_samples: u32,
+        pub uniform_samples: u32,
+        pub pad: [u32; 2],
+    }
+
+    /// A pixel of `method_image_space` between its dispatches: the f64 sum of its finite pass
+    /// values, the pass values left out, the dispatches whose loops the device cut short, and its
+    /// gather's `EntryCounts` over the passes.
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct ImageSpaceState {
+        pub sum: [f64; 3],
+        pub left_out: u32,
+        pub cut: u32,
+        pub samples: u32,
+        pub off_screen: u32,
+        pub occluded: u32,
+        pub outside: u32,
+        pub edge_on: u32,
+        pub pad: u32,
+    }
+
+    /// Push constants of `method_adaptive`: `sss::integrator::adaptive::AdaptiveParams` (the
+    /// radius sampling as its `RadiusSampling` code) and the sample this dispatch adds (one
+    /// dispatch per sample index `0..b_max`).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct AdaptiveMethodParams in push_constant params {
+        pub alpha: f32,
+        pub target_variance: f32,
+        pub kappa: f32,
+        pub b_min: u32,
+        pub b_max: u32,
+        pub radius: u32,
+        pub sample_index: u32,
+        pub pad: u32,
+    }
+
+    /// A pixel of `method_adaptive` within one frame: the f64 sum of its finite samples, its
+    /// count `n`, the samples left out, the dispatches whose loops the device cut short, and the
+    /// reprojected history it started from (`valid = 0`: none).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct AdaptiveState {
+        pub sum: [f64; 3],
+        pub count: u32,
+        pub left_out: u32,
+        pub cut: u32,
+        pub history_mean_count: f32,
+        pub history_mean: f32,
+        pub history_variance: f32,
+        pub history_valid: u32,
+        pub pad: u32,
+    }
+
     /// A pixel's running sum between the dispatches of `method_pt`.
     #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
     pub struct PtState {

@@ -5,7 +5,7 @@
 //! Without Vulkan each test prints why it is skipped and passes, unless
 //! `RESHIFT_REQUIRE_VULKAN=1`, which makes it fail.
 
-use engine::vulkan::testing::{UploadedFrame, kernel_or_skip};
+use engine::vulkan::testing::{UploadedFrame, kernel_or_skip, rel_mse_pixels};
 use std::cell::RefCell;
 use std::path::Path;
 
@@ -46,17 +46,6 @@ fn render_gpu(
     spp: u32,
 ) -> RandomWalkImage {
     render_random_walk(context, kernel, &uploaded.input(), media, spp).unwrap()
-}
-
-/// `Σ ‖a − b‖² / Σ ‖b‖²` over `pixels`.
-fn rel_mse(a: &[Vec3], b: &[Vec3], pixels: &[usize]) -> f64 {
-    let (mut num, mut den) = (0.0, 0.0);
-    for &p in pixels {
-        let (x, y) = (a[p].as_dvec3(), b[p].as_dvec3());
-        num += (x - y).length_squared();
-        den += y.length_squared();
-    }
-    if den > 0.0 { num / den } else { 0.0 }
 }
 
 /// Per pixel, how the CPU's `spp` walks ended (`[exited, terminated, truncated]`; zero on pixels
@@ -187,14 +176,22 @@ fn random_walk_method_matches_the_cpu() {
             "{name}: left out"
         );
 
-        let noise = rel_mse(&replica.pixels, &cpu.pixels, &walk_pixels);
-        let ratio = rel_mse(&gpu.image.image.pixels, &cpu.pixels, &walk_pixels) / noise;
+        let noise = rel_mse_pixels(&replica.pixels, &cpu.pixels, walk_pixels.iter().copied());
+        let ratio = rel_mse_pixels(
+            &gpu.image.image.pixels,
+            &cpu.pixels,
+            walk_pixels.iter().copied(),
+        ) / noise;
         let mismatched = walk_pixels
             .iter()
             .filter(|&&p| gpu_ends(&gpu.stats)[p] != ends[p])
             .count();
-        let pt_noise = rel_mse(&replica.pixels, &cpu.pixels, &pt_pixels);
-        let pt_ratio = rel_mse(&gpu.image.image.pixels, &cpu.pixels, &pt_pixels) / pt_noise;
+        let pt_noise = rel_mse_pixels(&replica.pixels, &cpu.pixels, pt_pixels.iter().copied());
+        let pt_ratio = rel_mse_pixels(
+            &gpu.image.image.pixels,
+            &cpu.pixels,
+            pt_pixels.iter().copied(),
+        ) / pt_noise;
         let walks: u32 = walk_pixels
             .iter()
             .map(|&p| ends[p].iter().sum::<u32>())
@@ -223,7 +220,11 @@ fn random_walk_method_matches_the_cpu() {
         let other_phase: Vec<GpuMedium> =
             media.iter().map(|m| GpuMedium { g: 0.5, ..*m }).collect();
         let control = render_gpu(&uploaded, &mut context, &kernel, &other_phase, SPP);
-        let control_ratio = rel_mse(&control.image.image.pixels, &cpu.pixels, &walk_pixels) / noise;
+        let control_ratio = rel_mse_pixels(
+            &control.image.image.pixels,
+            &cpu.pixels,
+            walk_pixels.iter().copied(),
+        ) / noise;
         eprintln!("{name}: control (g = 0.5): relMSE ratio {control_ratio:.2e}");
         assert!(
             control_ratio > WALK_RATIO,

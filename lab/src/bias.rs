@@ -297,7 +297,7 @@ impl Protocol {
     /// A row's verdict: `Equivalent` ⇔ its `1 − α` CI lies inside ±δ; otherwise `Biased` if
     /// the CI lies outside [−δ, δ] or Holm rejects zero bias, `Inconclusive` if neither (an
     /// unknown spread, see [`equivalence`], is never `Biased`: its p-value is 1).
-    fn verdict(&self, e: &Equivalence, holm_rejected: bool) -> Verdict {
+    pub(crate) fn verdict(&self, e: &Equivalence, holm_rejected: bool) -> Verdict {
         if e.ci_low > -self.delta && e.ci_high < self.delta {
             Verdict::Equivalent
         } else if e.ci_low >= self.delta || e.ci_high <= -self.delta || holm_rejected {

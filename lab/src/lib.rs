@@ -7,6 +7,7 @@
 //! pass; long jobs report to a caller's [`progress::Progress`].
 
 pub mod bias;
+pub mod chained;
 pub mod compare;
 pub mod error;
 pub mod experiments;

@@ -4,8 +4,8 @@
 //!
 //! Scenes `bumpy` and `half-shadow` at 24×18, the full 16-frame trajectory, seed 7: every
 //! registered ReSTIR preset and those of [`MODIFIED`] (all frames and the last frame's
-//! reservoirs), `pt:2` and
-//! `random-walk:2` (the last frame). On a mismatch the test prints every current hash, so the
+//! reservoirs), `pt:2`, `random-walk:2`, `image-space:2` and `adaptive` (the last frame, with
+//! its sample counts). On a mismatch the test prints every current hash, so the
 //! table below can be updated in one edit.
 
 use engine::hash::Fnv1a;
@@ -32,6 +32,8 @@ const PINNED: &[(&str, &str, u64)] = &[
     ("bumpy", "restir:hybrid/shade=all", 0x3c29f6dee9e46858),
     ("bumpy", "pt:2", 0xfb2fad5cb68b7040),
     ("bumpy", "random-walk:2", 0xa192fbb86f2b56e0),
+    ("bumpy", "image-space:2", 0xf869c5e060f72386),
+    ("bumpy", "adaptive", 0x65fa3f3c584f613a),
     ("half-shadow", "restir:reconnection", 0x68fa13b1d27d9221),
     ("half-shadow", "restir:delayed", 0x1798cbbb0bdfdc37),
     ("half-shadow", "restir:hybrid", 0x4218708c52a801c5),
@@ -41,6 +43,8 @@ const PINNED: &[(&str, &str, u64)] = &[
     ("half-shadow", "restir:hybrid/shade=all", 0x361fe9ef53ee0b99),
     ("half-shadow", "pt:2", 0xb16ae63d8ee7d985),
     ("half-shadow", "random-walk:2", 0x9bdf417661ddd47f),
+    ("half-shadow", "image-space:2", 0x695cec2a8113e190),
+    ("half-shadow", "adaptive", 0x1dd0ee67606b8a9d),
 ];
 
 fn hash_pixels(hash: &mut Fnv1a, pixels: &[glam::Vec3]) {
@@ -84,11 +88,14 @@ fn current_hashes() -> Vec<(String, String, u64)> {
                 hash.finish(),
             ));
         }
-        for spec in ["pt:2", "random-walk:2"] {
+        for spec in ["pt:2", "random-walk:2", "image-space:2", "adaptive"] {
             let method = Method::parse(spec).expect("registered method");
             let rendered = method.render(&scene, FRAMES, SEED).expect("method renders");
             let mut hash = Fnv1a::new();
             hash_pixels(&mut hash, &rendered.image.pixels);
+            if let Some(counts) = &rendered.counts {
+                hash.write(bytemuck::cast_slice(&counts.counts));
+            }
             out.push((scene_name.into(), spec.into(), hash.finish()));
         }
     }

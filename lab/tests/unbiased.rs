@@ -21,16 +21,16 @@
 //!   rows (Bonferroni over rows), from its per-replica CVs measured with N = 512
 //!   ([`Design::cv`], times [`CV_MARGIN`]) and the reference's own error (≤ 0.12%). Largest CV:
 //!   0.145 (sequential, bumpy penumbra blue). N: bumpy reconnection 1147, delayed 586, hybrid
-//!   582, sequential and sequential-exact 1426; half-shadow 625–657. Planned power to detect a
+//!   582, sequential and sequential-exact 1426; half-shadow 625–657; raised to 750–1835 by the
+//!   Vulkan chain's plan (see Backends), which the CPU tests share. Planned power to detect a
 //!   +3% bias in any one row: ≥ 0.9995. `power_plan_detects_3pct_in_any_row` prints the plan;
 //!   each table prints the measured CVs beside the planned ones.
-//! * Cost: the CPU tests of this file took 328 s of CPU time before the exact index policy
-//!   re-traced at both ends, and at most 500 CPU-s after it (user + system, `/usr/bin/time`, a
-//!   run that also spent 5 wall-minutes in the first Vulkan test; measured on a shared machine,
-//!   wall times were meaningless), i.e. at most about 4 minutes on two quiet cores; per replica
-//!   0.02 (reconnection) – 0.05 (sequential-exact, before) CPU-s on bumpy, 0.011–0.015 on
-//!   half-shadow; each reference ≈ 12 CPU-s. The Vulkan tests' cost on lavapipe is not
-//!   measured here.
+//! * Cost: the whole file (CPU and Vulkan tests, controls, references) took 562 CPU-s (user)
+//!   and 12 min 44 s wall on 2 cores shared with two builds and a fuzz campaign (load 5–8),
+//!   with the CPU's N raised 1.29× for the Vulkan chain; before that, 328–500 CPU-s for the CPU
+//!   tests and 54 CPU-s for the four paired Vulkan tests. Per replica 0.02 (reconnection) – 0.05
+//!   (sequential-exact) CPU-s on bumpy, 0.011–0.015 on half-shadow; each reference ≈ 12 CPU-s;
+//!   each Vulkan test's 32 lavapipe replicas 11–37 s wall under that load.
 //! * Negative controls, same protocol and N as the preset they break: near δ, delayed
 //!   reconnection with J · 1.03 (`broken::DelayedJacobianOff`: +4.8% … +6.1% on bumpy, the error
 //!   compounds over reuse passes) and the hybrid preset with its blue channel × 1.03 ([`tinted`]:
@@ -41,47 +41,35 @@
 //!   more; a biased chain grows with the frames: `restir:sequential/temporal=reconnection`,
 //!   now refused by `Preset::validate`, was 2–3% too dark in green and blue on bumpy with 3
 //!   frames, 4–11% with 8), and the shadowed region of `bumpy`.
-//! * Backends: the five presets run on the CPU backend on both scenes. Reconnection, delayed,
-//!   hybrid and sequential-exact run again on the Vulkan backend (`vulkan_*`, lavapipe in CI) on
-//!   `bumpy`, compared **paired** with the CPU backend, not with the reference: replicas
-//!   `0..N` on both backends (the same seeds, hence the same random numbers), per region and
-//!   channel the relative difference of the expectations GPU − CPU, `b = d̄/c̄`, with the
-//!   standard error of the linearised ratio (`lab::bias::paired_rows`); "equivalent within
-//!   ±0.5% at 99%" per row, Holm across the 12 rows at α = 0.01 ([`PAIRED`]). The shared seed's
-//!   noise cancels: the per-replica CV of the difference is ≈ 1e-7 (float rounding of exp, log,
-//!   pow on lavapipe) where no sampling decision diverged, and at most 1.2e-3 (sequential-exact,
-//!   whose re-traced intersection index diverges in 8 of 64 replicas), measured once with 64
-//!   pairs ([`measure_paired_cv`], [`PAIRED_CV`]) against CVs of 0.04–0.15 against the
-//!   reference. N = 32 pairs: the power calculation ([`paired_replicas`], power ≥ 0.95 for the
-//!   12 rows, CVs × 2) asks for 2 (sequential-exact 9), raised to [`PAIRED_MIN_N`] so that
-//!   divergent replicas are in the sample; planned power to detect a 1.5δ difference in any row
-//!   ≥ 0.99
-//!   (`paired_plan_detects_one_and_a_half_delta_in_any_row`). Measured: every row's 99% CI lies
-//!   within ±0.12% (sequential-exact, lit red; the other presets ±0.0001%).
+//! * Backends: the five presets run on both backends on both scenes (`vulkan_*`, lavapipe in
+//!   CI). A Vulkan replica costs ~100× a CPU one on lavapipe, so the Vulkan backend's bias is
+//!   measured through a **chain** ([`lab::chained`]): its GPU − CPU difference, paired, times
+//!   the CPU's bias against the reference. Paired: replicas `0..n` on both backends (the same
+//!   seeds, hence the same random numbers), per region and channel the relative difference of
+//!   the expectations `b = d̄/c̄` with the standard error of the linearised ratio
+//!   (`lab::bias::paired_rows`); the shared seed's noise cancels, leaving per-replica CVs of
+//!   ≈ 1e-7 (float rounding of exp, log, pow on lavapipe) and 1.0e-3 for sequential-exact on
+//!   `bumpy`, whose re-traced intersection index diverges in 6 of 64 replicas
+//!   ([`measure_paired_cv`], [`Design::paired_cv`]), against 0.04–0.15 against the reference.
+//!   Two statements per Vulkan test:
+//!   - parity, [`PAIRED`]: every paired row "equivalent within ±0.5% at 99%" (Holm across the
+//!     12 rows); n = 32 pairs (the power calculation asks for 2–9; raised to [`PAIRED_MIN_N`]
+//!     so that divergent replicas are in the sample), planned power to detect 1.5δ in any row
+//!     ≥ 0.99 (`paired_plan_detects_one_and_a_half_delta_in_any_row`);
+//!   - the bias, chained: with the CPU's N replicas against the reference at 99.1%
+//!     ([`CHAIN_CPU`]) and the n pairs at 99.9% ([`CHAIN_PAIRED`]), the interval
+//!     `[(1 + l)(1 + l') − 1, (1 + h)(1 + h') − 1]` of the GPU's relative bias holds at ≥ 99%
+//!     (Bonferroni); every row must be "equivalent within ±2% at 99%". The CPU's N is planned
+//!     for both its own test and this one (tolerance (1 + δ)/(1 + 0.2%) − 1 at 99.1%, leaving
+//!     [`PAIRED_ALLOWANCE`] to the paired CI): the larger N, 1.29× the CPU test's alone, runs
+//!     once and both tests share the replicas ([`Design::images`]).
 //!
-//!   **What this bounds.** The GPU's relative bias is `(1 + β_CPU)(1 + b) − 1`: with the CPU
-//!   test's CI inside ±2% and the paired CI inside ±0.5%, the GPU's bias on `bumpy` lies within
-//!   ±(2% + 0.5% + 0.01%) = ±2.51% with confidence ≥ 98% (Bonferroni over the two 99%
-//!   statements), and within the sum of the two measured CIs, which is tighter (the paired CIs
-//!   add at most ±0.12%). `half-shadow` is not run on the GPU.
-//!
-//!   Negative control of the paired test near δ: the GPU's hybrid with its blue channel ×
-//!   1.0075 (1.5δ) is Biased in every blue row (+0.75% [+0.75%, +0.75%]) while its luminance
-//!   (+0.04%) stays equivalent. The reference controls run on the CPU only; their GPU twins
-//!   agree with the CPU's shift for shift (`vulkan_reuse.rs`).
-//!
-//!   Cost on lavapipe (`RESHIFT_REQUIRE_VULKAN=1 nice -n 10 cargo test --release -p lab --test
-//!   unbiased vulkan -- --test-threads=1`, `/usr/bin/time`, load average 10–13 on 2 cores
-//!   shared with other builds, so wall times are inflated ≈ 3×): the four tests and the control
-//!   together 149 s wall, 54 CPU-s. Each alone (wall / CPU-s; each opens the device, ≈ 14 s of
-//!   pipeline compilation under this load, and runs 32 CPU replicas, 2–5 s): reconnection
-//!   29 / 9.8, delayed 45 / 17.6, hybrid 43 / 14.6, sequential-exact 58 / 19.7, the control
-//!   40 / 15.5 (hybrid and the control share their pairs within a run). The tests are CPU-bound,
-//!   so on two idle cores each takes about its CPU time or less: under 20 s. Before this
-//!   design the Vulkan tests ran the CPU tests' 582–1426 replicas against the reference on
-//!   lavapipe (1.1–1.6 s per replica under this load; one ran over 20 minutes unfinished).
-//!   Without Vulkan the `vulkan_*` tests print why and pass, unless `RESHIFT_REQUIRE_VULKAN=1`,
-//!   which makes them fail.
+//!   Negative controls on the GPU's hybrid on `bumpy`: blue × 1.0075 (1.5δ of the parity test)
+//!   is Biased in every blue row of the paired test while its luminance stays equivalent; blue
+//!   × 1.03 is not equivalent in any blue row of the chain while its luminance is. The
+//!   reference controls run on the CPU only; their GPU twins agree with the CPU's shift for
+//!   shift (`vulkan_reuse.rs`). Without Vulkan the `vulkan_*` tests print why and pass, unless
+//!   `RESHIFT_REQUIRE_VULKAN=1`, which makes them fail.
 //!
 //! * Rao-Blackwellised shading (`Shade::AllInputs`, CPU backend): per region and channel,
 //!   paired against the selected shading of the same replicas at ±2% on both designs
@@ -100,6 +88,7 @@ use lab::bias::{
     BiasRow, Channel, Images, Protocol, RegionSummary, Table, bias_rows, paired_rows,
     reference_images, region_mean, replica_images, summarize,
 };
+use lab::chained::chained_rows;
 use lab::regions::{Region, Regions};
 use restir::stats::{EquivalencePlan, Verdict, family_power, replicas_for, student_t_quantile};
 use sss::scene::{Camera, GBuffer, Scene};
@@ -145,8 +134,17 @@ struct Design {
     spp_per_batch: u32,
     framing: OnceLock<Framing>,
     reference: OnceLock<Reference>,
-    /// The CPU replicas of `hybrid`, shared by its test and the tint control.
-    hybrid: OnceLock<Images>,
+    /// Per registered preset of [`Design::paired_cv`], the largest per-replica CV of the paired
+    /// difference GPU − CPU over the 12 rows (`sd(dᵢ − b·cᵢ)/c̄`, see
+    /// [`lab::bias::paired_rows`]), measured by [`measure_paired_cv`] with [`PAIRED_MEASURE_N`]
+    /// pairs. Float rounding alone (exp, log, pow differ in the last bits on lavapipe) leaves
+    /// ≈ 1e-7; the rest comes from replicas whose sampling decisions diverged ([`DIVERGED`]):
+    /// 6 of 64 for sequential-exact on bumpy (its re-traced intersection index), none
+    /// elsewhere (measured 2026-11-24).
+    paired_cv: [(&'static str, f64); 5],
+    /// The CPU replicas of each registered preset (in the order of `cv`), shared by its CPU
+    /// test, its Vulkan test and the tint controls.
+    cpu: [OnceLock<Images>; 5],
 }
 
 /// `bumpy` from its own eye path, looking at the top of the object through a 8° field of view
@@ -213,7 +211,14 @@ static BUMPY: Design = Design {
     spp_per_batch: 128,
     framing: OnceLock::new(),
     reference: OnceLock::new(),
-    hybrid: OnceLock::new(),
+    paired_cv: [
+        ("reconnection", 7.1e-7),
+        ("delayed", 1.7e-7),
+        ("hybrid", 1.0e-7),
+        ("sequential", 1.2e-6),
+        ("sequential-exact", 1.0e-3),
+    ],
+    cpu: [const { OnceLock::new() }; 5],
 };
 
 /// `half-shadow` seen from 0.42 units above the shadow edge x = 0 through a 5° field of view
@@ -280,7 +285,14 @@ static HALF_SHADOW: Design = Design {
     spp_per_batch: 256,
     framing: OnceLock::new(),
     reference: OnceLock::new(),
-    hybrid: OnceLock::new(),
+    paired_cv: [
+        ("reconnection", 1.1e-7),
+        ("delayed", 5.8e-8),
+        ("hybrid", 5.7e-8),
+        ("sequential", 1.4e-7),
+        ("sequential-exact", 1.4e-7),
+    ],
+    cpu: [const { OnceLock::new() }; 5],
 };
 
 /// The scene of a design and its regions, computed once per run.
@@ -319,10 +331,31 @@ impl Design {
         cvs.map(|cv| (self.plan(), CV_MARGIN * cv)).collect()
     }
 
-    /// N for `preset` from the power calculation.
+    /// The plan of the CPU's part of the Vulkan backend's chained statement: tolerance
+    /// `(1 + δ)/(1 + a) − 1` with `a` = [`PAIRED_ALLOWANCE`] left to the paired CI, at level
+    /// [`CHAIN_CPU`]`.alpha`.
+    fn chain_plan(&self) -> EquivalencePlan {
+        EquivalencePlan {
+            delta: (1.0 + PROTOCOL.delta) / (1.0 + PAIRED_ALLOWANCE) - 1.0,
+            alpha: CHAIN_CPU.alpha,
+            ..self.plan()
+        }
+    }
+
+    /// The planned tests of every row of `preset` for the CPU's part of the chain.
+    fn chain_planned(&self, preset: &str) -> Vec<(EquivalencePlan, f64)> {
+        let cvs = self.measured_cv(preset).iter().flatten();
+        cvs.map(|cv| (self.chain_plan(), CV_MARGIN * cv)).collect()
+    }
+
+    /// N for `preset`: the larger of the power calculations of its CPU test and of the CPU's
+    /// part of its Vulkan test, which share the replicas.
     fn replicas(&self, preset: &str) -> u64 {
-        let n = replicas_for(&self.planned(preset), FAMILY_POWER, 1 << 20);
-        n.expect("the reference's own error leaves room for δ") as u64
+        let n = |planned: Vec<(EquivalencePlan, f64)>| {
+            let n = replicas_for(&planned, FAMILY_POWER, 1 << 20);
+            n.expect("the reference's own error leaves room for δ") as u64
+        };
+        n(self.planned(preset)).max(n(self.chain_planned(preset)))
     }
 
     /// The scene and its regions, computed once; checks at every call that the framing shows
@@ -410,13 +443,15 @@ impl Design {
     }
 
     /// N replicas of `preset` on `backend`, N planned for the registered preset `planned`
-    /// (the CPU replicas of `hybrid` are computed once).
+    /// (the CPU replicas of a registered preset are computed once).
     fn images(&self, backend: &Backend, preset: &Preset, planned: &str) -> Images {
         let scene = &self.framing().scene;
         let n = self.replicas(planned);
         let run = || replica_images(backend, scene, preset, n, FRAMES).expect("preset runs");
-        match backend {
-            Backend::Cpu if preset.name == "hybrid" => self.hybrid.get_or_init(run).clone(),
+        let registered = Preset::named(planned).is_some_and(|p| p == *preset);
+        let cached = self.cv.iter().position(|(name, _)| *name == planned);
+        match (backend, cached) {
+            (Backend::Cpu, Some(i)) if registered => self.cpu[i].get_or_init(run).clone(),
             _ => run(),
         }
     }
@@ -544,158 +579,199 @@ fn assert_tint_detected(design: &Design) {
 
 /// The paired comparison of the Vulkan backend with the CPU backend: δ = 0.5% on the relative
 /// difference GPU − CPU of each region mean in each channel, α = 0.01 (99% CIs, Holm across
-/// the 12 rows). The measured differences' 99% CIs lie within ±0.12% (N = 32), so ±0.5% costs
-/// no replica and keeps the GPU's bias bound (CPU ±2% + paired ±0.5%) near the CPU's.
+/// the 12 rows). A parity statement: the measured differences' 99% CIs lie within ±0.12%
+/// (N = 32), so ±0.5% costs no replica.
 const PAIRED: Protocol = Protocol {
     delta: 0.005,
     alpha: 0.01,
 };
-/// Per preset, the largest per-replica CV of the paired difference over the 12 rows of `bumpy`
-/// (`sd(dᵢ − b·cᵢ)/c̄`, see [`lab::bias::paired_rows`]), measured by [`measure_paired_cv`] with
-/// [`PAIRED_MEASURE_N`] replicas.
-///
-/// Float rounding alone (exp, log, pow differ in the last bits on lavapipe) leaves ≈ 1e-7; the
-/// rest comes from replicas whose sampling decisions diverged somewhere ([`DIVERGED`]): 1 of 64
-/// (reconnection, delayed), 0 (hybrid), 8 (sequential-exact).
-const PAIRED_CV: [(&str, f64); 4] = [
-    ("reconnection", 9.9e-6),
-    ("delayed", 3.8e-5),
-    ("hybrid", 1.3e-7),
-    ("sequential-exact", 1.2e-3),
-];
-/// Replicas (seeds 0..N) behind [`PAIRED_CV`].
+/// The CPU's part of the Vulkan backend's chained statement ([`lab::chained`]): its rows
+/// against the reference at 99.1%. With [`CHAIN_PAIRED`]'s 99.9% the chain holds at 99%.
+const CHAIN_CPU: Protocol = Protocol {
+    delta: PROTOCOL.delta,
+    alpha: 0.009,
+};
+/// The paired part of the chained statement: GPU − CPU at 99.9%. The pairs are cheap in
+/// variance (CVs ≤ 1.2e-3 against 0.04–0.15), so the paired side takes the small share of α
+/// and the CPU's N barely grows (t at 99.55% instead of 99.5%).
+const CHAIN_PAIRED: Protocol = Protocol {
+    delta: PROTOCOL.delta,
+    alpha: 0.001,
+};
+/// Room the CPU's plan leaves the paired CI of the chain: at most 0.2% (the paired 99% CIs
+/// measured at most ±0.12%, ±0.16% at 99.9%).
+const PAIRED_ALLOWANCE: f64 = 0.002;
+/// Replicas (seeds 0..N) behind [`Design::paired_cv`].
 const PAIRED_MEASURE_N: u64 = 64;
 /// A region mean that differs by more than this between the backends marks a replica whose
 /// sampling decisions diverged (float rounding alone leaves ≈ 1e-7).
 const DIVERGED: f64 = 1e-5;
-/// Safety factor on [`PAIRED_CV`] (the divergent replicas make it a rare-event estimate).
+/// Safety factor on [`Design::paired_cv`] (the divergent replicas make it a rare-event
+/// estimate).
 const PAIRED_CV_MARGIN: f64 = 2.0;
-/// The fewest pairs a paired test runs. The planned N (2; sequential-exact 9) would rest the
-/// spread on replicas whose decisions did not diverge: a t-interval reflects the divergent
-/// replicas' spread only when some are in the sample. With 32 pairs a divergence rate of 12.5%
-/// (sequential-exact) shows at least once with probability 1 − 0.875³² = 0.986, one of 10%
-/// with 0.966.
+/// The fewest pairs a paired test runs. The planned N (a handful) would rest the spread on
+/// replicas whose decisions did not diverge: a t-interval reflects the divergent replicas'
+/// spread only when some are in the sample. With 32 pairs a divergence rate of 12.5% shows at
+/// least once with probability 1 − 0.875³² = 0.986, one of 10% with 0.966.
 const PAIRED_MIN_N: u64 = 32;
 
-/// The planned paired tests of `preset`: 12 rows, each with the largest measured CV times
-/// [`PAIRED_CV_MARGIN`], against an exact baseline (the pairing has no separate reference term).
-fn paired_planned(preset: &str) -> Vec<(EquivalencePlan, f64)> {
-    let (_, cv) = PAIRED_CV
-        .iter()
-        .find(|(name, _)| *name == preset)
-        .unwrap_or_else(|| panic!("no paired CV of {preset}"));
-    let plan = EquivalencePlan {
-        delta: PAIRED.delta,
-        alpha: PAIRED.alpha,
-        reference_rel_se: 0.0,
-        reference_n: 0,
-    };
-    vec![(plan, PAIRED_CV_MARGIN * cv); 4 * BUMPY.regions.len()]
-}
+impl Design {
+    /// The planned paired tests of `preset`: 12 rows, each with the largest measured CV times
+    /// [`PAIRED_CV_MARGIN`], against an exact baseline (the pairing has no separate reference
+    /// term).
+    fn paired_planned(&self, preset: &str) -> Vec<(EquivalencePlan, f64)> {
+        let (_, cv) = self
+            .paired_cv
+            .iter()
+            .find(|(name, _)| *name == preset)
+            .unwrap_or_else(|| panic!("no paired CV of {preset}"));
+        let plan = EquivalencePlan {
+            delta: PAIRED.delta,
+            alpha: PAIRED.alpha,
+            reference_rel_se: 0.0,
+            reference_n: 0,
+        };
+        vec![(plan, PAIRED_CV_MARGIN * cv); 4 * self.regions.len()]
+    }
 
-/// N of the paired test of `preset`: the power calculation's, at least [`PAIRED_MIN_N`].
-fn paired_replicas(preset: &str) -> u64 {
-    let n = replicas_for(&paired_planned(preset), FAMILY_POWER, 1 << 20);
-    PAIRED_MIN_N.max(n.expect("an exact baseline leaves room for δ") as u64)
-}
+    /// N of the paired test of `preset`: the power calculation's, at least [`PAIRED_MIN_N`].
+    fn paired_replicas(&self, preset: &str) -> u64 {
+        let n = replicas_for(&self.paired_planned(preset), FAMILY_POWER, 1 << 20);
+        PAIRED_MIN_N.max(n.expect("an exact baseline leaves room for δ") as u64)
+    }
 
-/// Replicas `0..n` of `preset` on `backend` and on the CPU, on `bumpy`.
-fn paired_images(backend: &Backend, preset: &Preset, n: u64) -> (Images, Images) {
-    let scene = &BUMPY.framing().scene;
-    let start = Instant::now();
-    let gpu = replica_images(backend, scene, preset, n, FRAMES).expect("preset runs");
-    let gpu_s = start.elapsed().as_secs_f64();
-    let cpu = replica_images(&Backend::Cpu, scene, preset, n, FRAMES).expect("preset runs");
-    println!(
-        "{} on bumpy, N = {n}: {backend} {gpu_s:.1} s, CPU {:.1} s",
-        preset.name,
-        start.elapsed().as_secs_f64() - gpu_s
-    );
-    (gpu, cpu)
+    /// Replicas `0..n` of `preset` on `backend`.
+    fn gpu_images(&self, backend: &Backend, preset: &Preset, n: u64) -> Images {
+        let start = Instant::now();
+        let scene = &self.framing().scene;
+        let gpu = replica_images(backend, scene, preset, n, FRAMES).expect("preset runs");
+        println!(
+            "{} on {} on {backend}, N = {n}: {:.1} s",
+            preset.name,
+            self.name,
+            start.elapsed().as_secs_f64()
+        );
+        gpu
+    }
+
+    /// The paired rows of `gpu` against the first replicas of `cpu` under `protocol` (printed,
+    /// with each row's per-replica CV) after checking that no value was non-finite.
+    fn paired_rows(
+        &self,
+        label: &str,
+        gpu: &Images,
+        cpu: &Images,
+        protocol: &Protocol,
+    ) -> Vec<BiasRow> {
+        let cpu = &cpu.rgb[..gpu.rgb.len()];
+        assert_eq!(gpu.nonfinite, 0, "{label}: non-finite values on the GPU");
+        let rows = paired_rows(label, &gpu.rgb, cpu, &self.framing().regions, protocol);
+        println!(
+            "{label}, GPU − CPU on {}: N = {} pairs, {FRAMES} frames, δ = ±{}%, α = {}\n{}",
+            self.name,
+            gpu.rgb.len(),
+            100.0 * protocol.delta,
+            protocol.alpha,
+            Table(&rows)
+        );
+        let largest = rows
+            .iter()
+            .map(|row| paired_cv(row, protocol))
+            .fold(0.0, f64::max);
+        println!("  {label}: largest paired per-replica CV {largest:.2e}");
+        assert_eq!(rows.len(), 4 * self.regions.len(), "{}", Table(&rows));
+        rows
+    }
+
+    /// The chained rows of the GPU ([`lab::chained`]): the CPU's `cpu` replicas against the
+    /// reference at [`CHAIN_CPU`], then `gpu` − CPU paired at [`CHAIN_PAIRED`]; printed.
+    fn chained_rows(&self, label: &str, gpu: &Images, cpu: &Images) -> Vec<BiasRow> {
+        assert_eq!(cpu.nonfinite, 0, "{label}: non-finite values on the CPU");
+        let estimate = summarize(&cpu.rgb, &self.framing().regions);
+        let first = bias_rows(label, &estimate, self.reference(), &CHAIN_CPU);
+        let then = self.paired_rows(label, gpu, cpu, &CHAIN_PAIRED);
+        let rows = chained_rows(label, &first, &then);
+        println!(
+            "{label}, chained (CPU N = {} against the reference at {}%, GPU − CPU N = {} at {}%) on {}:\n{}",
+            cpu.rgb.len(),
+            100.0 * (1.0 - CHAIN_CPU.alpha),
+            gpu.rgb.len(),
+            100.0 * (1.0 - CHAIN_PAIRED.alpha),
+            self.name,
+            Table(&rows)
+        );
+        rows
+    }
 }
 
 /// The per-replica CV of a paired row, from its CI: `half-width / t_{1−α/2, N−1} · √N`.
-fn paired_cv(row: &BiasRow) -> f64 {
+fn paired_cv(row: &BiasRow, protocol: &Protocol) -> f64 {
     let n = row.equivalence.n as f64;
-    let t = student_t_quantile(1.0 - 0.5 * PAIRED.alpha, n - 1.0);
+    let t = student_t_quantile(1.0 - 0.5 * protocol.alpha, n - 1.0);
     row.ci_half_width() / t * n.sqrt()
 }
 
-/// The paired rows of `gpu` against `cpu` (printed, with each row's per-replica CV) after
-/// checking that no value was non-finite.
-fn paired_rows_checked(label: &str, gpu: &Images, cpu: &Images) -> Vec<BiasRow> {
-    assert_eq!(
-        gpu.nonfinite + cpu.nonfinite,
-        0,
-        "{label}: non-finite values"
-    );
-    let regions = &BUMPY.framing().regions;
-    let rows = paired_rows(label, &gpu.rgb, &cpu.rgb, regions, &PAIRED);
-    println!(
-        "{label}, GPU − CPU on bumpy: N = {} pairs, {FRAMES} frames, δ = ±{}%, α = {}\n{}",
-        gpu.rgb.len(),
-        100.0 * PAIRED.delta,
-        PAIRED.alpha,
-        Table(&rows)
-    );
-    for row in &rows {
-        println!(
-            "  {label} {:<11} {:<9} paired per-replica CV {:.2e}",
-            row.region,
-            row.channel,
-            paired_cv(row)
-        );
-    }
-    let largest = rows.iter().map(paired_cv).fold(0.0, f64::max);
-    println!("  {label}: largest paired per-replica CV {largest:.2e}");
-    assert_eq!(rows.len(), 4 * BUMPY.regions.len(), "{}", Table(&rows));
-    rows
+/// The GPU replicas of `hybrid` on `bumpy`, shared by its test and the tint controls.
+fn hybrid_gpu(backend: &Backend) -> &'static Images {
+    static GPU: OnceLock<Images> = OnceLock::new();
+    GPU.get_or_init(|| {
+        let hybrid = Preset::named("hybrid").expect("registered preset");
+        BUMPY.gpu_images(backend, &hybrid, BUMPY.paired_replicas("hybrid"))
+    })
 }
 
-/// Every paired row of `name` "equivalent within ±0.5% at 99%", N planned.
-fn assert_gpu_equivalent_to_cpu(backend: &Backend, name: &str) {
+/// Preset `name` on the Vulkan backend: every paired row "equivalent within ±0.5% at 99%"
+/// against the CPU (parity), and every chained row "equivalent within ±2% at 99%" against the
+/// reference.
+fn assert_gpu_equivalent(backend: &Backend, design: &Design, name: &str) {
     let start = Instant::now();
     let preset = Preset::named(name).expect("registered preset");
-    let n = paired_replicas(name);
+    let n = design.paired_replicas(name);
     let computed;
-    let (gpu, cpu) = if name == "hybrid" {
-        hybrid_pair(backend)
+    let gpu = if name == "hybrid" && design.name == BUMPY.name {
+        hybrid_gpu(backend)
     } else {
-        computed = paired_images(backend, &preset, n);
+        computed = design.gpu_images(backend, &preset, n);
         &computed
     };
-    let rows = paired_rows_checked(name, gpu, cpu);
-    let largest = rows.iter().map(paired_cv).fold(0.0, f64::max);
-    let planned = paired_planned(name)[0].1;
-    println!(
-        "{name}: largest paired CV {largest:.2e}, planned {planned:.2e}; {:.1} s",
-        start.elapsed().as_secs_f64()
-    );
-    assert_all_equivalent(
-        &rows,
-        &PAIRED,
-        &format!("{name} on {backend} against the CPU"),
-    );
-}
-
-/// The paired replicas of `hybrid`, shared by its test and the tint control.
-fn hybrid_pair(backend: &Backend) -> &'static (Images, Images) {
-    static PAIR: OnceLock<(Images, Images)> = OnceLock::new();
-    PAIR.get_or_init(|| {
-        let hybrid = Preset::named("hybrid").expect("registered preset");
-        paired_images(backend, &hybrid, paired_replicas("hybrid"))
-    })
+    let cpu = design.images(&Backend::Cpu, &preset, name);
+    let what = format!("{name} on {backend}, {}", design.name);
+    let paired = design.paired_rows(&what, gpu, &cpu, &PAIRED);
+    assert_all_equivalent(&paired, &PAIRED, &format!("{what} against the CPU"));
+    let chained = design.chained_rows(&what, gpu, &cpu);
+    println!("{what}: {:.1} s", start.elapsed().as_secs_f64());
+    assert_all_equivalent(&chained, &PROTOCOL, &what);
 }
 
 /// The GPU's hybrid with its blue channel × (1 + 1.5δ) differs from the CPU's in every blue
 /// row, while every luminance row (blue weighs 7% of it) stays equivalent within ±0.5%.
 fn assert_paired_tint_detected(backend: &Backend) {
-    let (gpu, cpu) = hybrid_pair(backend);
+    let cpu = BUMPY.images(&Backend::Cpu, &Preset::named("hybrid").unwrap(), "hybrid");
     let factor = 1.0 + PAIRED_CONTROL_BIAS;
-    let tinted = tinted(gpu, DVec3::new(1.0, 1.0, factor));
-    let rows = paired_rows_checked(&format!("hybrid, GPU blue × {factor}"), &tinted, cpu);
+    let tinted = tinted(hybrid_gpu(backend), DVec3::new(1.0, 1.0, factor));
+    let label = format!("hybrid, GPU blue × {factor}");
+    let rows = BUMPY.paired_rows(&label, &tinted, &cpu, &PAIRED);
     assert_biased(&rows, "GPU blue × (1 + 1.5δ)");
     assert_blue_only(&rows);
+}
+
+/// The GPU's hybrid with its blue channel × 1.03 is not equivalent within ±2% in any blue row
+/// of the chain (its interval reaches past +2%), while every luminance row stays equivalent.
+fn assert_chained_tint_detected(backend: &Backend) {
+    let cpu = BUMPY.images(&Backend::Cpu, &Preset::named("hybrid").unwrap(), "hybrid");
+    let tinted = tinted(
+        hybrid_gpu(backend),
+        DVec3::new(1.0, 1.0, 1.0 + CONTROL_BIAS),
+    );
+    let rows = BUMPY.chained_rows("hybrid, GPU blue × 1.03", &tinted, &cpu);
+    for row in &rows {
+        let equivalent = row.verdict == Verdict::Equivalent;
+        match row.channel {
+            Channel::Blue => assert!(!equivalent, "{}", Table(&rows)),
+            Channel::Luminance => assert!(equivalent, "{}", Table(&rows)),
+            Channel::Red | Channel::Green => {}
+        }
+    }
 }
 
 /// The bias of the near-δ control of the paired tests, 1.5δ.
@@ -705,19 +781,22 @@ const PAIRED_CONTROL_BIAS: f64 = 1.5 * PAIRED.delta;
 /// a difference of 1.5δ in any one row (at least 0.99).
 #[test]
 fn paired_plan_detects_one_and_a_half_delta_in_any_row() {
-    for (preset, _) in PAIRED_CV {
-        let n = paired_replicas(preset) as usize;
-        let tests = paired_planned(preset);
-        let planned = replicas_for(&tests, FAMILY_POWER, 1 << 20).expect("plannable");
-        let level = PAIRED.alpha / tests.len() as f64;
-        let (plan, cv) = tests[0];
-        let detect = plan.rejection_power(cv, n, PAIRED_CONTROL_BIAS, level);
-        let power = family_power(&tests, n);
-        println!(
-            "  {preset:<16} paired N = {n:>3} (power calculation: {planned}): planned CV {cv:.2e}, P(equivalent in every row | no difference) ≥ {power:.3}, P(Holm rejects a row | +1.5δ) ≥ {detect:.4}"
-        );
-        assert!(power >= FAMILY_POWER);
-        assert!(detect >= 0.99, "{preset} detects +1.5δ with {detect}");
+    for design in [&BUMPY, &HALF_SHADOW] {
+        for (preset, _) in design.paired_cv {
+            let n = design.paired_replicas(preset) as usize;
+            let tests = design.paired_planned(preset);
+            let planned = replicas_for(&tests, FAMILY_POWER, 1 << 20).expect("plannable");
+            let level = PAIRED.alpha / tests.len() as f64;
+            let (plan, cv) = tests[0];
+            let detect = plan.rejection_power(cv, n, PAIRED_CONTROL_BIAS, level);
+            let power = family_power(&tests, n);
+            println!(
+                "  {} {preset:<16} paired N = {n:>3} (power calculation: {planned}): planned CV {cv:.2e}, P(equivalent in every row | no difference) ≥ {power:.3}, P(Holm rejects a row | +1.5δ) ≥ {detect:.4}",
+                design.name
+            );
+            assert!(power >= FAMILY_POWER);
+            assert!(detect >= 0.99, "{preset} detects +1.5δ with {detect}");
+        }
     }
 }
 
@@ -745,10 +824,11 @@ fn power_plan_detects_3pct_in_any_row() {
                 .fold(1.0, f64::min);
             let worst = tests.iter().map(|t| t.1).fold(0.0, f64::max);
             let power = family_power(&tests, n);
+            let chain_power = family_power(&design.chain_planned(preset), n);
             println!(
-                "  {preset:<16} N = {n:>4}: largest planned CV {worst:.3}, P(equivalent in every row | no bias) ≥ {power:.3}, P(Holm rejects a row | +3%) ≥ {detect:.4}"
+                "  {preset:<16} N = {n:>4}: largest planned CV {worst:.3}, P(equivalent in every row | no bias) ≥ {power:.3} (CPU part of the Vulkan chain: ≥ {chain_power:.3}), P(Holm rejects a row | +3%) ≥ {detect:.4}"
             );
-            assert!(power >= FAMILY_POWER);
+            assert!(power >= FAMILY_POWER && chain_power >= FAMILY_POWER);
             assert!(
                 detect >= 0.99,
                 "{}: {preset} detects +3% with {detect}",
@@ -773,14 +853,21 @@ macro_rules! cpu_tests {
     };
 }
 
-/// `$test` compares preset `$name` on the Vulkan backend with the CPU backend on `bumpy`,
-/// replica by replica (or skips).
-macro_rules! vulkan_test {
-    ($name:literal, $test:ident) => {
+/// `$bumpy`, `$plane` run preset `$name` on the Vulkan backend on both designs, paired with
+/// the CPU replicas of the same seeds and chained through the CPU's test (or skip).
+macro_rules! vulkan_tests {
+    ($name:literal, $bumpy:ident, $plane:ident) => {
         #[test]
-        fn $test() {
-            if let Some(backend) = backend_or_skip(stringify!($test)) {
-                assert_gpu_equivalent_to_cpu(&backend, $name);
+        fn $bumpy() {
+            if let Some(backend) = backend_or_skip(stringify!($bumpy)) {
+                assert_gpu_equivalent(&backend, &BUMPY, $name);
+            }
+        }
+
+        #[test]
+        fn $plane() {
+            if let Some(backend) = backend_or_skip(stringify!($plane)) {
+                assert_gpu_equivalent(&backend, &HALF_SHADOW, $name);
             }
         }
     };
@@ -811,21 +898,30 @@ cpu_tests!(
     sequential_exact_is_equivalent_within_2pct_on_bumpy,
     sequential_exact_is_equivalent_within_2pct_on_half_shadow
 );
-vulkan_test!(
+vulkan_tests!(
     "reconnection",
-    vulkan_reconnection_is_equivalent_to_cpu_within_half_pct_on_bumpy
+    vulkan_reconnection_is_equivalent_within_2pct_on_bumpy,
+    vulkan_reconnection_is_equivalent_within_2pct_on_half_shadow
 );
-vulkan_test!(
+vulkan_tests!(
     "delayed",
-    vulkan_delayed_is_equivalent_to_cpu_within_half_pct_on_bumpy
+    vulkan_delayed_is_equivalent_within_2pct_on_bumpy,
+    vulkan_delayed_is_equivalent_within_2pct_on_half_shadow
 );
-vulkan_test!(
+vulkan_tests!(
     "hybrid",
-    vulkan_hybrid_is_equivalent_to_cpu_within_half_pct_on_bumpy
+    vulkan_hybrid_is_equivalent_within_2pct_on_bumpy,
+    vulkan_hybrid_is_equivalent_within_2pct_on_half_shadow
 );
-vulkan_test!(
+vulkan_tests!(
+    "sequential",
+    vulkan_sequential_is_equivalent_within_2pct_on_bumpy,
+    vulkan_sequential_is_equivalent_within_2pct_on_half_shadow
+);
+vulkan_tests!(
     "sequential-exact",
-    vulkan_sequential_exact_is_equivalent_to_cpu_within_half_pct_on_bumpy
+    vulkan_sequential_exact_is_equivalent_within_2pct_on_bumpy,
+    vulkan_sequential_exact_is_equivalent_within_2pct_on_half_shadow
 );
 
 #[test]
@@ -835,34 +931,49 @@ fn control_vulkan_blue_high_differs_from_cpu_on_bumpy() {
     }
 }
 
-/// Measures the per-replica CVs of the paired differences that [`PAIRED_CV`] records:
-/// `RESHIFT_REQUIRE_VULKAN=1 cargo test --release -p lab --test unbiased measure_paired_cv --
-/// --ignored --nocapture`.
+#[test]
+fn control_vulkan_blue_3pct_high_is_not_equivalent_on_bumpy() {
+    if let Some(backend) =
+        backend_or_skip("control_vulkan_blue_3pct_high_is_not_equivalent_on_bumpy")
+    {
+        assert_chained_tint_detected(&backend);
+    }
+}
+
+/// Measures the per-replica CVs of the paired differences that [`Design::paired_cv`] records,
+/// on both designs: `RESHIFT_REQUIRE_VULKAN=1 cargo test --release -p lab --test unbiased
+/// measure_paired_cv -- --ignored --nocapture`.
 #[test]
 #[ignore = "a measurement, run by hand"]
 fn measure_paired_cv() {
     let backend = backend_or_skip("measure_paired_cv").expect("Vulkan");
-    for (name, _) in PAIRED_CV {
-        let preset = Preset::named(name).expect("registered preset");
-        let (gpu, cpu) = paired_images(&backend, &preset, PAIRED_MEASURE_N);
-        paired_rows_checked(name, &gpu, &cpu);
-        let regions = &BUMPY.framing().regions;
-        let diverged = |(g, c): (&Vec<DVec3>, &Vec<DVec3>)| {
-            BUMPY.regions.iter().any(|&r| {
-                let (g, c) = (region_mean(g, regions, r), region_mean(c, regions, r));
-                let (g, c) = (g.expect("region"), c.expect("region"));
-                ((g - c).abs() / c).max_element() > DIVERGED
-            })
-        };
-        let count = gpu
-            .rgb
-            .iter()
-            .zip(&cpu.rgb)
-            .filter(|&p| diverged(p))
-            .count();
-        println!(
-            "  {name}: {count} of {PAIRED_MEASURE_N} replicas differ by more than {DIVERGED} in a region mean"
-        );
+    for design in [&BUMPY, &HALF_SHADOW] {
+        let scene = &design.framing().scene;
+        for (name, _) in design.paired_cv {
+            let preset = Preset::named(name).expect("registered preset");
+            let gpu = design.gpu_images(&backend, &preset, PAIRED_MEASURE_N);
+            let cpu = replica_images(&Backend::Cpu, scene, &preset, PAIRED_MEASURE_N, FRAMES)
+                .expect("preset runs");
+            design.paired_rows(name, &gpu, &cpu, &PAIRED);
+            let regions = &design.framing().regions;
+            let diverged = |(g, c): (&Vec<DVec3>, &Vec<DVec3>)| {
+                design.regions.iter().any(|&r| {
+                    let (g, c) = (region_mean(g, regions, r), region_mean(c, regions, r));
+                    let (g, c) = (g.expect("region"), c.expect("region"));
+                    ((g - c).abs() / c).max_element() > DIVERGED
+                })
+            };
+            let count = gpu
+                .rgb
+                .iter()
+                .zip(&cpu.rgb)
+                .filter(|&p| diverged(p))
+                .count();
+            println!(
+                "  {} {name}: {count} of {PAIRED_MEASURE_N} replicas differ by more than {DIVERGED} in a region mean",
+                design.name
+            );
+        }
     }
 }
 

@@ -285,8 +285,9 @@ fn layered_scene(layers: u32) -> Scene {
 
 /// Loops that the device cuts short are an error, never an image (`restir/glsl/loop_budget.glsl`).
 /// With 70 000 layers a probe's traversal loops past lavapipe's budget of 65 535 iterations per
-/// invocation group, so lavapipe must report `LoopsCut` from the candidates pass; a device
-/// without such a budget must run it. Control: 16 layers run on both.
+/// invocation group, so lavapipe must report `LoopsCut` from the candidates pass, and from
+/// `method_adaptive` for the adaptive method (one sample per dispatch); a device without such a
+/// budget must run them. Control: 16 layers run on both.
 #[test]
 fn loops_cut_by_the_device_are_errors() {
     let Some(backend) = backend_or_skip("loops_cut_by_the_device_are_errors") else {
@@ -306,6 +307,18 @@ fn loops_cut_by_the_device_are_errors() {
         }
         Ok(_) if !lavapipe => {}
         other => panic!("70 000 layers on {backend}: {:?}", other.err()),
+    }
+    let adaptive = Method::parse("adaptive:b_min=1/b_max=1").unwrap();
+    let control = adaptive.render_on(&backend, &layered_scene(16), 1, 1);
+    assert!(control.is_ok(), "adaptive, 16 layers: {:?}", control.err());
+    match adaptive.render_on(&backend, &layered_scene(70_000), 1, 1) {
+        Err(engine::PipelineError::Vulkan(VulkanError::LoopsCut { shader, count })) => {
+            assert!(lavapipe, "a cut reported on {backend}");
+            assert_eq!(shader, "method_adaptive");
+            assert!(count > 0);
+        }
+        Ok(_) if !lavapipe => {}
+        other => panic!("adaptive, 70 000 layers on {backend}: {:?}", other.err()),
     }
 }
 

@@ -319,7 +319,7 @@ impl Preset {
             Some((
                 i,
                 format!(
-                    "{} replays the random numbers a sample stores, but pass {j} ({}) moves samples keeping numbers drawn at another pixel's x1: biased (use inverting-reconnection-exact there, which re-derives them)",
+                    "{} replays numbers pass {j} ({}) moved across pixels: biased; make pass {j} inverting-reconnection-exact",
                     pass.label(),
                     earlier.label()
                 ),

@@ -28,7 +28,7 @@ struct AdaptiveParams {
     uint radius;
 };
 
-// std430, 16 bytes: Option<History>, valid = 0 for None.
+// std430, 16 bytes (Rust twin engine::vulkan::GpuHistory): Option<History>, valid = 0 for None.
 struct History {
     float mean_count;
     float mean;

@@ -24,7 +24,7 @@ const float DIPOLE_ONE_MINUS_EPSILON = 0.999999940395355225;
 // DIPOLE_NEWTON_ITERATIONS and the poles DIPOLE_POLE_* (sss/src/contract.rs).
 #include "contract/sss.glsl"
 
-// std430, 24 bytes (Rust twin to be added beside GpuMaterial): Dipole's fields plus
+// std430, 24 bytes (Rust twin engine::vulkan::GpuDipole): Dipole's fields plus
 // pole_probability(Real) and total_reflectance() from the host.
 struct GpuDipole {
     float reduced_albedo;

@@ -43,8 +43,8 @@ struct ImageSpaceSettings {
     float channel[3];
 };
 
-// std430, 108 bytes: GatherProfile (dipoles, the material's F_t, reflectance ρ_c, renormalised
-// P(c)).
+// std430, 108 bytes (Rust twin engine::vulkan::GpuGatherProfile): GatherProfile (dipoles, the
+// material's F_t, reflectance ρ_c, renormalised P(c)).
 struct GatherProfile {
     GpuDipoleProfiles dipoles;
     FresnelTransmission fresnel;

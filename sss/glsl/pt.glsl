@@ -27,6 +27,20 @@ const float PT_FRAC_1_PI = 0.31830987;
 // hits beyond the cap).
 uint pt_hit_overflow = 0u;
 
+// The running sum of a method's samples between its dispatches (one per sample): a finite `value`
+// is added to the f64 `sum` in sample order, as the CPU's DVec3 sum; a NaN or infinite one, or one
+// whose probe had more than BVH_MAX_HITS hits (pt_hit_overflow above `overflow`, its count before
+// the sample), is counted in `left_out` instead (the CPU leaves non-finite samples out of the sum
+// but not of the divisor; on the GPU a capped sample would be biased low).
+void pt_accumulate(vec3 value, uint overflow, inout double sum[3], inout uint left_out) {
+    if (any(isnan(value)) || any(isinf(value)) || pt_hit_overflow != overflow) {
+        left_out++;
+    } else {
+        precise dvec3 total = dvec3(sum[0], sum[1], sum[2]) + dvec3(value);
+        sum = double[3](total.x, total.y, total.z);
+    }
+}
+
 vec3 pt_vec3(float v[3]) {
     return vec3(v[0], v[1], v[2]);
 }

@@ -8,12 +8,14 @@
 //! [`VulkanError`] that says in one line what to install; nothing here panics for that.
 //! The buffer structs below are `#[repr(C)]` + `bytemuck` twins of std430 structs of the GLSL.
 
+mod adaptive;
 mod bvh;
 mod compute;
 mod decode;
 mod device;
 mod error;
 mod frame;
+mod image_space;
 mod memory;
 mod pass_params;
 mod pt;
@@ -26,12 +28,17 @@ mod timing;
 
 use bytemuck::{Pod, Zeroable};
 
+pub use adaptive::{ADAPTIVE, AdaptiveImage, GpuHistory, render_adaptive_frame};
 pub use bvh::{BVH_MAX_HITS, BvhRayInput, BvhRayOutput, GpuBvh};
 pub use compute::{Dispatch, Kernel, groups_for};
 pub use decode::decode_error;
 pub use device::{Context, DEVICE_ENV, DeviceInfo, DeviceKind, choose_device};
 pub use error::VulkanError;
 pub use frame::{CANDIDATES, SPATIAL, TEMPORAL};
+pub use image_space::{
+    GpuDipole, GpuGatherProfile, IMAGE_SPACE, ImageSpaceImage, render_image_space,
+    scene_gather_profiles,
+};
 pub use memory::Buffer;
 pub use pt::{DeviceImage, FrameInput, PT, SHADE, render_pt, render_pt_hits, shade};
 pub use random_walk::{

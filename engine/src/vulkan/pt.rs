@@ -5,6 +5,7 @@
 use glam::Vec3;
 
 use sss::integrator::pt::HitPolicy;
+use sss::scene::Scene;
 
 use super::{
     Buffer, Context, GpuPixel, GpuScene, Kernel, PassParams, Shader, VulkanError, groups_for,
@@ -31,6 +32,24 @@ pub struct FrameInput<'a> {
     pub height: u32,
 }
 
+impl<'a> FrameInput<'a> {
+    /// The input of a frame of `scene` at its camera's resolution.
+    pub fn new(
+        scene: &Scene,
+        gpu: &'a GpuScene,
+        params: &'a Buffer,
+        gbuffer: &'a Buffer,
+    ) -> FrameInput<'a> {
+        FrameInput {
+            scene: gpu,
+            params,
+            gbuffer,
+            width: scene.camera.width(),
+            height: scene.camera.height(),
+        }
+    }
+}
+
 /// An image read back from the device, and how many samples (`method_pt`) or pixels
 /// (`pass_shade`) were left out of a mean or written as 0: NaN or infinite values, as on the CPU,
 /// and path-traced samples whose probe had more than [`KEPT_HITS`](crate::contract::KEPT_HITS)
@@ -43,7 +62,7 @@ pub struct DeviceImage {
 
 /// The frame's bindings (scene, `FrameParams`, G-buffer) followed by `extra`, after checking
 /// that the G-buffer covers the frame.
-fn bindings<'a>(
+pub(super) fn bindings<'a>(
     frame: &FrameInput<'a>,
     extra: &[&'a Buffer],
 ) -> Result<Vec<&'a Buffer>, VulkanError> {
@@ -65,7 +84,7 @@ fn bindings<'a>(
 }
 
 /// Reads a `vec4` output back as an image and the count of its texels with `w ≠ 0` summed.
-fn read_image(frame: &FrameInput, output: &Buffer) -> Result<DeviceImage, VulkanError> {
+pub(super) fn read_image(frame: &FrameInput, output: &Buffer) -> Result<DeviceImage, VulkanError> {
     let texels = output.read::<[f32; 4]>()?;
     Ok(DeviceImage {
         image: Image {

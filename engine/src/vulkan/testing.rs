@@ -4,6 +4,8 @@
 
 use std::sync::OnceLock;
 
+use glam::Vec3;
+
 use sss::scene::{GBuffer, Scene};
 
 use super::{
@@ -64,6 +66,33 @@ pub fn rel_mse(a: &Run, b: &Run) -> f64 {
         }
     }
     sum / n.max(1) as f64
+}
+
+/// `Σ ‖a − b‖² / Σ ‖b‖²` over `pixels`, accumulated in f64 (the bare sum where `b` is black
+/// there): the image yardstick of the per-pixel method parity tests, compared with the same
+/// figure between two CPU seeds.
+pub fn rel_mse_pixels(a: &[Vec3], b: &[Vec3], pixels: impl IntoIterator<Item = usize>) -> f64 {
+    let (mut num, mut den) = (0.0, 0.0);
+    for p in pixels {
+        let (x, y) = (a[p].as_dvec3(), b[p].as_dvec3());
+        num += (x - y).length_squared();
+        den += y.length_squared();
+    }
+    if den > 0.0 { num / den } else { num }
+}
+
+/// The largest difference of a channel of `got` from `want`, over `want`'s largest channel (so
+/// that a dark channel is not over-weighted); 0 for equal pixels, ∞ where `want` is black and
+/// `got` is not.
+pub fn pixel_error(got: Vec3, want: Vec3) -> f64 {
+    let scale = want.max_element() as f64;
+    if got == want {
+        0.0
+    } else if scale > 0.0 {
+        (got - want).abs().max_element() as f64 / scale
+    } else {
+        f64::INFINITY
+    }
 }
 
 /// Relative error of `got` against `want`; equal values (0 included) give 0, a 0 or

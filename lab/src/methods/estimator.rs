@@ -286,14 +286,3 @@ pub fn parse_spp(arg: Option<&str>) -> Result<u32, String> {
         },
     }
 }
-
-/// `Ok` on the CPU; on another backend the one-line error of a method (`family`) whose device
-/// kernels do not exist yet.
-pub fn cpu_only(backend: &Backend, family: &str) -> Result<(), PipelineError> {
-    match backend.renderer() {
-        None => Ok(()),
-        Some(_) => Err(PipelineError::Config(format!(
-            "{family} is not yet available on Vulkan (use --backend cpu)"
-        ))),
-    }
-}

@@ -67,13 +67,7 @@ pub fn path_trace(
         Some(mut renderer) => {
             let (gbuffer, params) = renderer.gbuffer(scene, frame, seed)?;
             let (context, kernel, gpu) = renderer.parts(PT)?;
-            let input = FrameInput {
-                scene: gpu,
-                params: &params,
-                gbuffer: &gbuffer,
-                width: scene.camera.width(),
-                height: scene.camera.height(),
-            };
+            let input = FrameInput::new(scene, gpu, &params, &gbuffer);
             let out = render_pt_hits(context, kernel, &input, spp, hits)?;
             (out.image, out.left_out)
         }

@@ -72,7 +72,10 @@ pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
         };
     }
     preset.name = arg.to_string();
-    preset.validate().map_err(|e| e.to_string())?;
+    // The method's spec names the preset already.
+    preset
+        .validate()
+        .map_err(|e| format!("pass {}: {}", e.pass, e.reason))?;
     Ok(preset)
 }
 

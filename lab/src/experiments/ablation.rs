@@ -1,9 +1,8 @@
 //! `ablation` (issue 10): one ReSTIR preset varied one knob at a time — temporal cap, spatial
 //! cap, neighbours, Rao-Blackwellised shading, camera motion, jitter, resolution (2× and 3× the
-//! run's) — each row's
-//! efficiency `1/(MSE·s)` over 1-spp `pt` per region with its 95% interval (the delta method
-//! over replicas, paired by seed, [`crate::uncertainty`]), and over the unmodified preset where
-//! both ran on the same images. Rows sharing a camera and a resolution are one
+//! run's) — each row's efficiency `1/(MSE·s)` over 1-spp `pt` per region with its 95% interval
+//! (the delta method over replicas, paired by seed, [`crate::uncertainty`]), and its efficiency,
+//! MSE and time over the unmodified preset where both ran on the same images. Rows sharing a camera and a resolution are one
 //! [`compare::run`] (`<out>/<group>/`), so their ratios pair by seed. Every row's reuse
 //! telemetry ([`crate::telemetry`], CPU backend) comes from separate runs of the same seeds
 //! with diagnostics on (which cost time, so they are not the timed runs): `telemetry.md`.
@@ -245,7 +244,10 @@ pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, E
         "interval": INTERVAL_METHOD,
         "confidence": crate::uncertainty::CONFIDENCE,
         "rows": measured.iter().map(row_json).collect::<Vec<_>>(),
-        "not_knobs": NOT_KNOBS.iter().map(|(k, why)| json!({ "knob": k, "note": why })).collect::<Vec<_>>(),
+        "not_knobs": NOT_KNOBS
+            .iter()
+            .map(|(k, why)| json!({ "knob": k, "note": why }))
+            .collect::<Vec<_>>(),
         "runs": runs,
     });
     write_text(&root.join("telemetry.md"), &telemetry_markdown(&measured))?;

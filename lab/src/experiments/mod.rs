@@ -111,7 +111,7 @@ impl Experiment {
     /// Its defaults: `ground-truth` (21 scenes, every registry method, the walk as reference; 32×24, 16
     /// replicas, a 4096-spp walk: about 5 minutes on the shared 2-core machine) and `model-gap`
     /// (7 scenes × 3 boundaries, 8 estimators per sample; `reference_spp` is every estimator's
-    /// total over the replicas) run small; `ablation` (16 rows in 6 comparisons, up to
+    /// total over the replicas) run small; `ablation` (14 rows per method in 6 comparisons, up to
     /// 384×288) at 128×96 with 4 replicas and 1024-spp references; the figures at 128×96, 16
     /// replicas, 8192-spp references.
     pub fn defaults(self) -> Defaults {

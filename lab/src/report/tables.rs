@@ -57,7 +57,7 @@ fn relative_bias(r: &MethodResult, area: Area) -> Option<f64> {
 }
 
 /// Milliseconds per frame with its interval.
-fn milliseconds(r: &MethodResult) -> Measured {
+pub fn milliseconds(r: &MethodResult) -> Measured {
     let s = Measured::of(&r.seconds);
     Measured {
         value: 1e3 * s.value,

@@ -128,9 +128,11 @@ pub(super) fn findings(measured: &[Measurement]) -> String {
         "| region | more efficient than the unmodified preset | less efficient | rows whose lower bound over pt clears the bar |\n|---|---|---|---|\n",
     );
     for (i, region) in Region::ALL.iter().enumerate() {
+        // Issue 10's bar: translucent > 1, penumbra and shadowed ≥ 5; none for lit.
         let bar = match region {
-            Region::Penumbra | Region::Shadowed => 5.0,
-            _ => 1.0,
+            Region::Translucent => Some((1.0, false)),
+            Region::Penumbra | Region::Shadowed => Some((5.0, true)),
+            Region::Lit => None,
         };
         let decided = |word: &str| {
             let labels: Vec<&str> = measured
@@ -145,22 +147,27 @@ pub(super) fn findings(measured: &[Measurement]) -> String {
                 .collect();
             list(&labels)
         };
-        let clear: Vec<String> = measured
-            .iter()
-            .filter(|m| {
-                m.over_pt[i]
-                    .and_then(|r| r.ci)
-                    .is_some_and(|ci| if bar > 1.0 { ci.lo >= bar } else { ci.lo > bar })
-            })
-            .map(|m| format!("{} ({})", m.variation.spec, m.variation.label))
-            .collect();
-        let clear: Vec<&str> = clear.iter().map(String::as_str).collect();
-        let sign = if bar > 1.0 { "≥" } else { ">" };
+        let cleared = match bar {
+            None => "no bar".to_string(),
+            Some((bar, inclusive)) => {
+                let clear: Vec<String> = measured
+                    .iter()
+                    .filter(|m| {
+                        m.over_pt[i]
+                            .and_then(|r| r.ci)
+                            .is_some_and(|ci| if inclusive { ci.lo >= bar } else { ci.lo > bar })
+                    })
+                    .map(|m| format!("{} ({})", m.variation.spec, m.variation.label))
+                    .collect();
+                let clear: Vec<&str> = clear.iter().map(String::as_str).collect();
+                let sign = if inclusive { "≥" } else { ">" };
+                format!("{sign} {bar}: {}", list(&clear))
+            }
+        };
         out.push_str(&format!(
-            "| {region} | {} | {} | {sign} {bar}: {} |\n",
+            "| {region} | {} | {} | {cleared} |\n",
             decided("better"),
             decided("worse"),
-            list(&clear)
         ));
     }
     out
@@ -215,4 +222,71 @@ pub(super) fn row_json(m: &Measurement) -> Value {
         "time_over_default": m.mse_over_default.as_ref().map(|(_, t)| measured_json(t, false)),
         "telemetry": m.telemetry.as_deref().map(telemetry::json),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::experiments::ablation::{Framing, Variation};
+    use crate::uncertainty::Interval;
+
+    fn measured(lo: f64, value: f64, hi: f64) -> Option<Measured> {
+        Some(Measured {
+            value,
+            ci: Some(Interval { lo, hi }),
+        })
+    }
+
+    /// Issue 10's bar is decided by lower bounds: translucent strictly above 1, penumbra and
+    /// shadowed at least 5, lit has none; rows above or below the unmodified preset by their
+    /// intervals, an interval containing 1 in neither list.
+    #[test]
+    fn findings_decide_by_lower_bounds() {
+        let row = |spec: &str, over_pt: [Option<Measured>; 4], over_default| Measurement {
+            variation: Variation {
+                label: spec.into(),
+                spec: spec.into(),
+                framing: Framing::SCENE,
+                resolution: (8, 6),
+            },
+            over_pt: over_pt.to_vec(),
+            over_default,
+            milliseconds: (measured(1.0, 1.0, 1.0).unwrap(), None),
+            mse_over_default: None,
+            telemetry: None,
+        };
+        let rows = [
+            row(
+                "a",
+                [
+                    measured(1.01, 1.2, 1.4),
+                    measured(2.0, 3.0, 4.0),
+                    measured(5.0, 6.0, 7.0),
+                    measured(4.9, 8.0, 12.0),
+                ],
+                Some(vec![
+                    measured(1.1, 1.2, 1.3),
+                    measured(0.8, 1.0, 1.2),
+                    None,
+                    None,
+                ]),
+            ),
+            row(
+                "b",
+                [measured(0.9, 1.2, 1.5), None, None, measured(5.0, 6.0, 7.0)],
+                Some(vec![measured(0.5, 0.6, 0.7), None, None, None]),
+            ),
+        ];
+        let text = findings(&rows);
+        let line = |region: &str| {
+            text.lines()
+                .find(|l| l.starts_with(&format!("| {region} |")))
+                .unwrap()
+                .to_string()
+        };
+        assert_eq!(line("translucent"), "| translucent | a | b | > 1: a (a) |");
+        assert_eq!(line("lit"), "| lit | none | none | no bar |");
+        assert_eq!(line("penumbra"), "| penumbra | none | none | ≥ 5: a (a) |");
+        assert_eq!(line("shadowed"), "| shadowed | none | none | ≥ 5: b (b) |");
+    }
 }

@@ -43,7 +43,7 @@ pub use backend::Backend;
 pub use diagnostics::Diagnostics;
 pub use image::Image;
 pub use restir::mis::MisKind;
-pub use shifts::preset::{PassSpec, Preset, PresetError, Shade};
+pub use shifts::preset::{PassSpec, Preset, PresetError, RadiusRule, Shade};
 pub use shifts::{PixelReservoir, ShiftKind};
 
 /// What a run does besides the preset: the replica seed, the number of frames of the camera

@@ -16,7 +16,7 @@ use sss::scene::{GBuffer, GPixel, Scene};
 use crate::purpose;
 use shifts::PixelReservoir;
 use shifts::ShiftKind;
-use shifts::preset::{PassSpec, Shade};
+use shifts::preset::{PassSpec, RadiusRule, Shade};
 
 /// Reprojection checks of temporal reuse ([`GBuffer::reproject`]).
 pub use sss::scene::{
@@ -256,7 +256,7 @@ pub fn temporal(
 }
 
 /// Spatial reuse of `pixel`: `neighbours` pixels drawn uniformly in the disk of radius
-/// `R = Camera::spatial_radius_px(frame, x1, max d)` around the pixel centre (DESIGN §9). A
+/// `R = radius.radius_px(camera, frame, x1, max d)` around the pixel centre (DESIGN §9). A
 /// neighbour outside the image, equal to the pixel, without a primary hit or on another object
 /// is not taken (a rule symmetric in both pixels), so the MIS sees only the `v` neighbours taken.
 /// Each neighbour's confidence is capped at `cap` × the receiver's when given.
@@ -267,6 +267,7 @@ pub fn spatial(
     mis: &dyn MisScheme,
     neighbours: u32,
     cap: Option<f32>,
+    radius: RadiusRule,
     shade: Shade,
 ) -> Result<Reused, ResampleError> {
     let stored = input.reservoirs[pixel as usize];
@@ -276,10 +277,7 @@ pub fn spatial(
     let canonical = stored.get();
     let (width, height) = (input.gbuffer.width, input.gbuffer.height);
     let frame = input.gbuffer.frame;
-    let radius = input
-        .scene
-        .camera
-        .spatial_radius_px(frame, g.position, max_d(&receiver));
+    let radius = radius.radius_px(&input.scene.camera, frame, g.position, max_d(&receiver));
     let centre = Vec2::new((pixel % width) as f32 + 0.5, (pixel / width) as f32 + 0.5);
     let mut rng = StreamKey::new(pixel, frame, input.pass, purpose::NEIGHBOURS).stream(input.seed);
     let mut taken = Vec::with_capacity(neighbours as usize);
@@ -358,6 +356,7 @@ pub fn pass(
             mis,
             neighbours,
             confidence_cap,
+            radius,
         } => spatial(
             input,
             pixel,
@@ -365,6 +364,7 @@ pub fn pass(
             mis.scheme(),
             neighbours,
             confidence_cap,
+            radius,
             shade,
         ),
     })
@@ -441,6 +441,7 @@ mod tests {
                 MisKind::DefensivePairwise.scheme(),
                 4,
                 None,
+                RadiusRule::Clamped,
                 Shade::Selected,
             )
             .unwrap()

@@ -9,6 +9,9 @@ use std::fmt;
 
 use restir::mis::{MAX_DOMAINS, MisKind};
 
+use glam::Vec3;
+use sss::scene::Camera;
+
 use crate::IndexPolicy;
 use crate::kind::ShiftKind;
 
@@ -29,15 +32,59 @@ pub enum PassSpec {
         mis: MisKind,
         confidence_cap: f32,
     },
-    /// Spatial reuse: `neighbours` pixels drawn uniformly in the disk of radius
-    /// `Camera::spatial_radius_px`; each neighbour's confidence capped at `confidence_cap` × the
-    /// receiver's when given.
+    /// Spatial reuse: `neighbours` pixels drawn uniformly in the disk whose radius `radius`
+    /// gives; each neighbour's confidence capped at `confidence_cap` × the receiver's when given.
     Spatial {
         shift: ShiftKind,
         mis: MisKind,
         neighbours: u32,
         confidence_cap: Option<f32>,
+        radius: RadiusRule,
     },
+}
+
+/// The radius of a spatial pass's neighbour disk (DESIGN §9), from the screen length of
+/// `2·max d` at the receiver's primary hit (`Camera::projected_radius_px`). The disk depends
+/// only on the receiver's G-buffer, never on a reservoir, so it selects which domains enter the
+/// pairwise MIS and does not enter any MIS weight: every rule keeps the estimator unbiased.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RadiusRule {
+    /// Clamped to [5, 30] px (`Camera::spatial_radius_px`).
+    #[default]
+    Clamped,
+    /// The projection itself, floored at [`RadiusRule::FLOOR_PX`].
+    Unclamped,
+}
+
+impl RadiusRule {
+    /// The unclamped rule's floor: a disk narrower than a pixel would draw every neighbour
+    /// inside the receiver's own pixel, which spatial reuse skips.
+    pub const FLOOR_PX: f32 = 1.0;
+
+    /// `clamped` or `unclamped`.
+    pub fn name(self) -> &'static str {
+        match self {
+            RadiusRule::Clamped => "clamped",
+            RadiusRule::Unclamped => "unclamped",
+        }
+    }
+
+    /// The rule named `name`.
+    pub fn named(name: &str) -> Option<RadiusRule> {
+        [RadiusRule::Clamped, RadiusRule::Unclamped]
+            .into_iter()
+            .find(|r| r.name() == name)
+    }
+
+    /// The disk radius in pixels for a receiver whose primary hit is `x1` at `frame`.
+    pub fn radius_px(self, camera: &Camera, frame: u32, x1: Vec3, max_d: f32) -> f32 {
+        match self {
+            RadiusRule::Clamped => camera.spatial_radius_px(frame, x1, max_d),
+            RadiusRule::Unclamped => camera
+                .projected_radius_px(frame, x1, max_d)
+                .map_or(Self::FLOOR_PX, |r| r.max(Self::FLOOR_PX)),
+        }
+    }
 }
 
 impl PassSpec {
@@ -137,6 +184,7 @@ fn spatial(shift: ShiftKind, neighbours: u32) -> PassSpec {
         mis: MisKind::DefensivePairwise,
         neighbours,
         confidence_cap: None,
+        radius: RadiusRule::Clamped,
     }
 }
 
@@ -228,6 +276,16 @@ impl Preset {
         for pass in &mut self.passes {
             if let PassSpec::Spatial { neighbours, .. } = pass {
                 *neighbours = count;
+            }
+        }
+        self
+    }
+
+    /// The preset with every spatial pass's disk radius given by `rule`.
+    pub fn with_radius(mut self, rule: RadiusRule) -> Preset {
+        for pass in &mut self.passes {
+            if let PassSpec::Spatial { radius, .. } = pass {
+                *radius = rule;
             }
         }
         self
@@ -332,6 +390,31 @@ impl Preset {
 mod tests {
     use super::*;
 
+    /// The rules round-trip their names; the clamped rule is `Camera::spatial_radius_px`, the
+    /// unclamped one the projection itself above its floor and the floor below or behind the eye.
+    #[test]
+    fn radius_rules_name_and_radius() {
+        for rule in [RadiusRule::Clamped, RadiusRule::Unclamped] {
+            assert_eq!(RadiusRule::named(rule.name()), Some(rule));
+        }
+        assert_eq!(RadiusRule::named("wide"), None);
+        assert_eq!(RadiusRule::default(), RadiusRule::Clamped);
+        let camera = sss::scene::Scene::builtin("bumpy").unwrap().camera;
+        let x1 = camera.eye(0) + 2.0 * camera.forward(0);
+        for max_d in [1e-5, 0.01, 0.1, 10.0] {
+            let clamped = RadiusRule::Clamped.radius_px(&camera, 0, x1, max_d);
+            let unclamped = RadiusRule::Unclamped.radius_px(&camera, 0, x1, max_d);
+            let r = camera.projected_radius_px(0, x1, max_d).unwrap();
+            assert_eq!(clamped, camera.spatial_radius_px(0, x1, max_d));
+            assert_eq!(unclamped, r.max(RadiusRule::FLOOR_PX), "{max_d}");
+        }
+        let behind = camera.eye(0) - camera.forward(0);
+        assert_eq!(
+            RadiusRule::Unclamped.radius_px(&camera, 0, behind, 0.1),
+            RadiusRule::FLOOR_PX
+        );
+    }
+
     #[test]
     fn registry_matches_seed_001_defaults() {
         for name in PRESET_NAMES {
@@ -377,6 +460,16 @@ mod tests {
             }
         ));
         assert_eq!(capped.passes[..2], hybrid.passes[..2]);
+        let wide = hybrid.clone().with_radius(RadiusRule::Unclamped);
+        assert!(matches!(
+            wide.passes[2],
+            PassSpec::Spatial {
+                radius: RadiusRule::Unclamped,
+                neighbours: 4,
+                ..
+            }
+        ));
+        assert_eq!(wide.passes[..2], hybrid.passes[..2]);
         let seq = Preset::named("sequential").unwrap().with_neighbours(3);
         let counts: Vec<u32> = seq
             .passes

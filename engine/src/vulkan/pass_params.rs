@@ -38,6 +38,7 @@ impl PassParams {
                 mis,
                 neighbours,
                 confidence_cap,
+                ..
             }) => PassParams {
                 shift: shift.code(),
                 mis: mis.code(),
@@ -65,6 +66,7 @@ mod tests {
             mis: MisKind::DefensivePairwise,
             neighbours: 4,
             confidence_cap: None,
+            radius: shifts::preset::RadiusRule::Clamped,
         };
         let p = PassParams::new(2, Some(&spatial), true);
         assert_eq!((p.pass, p.shift, p.mis, p.neighbours), (2, 3, 2, 4));

@@ -25,7 +25,7 @@ use crate::hash::Fnv1a;
 use crate::image::Image;
 use crate::plan::Plan;
 use crate::{PipelineError, Run, RunConfig};
-use shifts::preset::{Preset, Shade};
+use shifts::preset::{PassSpec, Preset, RadiusRule, Shade};
 
 /// A Vulkan device with its kernels and the last uploaded scene, reused across runs.
 pub struct Renderer {
@@ -216,7 +216,8 @@ impl Renderer {
     /// Renders `config.frames` frames of `scene` with `preset` (validated by the caller) on
     /// the device: the GPU twin of [`crate::run`]. `Run::timings` are GPU seconds from the
     /// timestamps; they are empty on a queue that writes no timestamps. [`Shade::AllInputs`] has
-    /// no kernel: a one-line configuration error.
+    /// no kernel and the spatial kernel clamps its radius ([`RadiusRule::Clamped`]): any other
+    /// choice is a one-line configuration error.
     pub fn run(
         &mut self,
         scene: &Scene,
@@ -227,6 +228,15 @@ impl Renderer {
             return Err(PipelineError::Config(format!(
                 "preset `{}`: {:?} shading has no Vulkan kernel; use the CPU backend",
                 preset.name, preset.shade
+            )));
+        }
+        if let Some(pass) = preset.passes.iter().find(
+            |p| matches!(p, PassSpec::Spatial { radius, .. } if *radius != RadiusRule::Clamped),
+        ) {
+            return Err(PipelineError::Config(format!(
+                "preset `{}`: {} with a non-clamped radius has no Vulkan kernel; use the CPU backend",
+                preset.name,
+                pass.label()
             )));
         }
         let plan = Plan::lower(preset);

@@ -1,4 +1,4 @@
-//! `restir:<preset>[/temporal=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/shade=<selected|all>]`:
+//! `restir:<preset>[/temporal=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/radius=<clamped|unclamped>][/shade=<selected|all>]`:
 //! the ReSTIR SSS frame pipeline with a registered preset [001 §5.1] (DESIGN §6). Every frame of
 //! the trajectory is rendered (temporal reuse) and the last one is kept; `/temporal=<shift>`
 //! swaps the shift of the temporal pass [001 Fig. 10], `/cap=<κ>` sets its confidence cap,
@@ -9,7 +9,7 @@
 //! The only file of the lab that names presets and shift kinds: when presets move crates, the
 //! import below is the one to change.
 
-use engine::{Backend, PassSpec, PipelineError, Preset, RunConfig, Shade, ShiftKind};
+use engine::{Backend, PassSpec, PipelineError, Preset, RadiusRule, RunConfig, Shade, ShiftKind};
 use shifts::preset::PRESET_NAMES;
 use sss::scene::Scene;
 
@@ -17,12 +17,13 @@ use super::estimator::{Entry, Estimator, Frame, Method, Trajectory};
 
 pub const ENTRY: Entry = Entry {
     family: "restir",
-    usage: "restir:<reconnection|delayed|hybrid|sequential|sequential-exact>[/temporal=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/shade=<selected|all>]",
+    usage: "restir:<reconnection|delayed|hybrid|sequential|sequential-exact>[/temporal=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/radius=<clamped|unclamped>][/shade=<selected|all>]",
     about: "ReSTIR SSS with spatiotemporal reuse and the preset's shift mapping [001 §5.1]; \
             `/temporal=<shift>` swaps the temporal pass's shift (001 Fig. 10); \
             `/cap=<κ>` sets the temporal confidence cap (default 3; seed 001 uses 20); \
             `/spatial-cap=<κ>` caps spatial neighbours' confidence (default none); \
             `/neighbours=<n>` sets the spatial passes' neighbour count; \
+            `/radius=unclamped` drops the spatial disk's [5, 30] px clamp (floor 1 px; CPU only); \
             `/shade=all` paints the last reuse pass's Rao-Blackwellised value over all its inputs \
             (CPU backend only)",
     build: |arg| Ok(Method::new(Restir(preset(arg)?))),
@@ -35,7 +36,8 @@ pub struct Restir(pub Preset);
 /// The preset of `restir:<preset>[/modifier=value]…`: a registered preset, optionally modified by
 /// `/temporal=<shift>` (the temporal pass's shift becomes the [`ShiftKind`] named `<shift>`),
 /// `/cap=<κ>` (the temporal confidence cap, finite and > 0), `/spatial-cap=<κ>` (every spatial
-/// pass's cap), `/neighbours=<n>` (every spatial pass's count) and `/shade=<selected|all>`
+/// pass's cap), `/neighbours=<n>` (every spatial pass's count), `/radius=<clamped|unclamped>`
+/// (every spatial pass's [`RadiusRule`]) and `/shade=<selected|all>`
 /// ([`Shade`]). A modified preset is named `arg`.
 pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
     let arg = arg.ok_or("needs a preset, e.g. restir:hybrid")?;
@@ -58,6 +60,10 @@ pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
                     .map_err(|_| format!("neighbours {value:?} is not a whole number"))?;
                 preset.with_neighbours(count)
             }
+            Some(("radius", value)) => preset.with_radius(
+                RadiusRule::named(value)
+                    .ok_or_else(|| format!("radius {value:?} is not clamped or unclamped"))?,
+            ),
             Some(("shade", "selected")) => Preset {
                 shade: Shade::Selected,
                 ..preset
@@ -80,8 +86,7 @@ pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
 }
 
 /// The modifiers [`preset`] knows, for its error message.
-const MODIFIERS: &str =
-    "temporal=<shift>, cap=<κ>, spatial-cap=<κ>, neighbours=<n>, shade=<selected|all>";
+const MODIFIERS: &str = "temporal=<shift>, cap=<κ>, spatial-cap=<κ>, neighbours=<n>, radius=<clamped|unclamped>, shade=<selected|all>";
 
 /// A confidence cap: a finite number > 0.
 fn positive(value: &str) -> Result<f32, String> {
@@ -236,12 +241,30 @@ mod tests {
                 .with_neighbours(8)
                 .passes
         );
+        let wide = Method::parse("restir:sequential/radius=unclamped").unwrap();
+        assert_eq!(wide.name(), "restir:sequential/radius=unclamped");
+        assert_eq!(
+            preset(Some("sequential/radius=unclamped")).unwrap().passes,
+            Preset::named("sequential")
+                .unwrap()
+                .with_radius(RadiusRule::Unclamped)
+                .passes
+        );
+        assert_eq!(
+            preset(Some("hybrid/radius=clamped")).unwrap().passes,
+            Preset::named("hybrid").unwrap().passes
+        );
+        let refused = Method::parse("restir:hybrid/radius=wide").expect_err("radius=wide");
+        assert!(!refused.to_string().contains('\n'), "{refused}");
+        assert!(refused.to_string().contains("wide"), "{refused}");
         for bad in [
             "restir:hybrid/spatial-cap=0",
             "restir:hybrid/neighbours=0",
             "restir:hybrid/neighbours=2.5",
             "restir:hybrid/neighbours=99",
             "restir:hybrid/shade=some",
+            "restir:hybrid/radius=",
+            "restir:hybrid/radius=Unclamped",
             "restir:hybrid/cap=0",
             "restir:hybrid/cap=-1",
             "restir:hybrid/cap=nan",

@@ -188,14 +188,17 @@ impl Camera {
     /// the image plane keeps the view depth, so both axes give `2·max_d · pixels_per_unit(z)`.
     /// Points behind the eye get the lower bound.
     pub fn spatial_radius_px(&self, frame: u32, x1: Vec3, max_d: f32) -> f32 {
+        self.projected_radius_px(frame, x1, max_d)
+            .map_or(5.0, |r| r.clamp(5.0, 30.0))
+    }
+
+    /// The unclamped projection behind [`Self::spatial_radius_px`]: the screen length of `2·max_d`
+    /// at `x1`, or `None` when `x1` is behind the eye or the length is not finite.
+    pub fn projected_radius_px(&self, frame: u32, x1: Vec3, max_d: f32) -> Option<f32> {
         let b = self.basis(frame);
         let z = (x1 - b.eye).dot(b.forward);
         let r = 2.0 * max_d * self.pixels_per_unit(z);
-        if z > 0.0 && r.is_finite() {
-            r.clamp(5.0, 30.0)
-        } else {
-            5.0
-        }
+        (z > 0.0 && r.is_finite()).then_some(r)
     }
 }
 
@@ -358,11 +361,14 @@ mod tests {
             (r - along_right).abs() < 1e-3 * r && (r - along_up).abs() < 1e-3 * r,
             "{r} {along_right} {along_up}"
         );
+        assert_eq!(cam.projected_radius_px(3, x1, max_d), Some(r));
         assert_eq!(cam.spatial_radius_px(3, x1, 1e-4), 5.0);
         assert_eq!(cam.spatial_radius_px(3, x1, 10.0), 30.0);
-        assert_eq!(
-            cam.spatial_radius_px(3, cam.eye(3) - cam.forward(3), 0.1),
-            5.0
-        );
+        let small = cam.projected_radius_px(3, x1, 1e-4).unwrap();
+        let large = cam.projected_radius_px(3, x1, 10.0).unwrap();
+        assert!(small < 5.0 && large > 30.0, "{small} {large}");
+        let behind = cam.eye(3) - cam.forward(3);
+        assert_eq!(cam.spatial_radius_px(3, behind, 0.1), 5.0);
+        assert_eq!(cam.projected_radius_px(3, behind, 0.1), None);
     }
 }

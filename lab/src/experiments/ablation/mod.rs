@@ -10,7 +10,7 @@
 mod rows;
 mod tables;
 
-use rows::{Framing, NOT_KNOBS, Variation, variations};
+use rows::{CPU_ONLY, Framing, NOT_KNOBS, Variation, variations};
 
 use engine::RunConfig;
 use serde_json::json;
@@ -79,12 +79,12 @@ pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, E
         )));
     }
     let root = output_dir(&settings.out_dir("ablation"))?;
-    // Rao-Blackwellised shading has no Vulkan kernel: its rows run on the CPU backend only.
+    // Rao-Blackwellised shading and the unclamped radius have no Vulkan kernel: CPU rows only.
     let cpu = matches!(settings.backend, engine::Backend::Cpu);
     let rows: Vec<Variation> = bases
         .iter()
         .flat_map(|b| variations(b, settings.resolution))
-        .filter(|v| cpu || !v.spec.contains("/shade=all"))
+        .filter(|v| cpu || !CPU_ONLY.iter().any(|m| v.spec.contains(m)))
         .collect();
     let mut groups: Vec<String> = rows.iter().map(Variation::group).collect();
     groups.sort();

@@ -6,16 +6,13 @@ use sss::scene::Scene;
 pub const RESOLUTION_FACTORS: [u32; 2] = [2, 3];
 
 /// Knobs of issue 10's list that the engine does not have: named in the table's notes.
-pub const NOT_KNOBS: [(&str, &str); 2] = [
-    (
-        "spatial radius rule",
-        "not a knob yet: `Camera::spatial_radius_px` always clamps the projected 2·max d to [5, 30] px",
-    ),
-    (
-        "target p̂",
-        "not a knob yet: p̂ is the luminance of the contribution f (`SssDomain::target`) in both backends",
-    ),
-];
+pub const NOT_KNOBS: [(&str, &str); 1] = [(
+    "target p̂",
+    "not a knob yet: p̂ is the luminance of the contribution f (`SssDomain::target`) in both backends",
+)];
+
+/// Modifiers without a Vulkan kernel: their rows run on the CPU backend only.
+pub const CPU_ONLY: [&str; 2] = ["/shade=all", "/radius=unclamped"];
 
 /// How the camera moves over the trajectory.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -90,6 +87,7 @@ pub fn variations(base: &str, resolution: (u32, u32)) -> Vec<Variation> {
         here("spatial cap 3", "/spatial-cap=3"),
         here("neighbours 2", "/neighbours=2"),
         here("neighbours 8", "/neighbours=8"),
+        here("radius unclamped", "/radius=unclamped"),
         here("shade=all", "/shade=all"),
     ];
     for (label, moving, jitter) in [
@@ -133,6 +131,7 @@ mod tests {
             "spatial cap 1",
             "neighbours 2",
             "neighbours 8",
+            "radius unclamped",
             "shade=all",
             "static camera",
             "no jitter",

@@ -7,7 +7,7 @@ use crate::regions::Region;
 use crate::report::tables::{verdict_word, with_ci};
 use crate::telemetry;
 
-use super::rows::NOT_KNOBS;
+use super::rows::{CPU_ONLY, NOT_KNOBS};
 use super::{FRAMES, Measurement, Settings};
 
 /// One telemetry table per row ([`telemetry::markdown`]).
@@ -115,7 +115,12 @@ pub(super) fn markdown(measured: &[Measurement], scene: &str, settings: &Setting
         notes.push_str(&format!("- {knob}: {why}\n"));
     }
     if !matches!(settings.backend, engine::Backend::Cpu) {
-        notes.push_str("- shade=all: left out, it has no Vulkan kernel (CPU backend only)\n");
+        for modifier in CPU_ONLY {
+            notes.push_str(&format!(
+                "- {}: left out, it has no Vulkan kernel (CPU backend only)\n",
+                &modifier[1..]
+            ));
+        }
     }
     format!("{over_pt}{over_default}{mse_over_default}{notes}")
 }

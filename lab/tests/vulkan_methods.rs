@@ -221,23 +221,28 @@ fn gpu_runs_are_deterministic() {
     assert_ne!(bits(&one).0, bits(&other).0, "control: another seed");
 }
 
-/// Rao-Blackwellised shading has no Vulkan kernel: the backend refuses it with one line naming
-/// the preset, and the same preset with selected shading runs (control).
+/// Rao-Blackwellised shading and the unclamped spatial radius have no Vulkan kernel: the backend
+/// refuses each with one line naming the preset, and the same preset with selected shading and
+/// the clamped radius runs (control).
 #[test]
-fn rao_blackwellised_shading_is_refused_in_one_line() {
-    let Some(backend) = backend_or_skip("rao_blackwellised_shading_is_refused_in_one_line") else {
+fn cpu_only_modifiers_are_refused_in_one_line() {
+    let Some(backend) = backend_or_skip("cpu_only_modifiers_are_refused_in_one_line") else {
         return;
     };
     let scene = scene("bumpy", 16, 12);
-    let rb = restir::preset(Some("hybrid/shade=all")).unwrap();
-    let line = backend
-        .run(&scene, &rb, &config(0, 2))
-        .unwrap_err()
-        .to_string();
-    assert!(
-        !line.contains('\n') && line.contains("hybrid/shade=all") && line.contains("CPU"),
-        "{line}"
-    );
+    for spec in ["hybrid/shade=all", "hybrid/radius=unclamped"] {
+        let cpu_only = restir::preset(Some(spec)).unwrap();
+        let line = backend
+            .run(&scene, &cpu_only, &config(0, 2))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            !line.contains('\n') && line.contains(spec) && line.contains("CPU"),
+            "{line}"
+        );
+    }
+    let clamped = restir::preset(Some("hybrid/radius=clamped")).unwrap();
+    backend.run(&scene, &clamped, &config(0, 2)).unwrap();
     let selected = restir::preset(Some("hybrid/shade=selected")).unwrap();
     backend.run(&scene, &selected, &config(0, 2)).unwrap();
 }

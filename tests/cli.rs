@@ -901,6 +901,7 @@ fn ablation_runs_small() {
         "| temporal cap 20 | restir:reconnection/cap=20 | moving | 8×6 |",
         "| static camera, no jitter | restir:reconnection | static-unjittered | 8×6 |",
         "| 24×18 | restir:reconnection | moving | 24×18 |",
+        "| radius unclamped | restir:reconnection/radius=unclamped | moving | 8×6 |",
     ] {
         assert!(text.contains(row), "{row}: {text}");
     }
@@ -908,7 +909,7 @@ fn ablation_runs_small() {
     let json: Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
     assert_eq!(json["schema"], "reshift-ablation/1");
-    assert_eq!(json["rows"].as_array().unwrap().len(), 14);
+    assert_eq!(json["rows"].as_array().unwrap().len(), 15);
     for file in [
         "table.md",
         "telemetry.md",
@@ -929,8 +930,8 @@ fn ablation_runs_small() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// `experiment ablation --backend vulkan` (8×6, 2 replicas) leaves out the `shade=all` rows
-/// (no Vulkan kernel) and says so, and writes no telemetry (CPU only); without Vulkan it is a
+/// `experiment ablation --backend vulkan` (8×6, 2 replicas) leaves out the `shade=all` and
+/// `radius=unclamped` rows (no Vulkan kernel) and says so, and writes no telemetry (CPU only); without Vulkan it is a
 /// one-line error.
 #[test]
 fn ablation_on_the_vulkan_backend_leaves_out_what_it_cannot_run() {
@@ -945,6 +946,8 @@ fn ablation_on_the_vulkan_backend_leaves_out_what_it_cannot_run() {
             assert!(text.contains("| temporal cap 20 |"), "{text}");
             assert!(!text.contains("| shade=all |"), "{text}");
             assert!(text.contains("shade=all: left out"), "{text}");
+            assert!(!text.contains("| radius unclamped |"), "{text}");
+            assert!(text.contains("radius=unclamped: left out"), "{text}");
             let telemetry = std::fs::read_to_string(out.join("telemetry.md")).unwrap();
             assert!(telemetry.contains("No telemetry"), "{telemetry}");
         }

@@ -22,7 +22,7 @@ use restir::rng::{Stream, StreamKey};
 use sss::geometry::Ray;
 use sss::integrator::pt::{self, PtSettings};
 use sss::random_walk::{self, ExitLighting, Medium, MeshBoundary, estimate_exitant};
-use sss::scene::{GBuffer, Light, Scene};
+use sss::scene::{GBuffer, GPixel, Light, Scene};
 
 use crate::PipelineError;
 use crate::image::Image;
@@ -145,6 +145,42 @@ impl ExitLighting for SceneLighting<'_> {
     }
 }
 
+/// What the walks of one translucent pixel need: the object's mesh as the boundary, the outward
+/// normal at x1, the scene's lights with the pixel's light-selection stream, and the pixel's
+/// walk stream (both keyed by pixel, frame and seed).
+pub struct PixelWalk<'a> {
+    pub boundary: MeshBoundary<'a>,
+    pub n1: Vec3,
+    pub lighting: SceneLighting<'a>,
+    pub stream: Stream,
+}
+
+impl<'a> PixelWalk<'a> {
+    pub fn new(scene: &'a Scene, g: &GPixel, pixel: u32, frame: u32, seed: u64) -> PixelWalk<'a> {
+        let n = scene.geometry.geometric_normal(g.prim);
+        let inward_winding = n.dot(g.view) < 0.0;
+        let key = |purpose| StreamKey {
+            pixel,
+            frame,
+            pass: 0,
+            purpose,
+        };
+        PixelWalk {
+            boundary: MeshBoundary {
+                geometry: &scene.geometry,
+                object: g.object,
+                inward_winding,
+            },
+            n1: if inward_winding { -n } else { n },
+            lighting: SceneLighting {
+                scene,
+                selection: RefCell::new(key(PURPOSE_WALK_LIGHT).stream(seed)),
+            },
+            stream: key(PURPOSE_WALK).stream(seed),
+        }
+    }
+}
+
 /// Renders frame `gbuffer.frame`: translucent pixels by `spp` random walks each, the others by
 /// the path tracer at `spp`. Returns the image and the number of non-finite estimates (left out).
 pub fn render(
@@ -164,25 +200,12 @@ pub fn render(
         let Some(medium) = &media[material] else {
             continue;
         };
-        let n = scene.geometry.geometric_normal(g.prim);
-        let inward_winding = n.dot(g.view) < 0.0;
-        let boundary = MeshBoundary {
-            geometry: &scene.geometry,
-            object: g.object,
-            inward_winding,
-        };
-        let n1 = if inward_winding { -n } else { n };
-        let key = |purpose| StreamKey {
-            pixel: index as u32,
-            frame: gbuffer.frame,
-            pass: 0,
-            purpose,
-        };
-        let lighting = SceneLighting {
-            scene,
-            selection: RefCell::new(key(PURPOSE_WALK_LIGHT).stream(seed)),
-        };
-        let mut stream = key(PURPOSE_WALK).stream(seed);
+        let PixelWalk {
+            boundary,
+            n1,
+            lighting,
+            mut stream,
+        } = PixelWalk::new(scene, g, index as u32, gbuffer.frame, seed);
         let (mut sum, mut finite) = (DVec3::ZERO, 0u32);
         for _ in 0..spp {
             let l = estimate_exitant(

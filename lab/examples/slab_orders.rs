@@ -8,16 +8,13 @@
 //! `cargo run --release -p lab --example slab_orders -- [scene] [WxH] [replicas] [spp]`
 //! (defaults: `slab 40x30 8 32`, frame 15).
 
-use std::cell::RefCell;
-
 use glam::DVec3;
 use rayon::prelude::*;
-use restir::rng::StreamKey;
 use sss::integrator::single_scatter::{self, SingleScatterSettings};
-use sss::random_walk::{Medium, MeshBoundary, WalkEnd, WalkSettings, estimate_exitant_with};
+use sss::random_walk::{Medium, WalkEnd, WalkSettings, estimate_exitant_with};
 use sss::scene::{GBuffer, Scene};
 
-use engine::random_walk_method::{PURPOSE_WALK, PURPOSE_WALK_LIGHT, SceneLighting};
+use engine::random_walk_method::PixelWalk;
 use lab::methods::single_scatter::exit_lighting;
 use lab::regions::{Region, Regions};
 
@@ -47,26 +44,13 @@ fn main() {
                     let g = gbuffer.pixels[index].as_ref().unwrap();
                     let material = scene.objects[g.object as usize].material as usize;
                     let medium = media[material].unwrap();
-                    let n = scene.geometry.geometric_normal(g.prim);
-                    let inward_winding = n.dot(g.view) < 0.0;
-                    let boundary = MeshBoundary {
-                        geometry: &scene.geometry,
-                        object: g.object,
-                        inward_winding,
-                    };
-                    let n1 = if inward_winding { -n } else { n };
-                    let key = |purpose| StreamKey {
-                        pixel: index as u32,
-                        frame,
-                        pass: 0,
-                        purpose,
-                    };
-                    let lighting = SceneLighting {
-                        scene: &scene,
-                        selection: RefCell::new(key(PURPOSE_WALK_LIGHT).stream(seed)),
-                    };
+                    let PixelWalk {
+                        boundary,
+                        n1,
+                        lighting,
+                        mut stream,
+                    } = PixelWalk::new(&scene, g, index as u32, frame, seed);
                     let mut out = [DVec3::ZERO; 7];
-                    let mut stream = key(PURPOSE_WALK).stream(seed);
                     for _ in 0..spp {
                         let s = estimate_exitant_with(
                             &boundary,

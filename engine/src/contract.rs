@@ -182,6 +182,19 @@ twin::contract! {
         pub pad: [u32; 7],
     }
 
+    /// Push constants of `method_single_scatter`: `spp`, the sample this dispatch runs (one
+    /// dispatch per sample) and `SingleScatterSettings`' knobs the kernel takes (the
+    /// `ChannelSelection` code, the `PtHits` code of the diffusion's probe, `max_segments`).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+    pub struct SingleScatterParams in push_constant params {
+        pub spp: u32,
+        pub sample_index: u32,
+        pub channel_selection: u32,
+        pub hits: u32,
+        pub max_segments: u32,
+        pub pad: [u32; 3],
+    }
+
     /// `ImageSpaceParams::stage`: which half of a pass of `method_image_space` a dispatch runs.
     #[derive(Clone, Copy, Debug, PartialEq, Eq)]
     pub enum ImageSpaceStage in IMAGE_SPACE_STAGE {

@@ -11,8 +11,9 @@
 //! ([`SceneLighting`], the random walk's), whose light selection draws from a stream of its own
 //! per pixel ([`PURPOSE_SINGLE_SCATTER_LIGHT`]).
 //!
-//! CPU only for now: on Vulkan the method says so (its kernel is not written; the GLSL twin
-//! `sss/glsl/single_scatter.glsl` has only a parity kernel, lit by a fixed sun).
+//! On Vulkan its twin is the kernel `engine/glsl/method_single_scatter.glsl`
+//! ([`engine::vulkan::Renderer::single_scatter`]): the same sample and light-selection streams,
+//! one dispatch per sample.
 
 use std::cell::RefCell;
 
@@ -25,15 +26,14 @@ use sss::scene::{GBuffer, Scene};
 use super::estimator::{Entry, Estimator, Frame, Method, parse_spp};
 use super::pt::to_image;
 
-/// `purpose` of the exits' light-selection streams (ASCII "SS" + 2; the samples use
-/// `sss::integrator::single_scatter::PURPOSE_SINGLE_SCATTER`, "SS" + 1).
-pub const PURPOSE_SINGLE_SCATTER_LIGHT: u32 = 0x5353_0002;
+/// `purpose` of the exits' light-selection streams (the kernel's `PURPOSE_SINGLE_SCATTER_LIGHT`).
+pub use engine::purpose::SINGLE_SCATTER_LIGHT as PURPOSE_SINGLE_SCATTER_LIGHT;
 
 pub const ENTRY: Entry = Entry {
     family: "single-scatter",
     usage: "single-scatter[:spp][/channels=<scattering|uniform>]",
     about: "path-traced zero and single scattering, diffusion with R − R1 for the rest [000]; \
-            `/channels=uniform` draws distance channels uniformly (default σt·α CDF); CPU only",
+            `/channels=uniform` draws distance channels uniformly (default σt·α CDF)",
     build: |arg| Ok(Method::new(parse(arg)?)),
 };
 
@@ -88,13 +88,16 @@ impl Estimator for SingleScatter {
         frames: u32,
         seed: u64,
     ) -> Result<Frame, PipelineError> {
-        if let Backend::Vulkan(_) = backend {
-            return Err(PipelineError::Config(format!(
-                "{} has no Vulkan implementation yet (its kernel is not written); use --backend cpu",
-                self.name()
-            )));
-        }
         let frame = frames - 1;
+        if let Some(mut renderer) = backend.renderer() {
+            let (image, nonfinite) =
+                renderer.single_scatter(scene, frame, seed, self.spp, self.channels)?;
+            return Ok(Frame {
+                image,
+                frames_rendered: 1,
+                nonfinite,
+            });
+        }
         let gbuffer = GBuffer::render(scene, frame);
         let settings = SingleScatterSettings {
             channel: self.channels,

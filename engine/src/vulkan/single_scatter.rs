@@ -118,22 +118,7 @@ pub fn render_single_scatter(
     settings: &SingleScatterSettings,
     spp: u32,
 ) -> Result<SingleScatterImage, VulkanError> {
-    let kernel_diffusion = PtSettings {
-        hits: settings.diffusion.hits,
-        ..PtSettings::default()
-    };
-    if settings.diffusion != kernel_diffusion {
-        return Err(VulkanError::Binding(format!(
-            "single-scatter: the kernel's diffusion has the default techniques, radii and \
-             profile, not {:?}",
-            settings.diffusion
-        )));
-    }
-    let hits = match settings.diffusion.hits {
-        HitPolicy::UniformOne => PtHits::UniformOne,
-        HitPolicy::All => PtHits::All,
-    }
-    .code();
+    let hits = kernel_hits(&settings.diffusion)?;
     let count = frame.width * frame.height;
     // Vulkan buffers cannot be empty; a scene without materials has no pixel that reads one.
     let (media, profiles) = if media.0.is_empty() {
@@ -177,6 +162,26 @@ pub fn render_single_scatter(
     })
 }
 
+/// The `PtHits` code of `diffusion`'s hit policy, or a [`VulkanError::Binding`] when its other
+/// knobs are not the kernel's ([`PtSettings::default`]'s techniques, radii and profile).
+fn kernel_hits(diffusion: &PtSettings) -> Result<u32, VulkanError> {
+    let kernel = PtSettings {
+        hits: diffusion.hits,
+        ..PtSettings::default()
+    };
+    if *diffusion != kernel {
+        return Err(VulkanError::Binding(format!(
+            "single-scatter: the kernel's diffusion has the default techniques, radii and \
+             profile, not {diffusion:?}"
+        )));
+    }
+    Ok(match diffusion.hits {
+        HitPolicy::UniformOne => PtHits::UniformOne,
+        HitPolicy::All => PtHits::All,
+    }
+    .code())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -206,6 +211,28 @@ mod tests {
             size_of::<SingleScatterParams>() as u32,
             SINGLE_SCATTER.push_bytes
         );
+    }
+
+    /// Both hit policies reach the kernel; a diffusion with other techniques, radii or profile
+    /// than the kernel's is refused in one line.
+    #[test]
+    fn only_the_kernels_diffusion_is_accepted() {
+        for (hits, code) in [
+            (HitPolicy::All, PtHits::All),
+            (HitPolicy::UniformOne, PtHits::UniformOne),
+        ] {
+            let diffusion = PtSettings {
+                hits,
+                ..PtSettings::default()
+            };
+            assert_eq!(kernel_hits(&diffusion).unwrap(), code.code());
+        }
+        let dipole = PtSettings {
+            profile: sss::profile::ProfileKind::Dipole,
+            ..PtSettings::default()
+        };
+        let line = kernel_hits(&dipole).unwrap_err().to_string();
+        assert!(line.contains("Dipole") && !line.contains('\n'), "{line}");
     }
 
     /// `bumpy`'s translucent material gets the CPU's medium and profiles bit for bit, its Lambert

@@ -130,7 +130,8 @@ twin::contract! {
         pub has_previous: u32,
     }
 
-    /// A G-buffer pixel: `sss::scene::GPixel` with `valid = 0` where the CPU has `None`.
+    /// A G-buffer pixel: `sss::scene::GPixel` with `valid = 0` where the CPU has `None`; 64
+    /// bytes, so that a 1920×1080 G-buffer fits a 128 MiB storage-buffer range.
     #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
     pub struct GpuPixel as GPixel {
         pub position: [f32; 3],
@@ -141,9 +142,6 @@ twin::contract! {
         pub depth: f32,
         pub view: [f32; 3],
         pub valid: u32,
-        pub bary: [f32; 2],
-        pub pad0: u32,
-        pub pad1: u32,
     }
 
     /// Push constants of every pass kernel.

@@ -1,6 +1,8 @@
 #version 460
 // The shade pass: the GLSL twin of engine/src/cpu.rs `shade` per pixel. Translucent primary
-// hits get f(Y) W of their reservoir (reuse::shade); other primary hits get one sample of the
+// hits get f(Y) W of their reservoir (reuse::shade), or with params.shade (Shade::AllInputs) the
+// Rao-Blackwellised value of the frame's last reuse pass that resampled them, where one was
+// written (rao_blackwellised[pixel].w != 0); other primary hits get one sample of the
 // path tracer's estimator with the stream StreamKey { pixel, frame, pass, OPAQUE }, so a ReSTIR
 // image and a path-traced one estimate the same radiance everywhere. A non-finite value is
 // written as 0 with w = 1 (the CPU counts it in `nan_count`); so is a path-traced sample whose
@@ -47,7 +49,16 @@ void main() {
     SssDomain domain;
     vec3 value;
     if (domain_new(x1, pixel, frame_params.frame, params.pass, seed, domain)) {
-        value = reuse_shade(domain, reservoirs_in[pixel]);
+        // Selected shading binds no per-pixel values: the buffer is read only with params.shade.
+        vec4 rao_blackwellised_value = vec4(0.0);
+        if (params.shade != 0u) {
+            rao_blackwellised_value = rao_blackwellised[pixel];
+        }
+        if (rao_blackwellised_value.w != 0.0) {
+            value = rao_blackwellised_value.xyz;
+        } else {
+            value = reuse_shade(domain, reservoirs_in[pixel]);
+        }
     } else {
         Stream rng = stream_new(StreamKey(pixel, frame_params.frame, params.pass, PURPOSE_OPAQUE), seed);
         value = pt_estimate(x1, PT_HITS_ALL, rng);

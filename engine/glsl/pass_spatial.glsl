@@ -5,7 +5,8 @@
 // or on another object is not taken; each taken neighbour's confidence is capped when
 // confidence_cap > 0; the reservoirs are combined by restir/glsl/resample.glsl. Bindings:
 // the scene's, then PassKernel::Spatial's (engine/src/plan/kernels.rs); the diag holds (shifted,
-// failed, improved, error code of resample.glsl).
+// failed, improved, error code of resample.glsl). With params.shade (Shade::AllInputs) a pixel
+// the pass resampled gets its Rao-Blackwellised value in rao_blackwellised (w = 1).
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 // KEPT_HITS, LOOP_BUDGET_CUT, TEMPORAL_*, the purposes PURPOSE_*.
 #include "contract/engine.glsl"
@@ -90,9 +91,16 @@ void main() {
     }
     PixelReservoir result;
     uvec3 counts;
+    vec3 rao_blackwellised_value;
+    bool rao_blackwellise = params.shade != 0u;
     uint error = resample_step(n, params.shift, params.mis, PURPOSE_SELECT,
-                               params.collect_diagnostics != 0u, result, counts);
+                               params.collect_diagnostics != 0u, rao_blackwellise, result,
+                               counts, rao_blackwellised_value);
     reservoirs_out[pixel] = error == 0u ? result : stored;
+    // Step::run's Some(sum): this pass resampled the pixel.
+    if (rao_blackwellise && error == 0u) {
+        rao_blackwellised[pixel] = vec4(rao_blackwellised_value, 1.0);
+    }
     if (!loop_budget_intact(min(frame_params.width, 1u))) {
         error = LOOP_BUDGET_CUT;
     }

@@ -159,6 +159,9 @@ twin::contract! {
         pub bssrdf_samples: u32,
         pub shared_light: u32,
         pub collect_diagnostics: u32,
+        /// 1 for `Shade::AllInputs`: the reuse passes write the Rao-Blackwellised value of the
+        /// pixels they resample and shade paints it; 0 (`Shade::Selected`): neither touches it.
+        pub shade: u32,
     }
 
     /// Push constants of `method_pt`.

@@ -162,7 +162,9 @@ impl Frame<'_> {
         let scene = self.scene;
         if step.kernel == PassKernel::GBuffer {
             self.gbuffer = Some(GBuffer::render(scene, frame));
-            self.rao_blackwellised.fill(None);
+            if step.clears.contains(&Resource::RaoBlackwellised) {
+                self.rao_blackwellised.fill(None);
+            }
             return Ok(None);
         }
         let gbuffer = self

@@ -831,12 +831,13 @@ fn reuse_passes_match_the_cpu() {
                     .unwrap();
                 let out = Buffer::zeroed(&context, n * PixelReservoir::BYTES).unwrap();
                 let diag = Buffer::zeroed(&context, n * 16).unwrap();
+                let rao_blackwellised = Buffer::zeroed(&context, n * 16).unwrap();
                 let mut buffers: Vec<&Buffer> = gpu_scene.buffers().to_vec();
                 buffers.extend([&frame, &p1, &b1]);
                 if is_temporal {
                     buffers.extend([&p0, &b0]);
                 }
-                buffers.extend([&out, &diag]);
+                buffers.extend([&out, &diag, &rao_blackwellised]);
                 let mut params = PassParams::new(case.pass, Some(&case.spec), true);
                 if let Some(shift) = shift {
                     params.shift = shift;

@@ -1,6 +1,7 @@
 // The resampling driver [001 Alg. 2]: the GLSL twin of restir::resample::resample, specialised to
 // the SSS domain and the shifts of shift.glsl, and of the shared tail of engine::reuse
-// (Step::run: resample, resolve a deferred index, count shift diagnostics).
+// (Step::run: resample, resolve a deferred index, count shift diagnostics, sum the
+// Rao-Blackwellised value).
 //
 // The domains and reservoirs of one step are shader-private globals (index 0 = the receiver,
 // 1..n-1 the neighbours) so that no large array is copied per call. Errors (ResampleError) are
@@ -30,14 +31,19 @@ uint resample_error(uint kind, uint source) {
 // neighbours into the receiver's domain, one uniform number per input from `rng`, weights
 // w_i = m_i(y_i) p̂_r(y_i) W_i J_i; a failed shift or an empty input adds its confidence only.
 // Also returns Step::count_shifts' (shifted, failed, improved) from the forward shifts (the
-// shifts are deterministic, so re-applying them as the CPU does gives the same outcomes).
+// shifts are deterministic, so re-applying them as the CPU does gives the same outcomes), and,
+// when `rao_blackwellise`, the Rao-Blackwellised value Σ_i f(y_i) m_i W_i J_i over the inputs
+// with a positive weight (resample_observed's `observe` in Step::run; 0 otherwise).
 //
 // Every shift (forward T_{i->r}(x_i) at j = 0, back-shifts T_{r->j}(y) for j >= 1) runs through
 // the one shift_shift call of the inner loop: Mesa inlines every call site.
-uint resample_resample(uint n, ShiftSpec shift, uint mis, inout Stream rng,
-                       out PixelReservoir result, out uvec3 counts) {
+uint resample_resample(uint n, ShiftSpec shift, uint mis, bool rao_blackwellise,
+                       inout Stream rng, out PixelReservoir result, out uvec3 counts,
+                       out vec3 rao_blackwellised) {
     result = reservoir_empty();
     counts = uvec3(0u);
+    rao_blackwellised = vec3(0.0);
+    precise vec3 sum = vec3(0.0);
     if (n > MAX_DOMAINS) {
         return resample_error(RESAMPLE_TOO_MANY_DOMAINS, n);
     }
@@ -133,20 +139,30 @@ uint resample_resample(uint n, ShiftSpec shift, uint mis, inout Stream rng,
         if (code != 0u) {
             return resample_error(code, i);
         }
+        if (rao_blackwellise && w > 0.0) {
+            // Σ_i f(y_i) · m_i W_i J_i = E[f(Y)·W | inputs]   [001 Eq. 6]
+            precise float factor = m * source.ucw * jacobian;
+            precise vec3 term = domain_contribution(resample_domains[0], y) * factor;
+            sum = sum + term;
+        }
     }
     result = ris_finish(ris);
+    rao_blackwellised = sum;
     return 0u;
 }
 
 // Step::run: the receiver's stream (pixel, frame, pass, SELECT), resample, resolve a deferred
-// index of the selected sample, and the shift counts when `collect`. Returns the error code.
+// index of the selected sample, the shift counts when `collect`, and the Rao-Blackwellised value
+// when `rao_blackwellise` (Shade::AllInputs). Returns the error code.
 uint resample_step(uint n, uint shift_kind, uint mis, uint select_purpose, bool collect,
-                   out PixelReservoir result, out uvec3 counts) {
+                   bool rao_blackwellise, out PixelReservoir result, out uvec3 counts,
+                   out vec3 rao_blackwellised) {
     SssDomain receiver = resample_domains[0];
     ShiftSpec shift = shift_spec(shift_kind, receiver.material);
     Stream rng = stream_new(
         StreamKey(receiver.pixel, receiver.frame, receiver.pass, select_purpose), receiver.seed);
-    uint error = resample_resample(n, shift, mis, rng, result, counts);
+    uint error = resample_resample(n, shift, mis, rao_blackwellise, rng, result, counts,
+                                   rao_blackwellised);
     if (!collect) {
         counts = uvec3(0u);
     }

@@ -121,7 +121,7 @@ pub enum Shade {
     /// `Σ_i f(y_i)·m_i·W_i·J_i` over all its inputs (`restir::resample::resample_observed`):
     /// `E[f(Y)·W | inputs]`. Its luminance is `f(Y)·W`'s (`p̂ = luminance(f)`); it removes the
     /// colour noise of the one selected sample. The stored reservoirs, and so later frames, are
-    /// unchanged. CPU backend only.
+    /// unchanged. Both backends.
     AllInputs,
 }
 

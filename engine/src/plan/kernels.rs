@@ -38,6 +38,10 @@ pub enum Role {
     Diag,
     /// The shaded image, `vec4` per pixel (`w` = 1 where a value was written as 0).
     Image,
+    /// Per pixel, the Rao-Blackwellised value of this frame's last reuse pass that resampled it
+    /// (`Shade::AllInputs`), `vec4`: the value in `xyz`, `w` = 1 where a pass wrote one. The
+    /// reuse passes write it and shade reads it only when `PassParams::shade` is set.
+    RaoBlackwellised,
 }
 
 /// One storage buffer of a kernel: its role, its access, and its GLSL declaration, an array
@@ -92,19 +96,38 @@ const RESERVOIRS_OUT: KernelBuffer = buffer(
 );
 const DIAG: KernelBuffer = buffer(Role::Diag, Access::Write, "uvec4", "diag");
 const IMAGE: KernelBuffer = buffer(Role::Image, Access::Write, "vec4", "image");
+const RAO_BLACKWELLISED_OUT: KernelBuffer = buffer(
+    Role::RaoBlackwellised,
+    Access::Write,
+    "vec4",
+    "rao_blackwellised",
+);
+const RAO_BLACKWELLISED_IN: KernelBuffer = buffer(
+    Role::RaoBlackwellised,
+    Access::Read,
+    "vec4",
+    "rao_blackwellised",
+);
 
 const G_BUFFER_BUFFERS: [KernelBuffer; 1] = [G_BUFFER_OUT];
 const CANDIDATES_BUFFERS: [KernelBuffer; 3] = [G_BUFFER_IN, RESERVOIRS_OUT, DIAG];
-const TEMPORAL_BUFFERS: [KernelBuffer; 6] = [
+const TEMPORAL_BUFFERS: [KernelBuffer; 7] = [
     G_BUFFER_IN,
     RESERVOIRS_IN,
     PREVIOUS_G_BUFFER,
     PREVIOUS_RESERVOIRS,
     RESERVOIRS_OUT,
     DIAG,
+    RAO_BLACKWELLISED_OUT,
 ];
-const SPATIAL_BUFFERS: [KernelBuffer; 4] = [G_BUFFER_IN, RESERVOIRS_IN, RESERVOIRS_OUT, DIAG];
-const SHADE_BUFFERS: [KernelBuffer; 3] = [G_BUFFER_IN, RESERVOIRS_IN, IMAGE];
+const SPATIAL_BUFFERS: [KernelBuffer; 5] = [
+    G_BUFFER_IN,
+    RESERVOIRS_IN,
+    RESERVOIRS_OUT,
+    DIAG,
+    RAO_BLACKWELLISED_OUT,
+];
+const SHADE_BUFFERS: [KernelBuffer; 4] = [G_BUFFER_IN, RESERVOIRS_IN, IMAGE, RAO_BLACKWELLISED_IN];
 
 impl PassKernel {
     pub const ALL: [PassKernel; 5] = [

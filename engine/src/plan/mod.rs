@@ -12,7 +12,7 @@
 
 mod kernels;
 
-use shifts::preset::{PassSpec, Preset};
+use shifts::preset::{PassSpec, Preset, Shade};
 
 use crate::contract::PassParams;
 pub use kernels::{Access, KernelBuffer, PassKernel, Role, SCENE_BINDINGS};
@@ -35,6 +35,8 @@ pub enum Resource {
     /// The diagnostics of the preset's pass `i`.
     Diag(usize),
     Image,
+    /// The Rao-Blackwellised value per pixel ([`Role::RaoBlackwellised`]).
+    RaoBlackwellised,
 }
 
 /// One kernel dispatch of a frame.
@@ -50,6 +52,12 @@ pub struct Step {
     pub label: String,
     /// The kernel's buffers after the scene's, in binding order, as this step binds them.
     pub buffers: Vec<(Resource, Access)>,
+    /// The buffers zeroed before the kernel runs: the G-buffer step clears
+    /// [`Resource::RaoBlackwellised`] for [`Shade::AllInputs`] (a frame's reuse passes write
+    /// only the pixels they resample, shade paints the value where one was written).
+    pub clears: Vec<Resource>,
+    /// The preset's shade ([`PassParams::shade`]).
+    pub shade: Shade,
 }
 
 impl Step {
@@ -66,7 +74,16 @@ impl Step {
     /// The step's push constants; diagnostics are collected by the preset's passes only.
     pub fn params(&self, collect_diagnostics: bool) -> PassParams {
         let collect = collect_diagnostics && self.spec.is_some();
-        PassParams::new(self.pass, self.spec.as_ref(), collect)
+        PassParams {
+            shade: (self.shade == Shade::AllInputs) as u32,
+            ..PassParams::new(self.pass, self.spec.as_ref(), collect)
+        }
+    }
+
+    /// The buffers the step touches: those it binds, and those it clears (written).
+    fn touches(&self) -> impl Iterator<Item = (Resource, Access)> + '_ {
+        let cleared = self.clears.iter().map(|&r| (r, Access::Write));
+        self.buffers.iter().copied().chain(cleared)
     }
 }
 
@@ -79,13 +96,24 @@ pub struct Plan {
 }
 
 impl Plan {
-    /// Lowers `preset` (validated: candidates first): the G-buffer, the preset's passes (each
-    /// reads the reservoirs the previous one wrote and writes the other work buffer; the first
-    /// writes `Work(0)`), then shade of the last pass's reservoirs.
+    /// Lowers `preset` (validated: candidates first): the G-buffer (which clears the
+    /// Rao-Blackwellised values for [`Shade::AllInputs`]), the preset's passes (each reads the
+    /// reservoirs the previous one wrote and writes the other work buffer; the first writes
+    /// `Work(0)`), then shade of the last pass's reservoirs.
     pub fn lower(preset: &Preset) -> Plan {
-        let mut steps = vec![step(PassKernel::GBuffer, 0, None, "gbuffer".into(), |_| {
-            None
-        })];
+        let shade = preset.shade;
+        let mut gbuffer = step(
+            PassKernel::GBuffer,
+            0,
+            None,
+            "gbuffer".into(),
+            shade,
+            |_| None,
+        );
+        if shade == Shade::AllInputs {
+            gbuffer.clears.push(Resource::RaoBlackwellised);
+        }
+        let mut steps = vec![gbuffer];
         let mut input = Slot::Previous;
         for (index, spec) in preset.passes.iter().enumerate() {
             let output = Slot::Work(index % 2);
@@ -99,6 +127,7 @@ impl Plan {
                 index as u32,
                 Some(*spec),
                 spec.label(),
+                shade,
                 |role| match role {
                     Role::ReservoirsIn => Some(Resource::Reservoirs(input)),
                     Role::ReservoirsOut => Some(Resource::Reservoirs(output)),
@@ -114,12 +143,18 @@ impl Plan {
             passes,
             None,
             "shade".into(),
+            shade,
             |role| (role == Role::ReservoirsIn).then_some(Resource::Reservoirs(input)),
         ));
         Plan {
             steps,
             final_reservoirs: input,
         }
+    }
+
+    /// Whether a step clears `resource` (then every frame writes it before reading it).
+    pub fn clears(&self, resource: Resource) -> bool {
+        self.steps.iter().any(|s| s.clears.contains(&resource))
     }
 
     /// The steps of the preset's passes, with the pass index.
@@ -139,18 +174,18 @@ impl Plan {
         self.steps
             .iter()
             .map(|step| {
-                let conflict = step.buffers.iter().any(|(resource, access)| {
-                    written.contains(resource)
-                        || (*access == Access::Write && read.contains(resource))
+                let conflict = step.touches().any(|(resource, access)| {
+                    written.contains(&resource)
+                        || (access == Access::Write && read.contains(&resource))
                 });
                 if conflict {
                     read.clear();
                     written.clear();
                 }
-                for (resource, access) in &step.buffers {
+                for (resource, access) in step.touches() {
                     match access {
-                        Access::Read => read.push(*resource),
-                        Access::Write => written.push(*resource),
+                        Access::Read => read.push(resource),
+                        Access::Write => written.push(resource),
                     }
                 }
                 conflict
@@ -165,6 +200,7 @@ fn step(
     pass: u32,
     spec: Option<PassSpec>,
     label: String,
+    shade: Shade,
     bind: impl Fn(Role) -> Option<Resource>,
 ) -> Step {
     let buffers = kernel
@@ -176,6 +212,7 @@ fn step(
                 Role::PreviousGBuffer => Resource::PreviousGBuffer,
                 Role::PreviousReservoirs => Resource::Reservoirs(Slot::Previous),
                 Role::Image => Resource::Image,
+                Role::RaoBlackwellised => Resource::RaoBlackwellised,
                 role => bind(role).unwrap_or_else(|| {
                     unreachable!("{} binds {role:?} in a step of its own", kernel.name())
                 }),
@@ -189,6 +226,8 @@ fn step(
         spec,
         label,
         buffers,
+        clears: Vec::new(),
+        shade,
     }
 }
 
@@ -249,8 +288,11 @@ mod tests {
                 (Resource::Reservoirs(Slot::Previous), Access::Read),
                 (Resource::Reservoirs(Slot::Work(1)), Access::Write),
                 (Resource::Diag(1), Access::Write),
+                (Resource::RaoBlackwellised, Access::Write),
             ]
         );
+        assert!(plan.steps.iter().all(|s| s.clears.is_empty()));
+        assert_eq!(temporal.params(false).shade, 0);
         assert_eq!(plan.final_reservoirs, Slot::Work(1));
         assert_eq!(
             plan.steps[3].resource(Role::ReservoirsIn),
@@ -286,6 +328,8 @@ mod tests {
                     spec: None,
                     label: String::new(),
                     buffers,
+                    clears: Vec::new(),
+                    shade: Shade::Selected,
                 })
                 .collect(),
             final_reservoirs: Slot::Work(0),
@@ -312,6 +356,35 @@ mod tests {
             plan(vec![vec![(a, w)], vec![(a, r)], vec![(b, r)], vec![(a, r)]]).waits(),
             [false, true, false, false]
         );
+    }
+
+    /// Rao-Blackwellised shading: the G-buffer step clears the per-pixel values, the reuse
+    /// passes write them and shade reads them, every step says so in its push constants, and
+    /// the waits are those of selected shading (every step after the G-buffer already waits).
+    #[test]
+    fn shade_all_clears_writes_and_reads_the_rao_blackwellised_values() {
+        let selected = Preset::named("hybrid").unwrap();
+        let all = Preset {
+            shade: Shade::AllInputs,
+            ..selected.clone()
+        };
+        let plan = Plan::lower(&all);
+        assert_eq!(plan.steps[0].clears, [Resource::RaoBlackwellised]);
+        assert!(plan.steps[1..].iter().all(|s| s.clears.is_empty()));
+        assert!(plan.steps.iter().all(|s| s.params(false).shade == 1));
+        let rb = |s: &Step| {
+            s.buffers
+                .iter()
+                .find(|(r, _)| *r == Resource::RaoBlackwellised)
+                .map(|(_, a)| *a)
+        };
+        let accesses: Vec<_> = plan.steps.iter().map(rb).collect();
+        let reuse = plan.steps.len() - 3;
+        let mut want = vec![None, None];
+        want.extend(vec![Some(Access::Write); reuse]);
+        want.push(Some(Access::Read));
+        assert_eq!(accesses, want);
+        assert_eq!(plan.waits(), Plan::lower(&selected).waits());
     }
 
     /// Rotation: the work buffers are the two others, and each frame's final buffer is the next

@@ -57,6 +57,9 @@ pub(super) struct FrameRun<'a> {
     /// One per preset pass.
     diags: Vec<Buffer>,
     image: Buffer,
+    /// [`Resource::RaoBlackwellised`]: a texel per pixel where the plan clears it
+    /// (`Shade::AllInputs`), else one texel that no kernel reads or writes.
+    rao_blackwellised: Buffer,
     /// Image, then each pass's diag, then the final reservoirs.
     readback: Allocation,
     descriptor_pool: vk::DescriptorPool,
@@ -126,6 +129,11 @@ impl<'a> FrameRun<'a> {
             ],
             diags: Vec::new(),
             image: zeroed(n * TEXEL)?,
+            rao_blackwellised: zeroed(if plan.clears(Resource::RaoBlackwellised) {
+                n * TEXEL
+            } else {
+                TEXEL
+            })?,
             readback: Allocation::new(
                 &context.shared,
                 ((passes + 1) * n * TEXEL + reservoir_bytes) as u64,
@@ -249,6 +257,7 @@ impl<'a> FrameRun<'a> {
             Resource::Reservoirs(slot) => &self.reservoirs[rotation.buffer(slot)],
             Resource::Diag(pass) => &self.diags[pass],
             Resource::Image => &self.image,
+            Resource::RaoBlackwellised => &self.rao_blackwellised,
         }
     }
 
@@ -318,6 +327,9 @@ impl<'a> FrameRun<'a> {
                 ),
             );
             for (section, (step, wait)) in self.plan.steps.iter().zip(&self.waits).enumerate() {
+                if !step.clears.is_empty() {
+                    self.clear(cb, &step.clears, current, rotation);
+                }
                 if *wait {
                     barrier(
                         device,
@@ -391,6 +403,38 @@ impl<'a> FrameRun<'a> {
                 .map_err(api("vkEndCommandBuffer"))?;
         }
         Ok(recorded)
+    }
+
+    /// Records zeroing `resources` after the compute work before it and before the compute work
+    /// after it.
+    ///
+    /// # Safety
+    /// `cb` is recording.
+    unsafe fn clear(
+        &self,
+        cb: vk::CommandBuffer,
+        resources: &[Resource],
+        current: usize,
+        rotation: Rotation,
+    ) {
+        let device = &self.context.shared.device;
+        let compute = (
+            vk::PipelineStageFlags::COMPUTE_SHADER,
+            vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE,
+        );
+        let transfer = (
+            vk::PipelineStageFlags::TRANSFER,
+            vk::AccessFlags::TRANSFER_WRITE,
+        );
+        // SAFETY: `cb` is recording (the caller's contract); the buffers are this run's.
+        unsafe {
+            barrier(device, cb, compute, transfer);
+            for &resource in resources {
+                let buffer = self.buffer(resource, current, rotation).allocation.buffer;
+                device.cmd_fill_buffer(cb, buffer, 0, vk::WHOLE_SIZE, 0);
+            }
+            barrier(device, cb, transfer, compute);
+        }
     }
 
     /// Records one timed step: bind, push, dispatch.

@@ -151,8 +151,9 @@ pub fn render_pt_hits(
     }
     read_image(frame, &output)
 }
-/// The shade pass on one frame: `f(Y)·W` of `reservoirs` (`PixelReservoir`s) on translucent
-/// pixels, one path-traced sample elsewhere, keyed by `pass` (the kernel of [`SHADE`]).
+/// The shade pass on one frame with selected shading: `f(Y)·W` of `reservoirs`
+/// (`PixelReservoir`s) on translucent pixels, one path-traced sample elsewhere, keyed by `pass`
+/// (the kernel of [`SHADE`]).
 pub fn shade(
     context: &mut Context,
     kernel: &Kernel,
@@ -162,7 +163,9 @@ pub fn shade(
 ) -> Result<DeviceImage, VulkanError> {
     let count = frame.width * frame.height;
     let output = Buffer::zeroed(context, count as usize * 16)?;
-    let buffers = bindings(frame, &[reservoirs, &output])?;
+    // Selected shading reads no Rao-Blackwellised value: one texel stands in for the buffer.
+    let unread = Buffer::zeroed(context, 16)?;
+    let buffers = bindings(frame, &[reservoirs, &output, &unread])?;
     let params = PassParams::new(pass, None, false);
     context.dispatch(
         kernel,

@@ -28,8 +28,7 @@ pub const ENTRY: Entry = Entry {
             `/neighbours=<n>` sets the spatial passes' neighbour count; \
             `/radius=unclamped` drops the spatial disk's [5, 30] px clamp (floor 1 px; CPU only); \
             `/target=<mean|l2>` sets p̂ to the channel mean or the L2 norm of f (default luminance; CPU only); \
-            `/shade=all` paints the last reuse pass's Rao-Blackwellised value over all its inputs \
-            (CPU backend only)",
+            `/shade=all` paints the last reuse pass's Rao-Blackwellised value over all its inputs",
     build: |arg| Ok(Method::new(Restir(preset(arg)?))),
 };
 

@@ -79,7 +79,8 @@ pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, E
         )));
     }
     let root = output_dir(&settings.out_dir("ablation"))?;
-    // Rao-Blackwellised shading and the unclamped radius have no Vulkan kernel: CPU rows only.
+    // The unclamped radius and the targets other than the luminance have no Vulkan kernel: CPU
+    // rows only.
     let cpu = matches!(settings.backend, engine::Backend::Cpu);
     let rows: Vec<Variation> = bases
         .iter()

@@ -6,12 +6,7 @@ use sss::scene::Scene;
 pub const RESOLUTION_FACTORS: [u32; 2] = [2, 3];
 
 /// Modifiers without a Vulkan kernel: their rows run on the CPU backend only.
-pub const CPU_ONLY: [&str; 4] = [
-    "/shade=all",
-    "/radius=unclamped",
-    "/target=mean",
-    "/target=l2",
-];
+pub const CPU_ONLY: [&str; 3] = ["/radius=unclamped", "/target=mean", "/target=l2"];
 
 /// How the camera moves over the trajectory.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -4,10 +4,11 @@
 //!
 //! `cargo bench -p engine --bench vulkan`. Frames default to 4 (frame 0 has no temporal
 //! history; the table averages over all frames run); `RESHIFT_BENCH_FRAMES` (1..=16) changes
-//! them and `RESHIFT_BENCH_SIZES` (e.g. `512x512,1920x1080`) the resolutions.
+//! them, `RESHIFT_BENCH_SIZES` (e.g. `512x512,1920x1080`) the resolutions, and
+//! `RESHIFT_BENCH_SHADE=all` runs every preset with Rao-Blackwellised shading (`<preset>/shade=all`).
 
 use engine::vulkan::VulkanError;
-use engine::{Backend, PipelineError, Preset, RunConfig};
+use engine::{Backend, PipelineError, Preset, RunConfig, Shade};
 use sss::scene::Scene;
 
 fn frames() -> Result<u32, String> {
@@ -19,6 +20,14 @@ fn frames() -> Result<u32, String> {
                 "RESHIFT_BENCH_FRAMES = {v:?}: need an integer in 1..=16"
             )),
         },
+    }
+}
+
+fn shade() -> Result<Shade, String> {
+    match std::env::var("RESHIFT_BENCH_SHADE").as_deref() {
+        Err(_) | Ok("selected") => Ok(Shade::Selected),
+        Ok("all") => Ok(Shade::AllInputs),
+        Ok(v) => Err(format!("RESHIFT_BENCH_SHADE = {v:?}: need selected or all")),
     }
 }
 
@@ -37,7 +46,7 @@ fn sizes() -> Result<Vec<(u32, u32)>, String> {
 }
 
 fn main() -> Result<(), String> {
-    let (frames, sizes) = (frames()?, sizes()?);
+    let (frames, sizes, shade) = (frames()?, sizes()?, shade()?);
     let backend = match Backend::vulkan(None, false) {
         Ok(b) => b,
         Err(e) => {
@@ -63,6 +72,14 @@ fn main() -> Result<(), String> {
             collect_diagnostics: false,
         };
         for preset in Preset::all() {
+            let preset = match shade {
+                Shade::Selected => preset,
+                Shade::AllInputs => Preset {
+                    name: format!("{}/shade=all", preset.name),
+                    shade,
+                    ..preset
+                },
+            };
             let run = match backend.run(&scene, &preset, &config) {
                 Ok(run) => run,
                 // lavapipe's maxStorageBufferRange is 128 MiB: 80-byte-per-pixel buffers at

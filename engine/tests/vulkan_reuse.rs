@@ -712,18 +712,91 @@ fn cpu_reuse(
     previous: Option<&Previous>,
     spec: &PassSpec,
 ) -> Vec<(PixelReservoir, [u32; 4])> {
-    (0..input.gbuffer.pixels.len() as u32)
-        .map(|pixel| {
-            let Reused {
-                reservoir,
-                shifts: c,
-                ..
-            } = reuse::pass(input, previous, pixel, spec, Shade::Selected)
-                .expect("only reuse passes are compared")
-                .unwrap();
-            (reservoir, [c.shifted, c.failed, c.improved, 0])
+    cpu_reused(input, previous, spec, Shade::Selected)
+        .into_iter()
+        .map(|r| {
+            let c = r.shifts;
+            (r.reservoir, [c.shifted, c.failed, c.improved, 0])
         })
         .collect()
+}
+
+/// The CPU's reuse pass with `shade`, per pixel.
+fn cpu_reused(
+    input: &PassInput,
+    previous: Option<&Previous>,
+    spec: &PassSpec,
+    shade: Shade,
+) -> Vec<Reused> {
+    (0..input.gbuffer.pixels.len() as u32)
+        .map(|pixel| {
+            reuse::pass(input, previous, pixel, spec, shade)
+                .expect("only reuse passes are compared")
+                .unwrap()
+        })
+        .collect()
+}
+
+/// Bound on the relative error `max_c |g_c − c_c| / max_c |c_c|` of a pixel's Rao-Blackwellised
+/// value: a sum of ≤ 5 terms `f(y_i)·m_i·W_i·J_i`, each factor within ~1e-5 relative as the
+/// [`PASS_BOUNDS`] (`f` carries the profile's `exp`). Seen: ≤ 4.3e-6 (`bumpy`, `half-shadow`,
+/// every reuse pass of the presets, 208–1 024 pixels each); bound 1e-4. The control (the
+/// selected `f(Y)·W` in its place) is rejected on ≥ 21 % of the pixels where the CPU shifted.
+const RAO_BLACKWELLISED_BOUND: f64 = 1e-4;
+
+/// `max_c |got_c − want_c| / max_c |want_c|` (0 when equal, infinite against a zero value).
+fn vector_error(got: [f32; 3], want: glam::Vec3) -> f64 {
+    let scale = want.abs().max_element() as f64;
+    let diff = (0..3)
+        .map(|c| (got[c] as f64 - want[c] as f64).abs())
+        .fold(0.0, f64::max);
+    if diff == 0.0 {
+        0.0
+    } else if scale > 0.0 && diff.is_finite() {
+        diff / scale
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// Of the pixels where the CPU's reservoir (integer fields) and diag agree with the GPU's and `want` has a
+/// value: how many, and how many of the GPU's values are absent or beyond
+/// [`RAO_BLACKWELLISED_BOUND`]; and the worst error within it.
+fn compare_rao_blackwellised(
+    cpu: &[(PixelReservoir, [u32; 4])],
+    want: &[Option<glam::Vec3>],
+    reservoirs: &[PixelReservoir],
+    diag: &[[u32; 4]],
+    values: &[[f32; 4]],
+) -> (usize, usize, f64) {
+    let (mut compared, mut beyond, mut worst) = (0, 0, 0.0f64);
+    for (((c, w), (r, d)), v) in cpu
+        .iter()
+        .zip(want)
+        .zip(reservoirs.iter().zip(diag))
+        .zip(values)
+    {
+        let key =
+            |r: &PixelReservoir| (r.has_sample, (r.has_sample != 0).then(|| sample_key(&r.y)));
+        let same = key(&c.0) == key(r) && c.1 == *d;
+        match w {
+            Some(w) if same => {
+                compared += 1;
+                let error = if v[3] == 1.0 {
+                    vector_error([v[0], v[1], v[2]], *w)
+                } else {
+                    f64::INFINITY
+                };
+                if error > RAO_BLACKWELLISED_BOUND {
+                    beyond += 1;
+                } else {
+                    worst = worst.max(error);
+                }
+            }
+            _ => {}
+        }
+    }
+    (compared, beyond, worst)
 }
 
 /// Bounds of the pass comparison: those of [`SHIFT_BOUNDS`] for the stored sample; the
@@ -782,6 +855,10 @@ fn compare_pass(
 /// pixel's reservoir and diag are compared. Negative controls: the GPU run with a wrong shift
 /// index, with another seed, and (temporal passes) with the other temporal cap must differ in
 /// more than 2 × [`PASS_MISMATCH_FRACTION`] of the pixels where the CPU shifted a sample.
+/// With `PassParams::shade = 0` the kernels leave the Rao-Blackwellised buffer untouched; with 1
+/// they write the same reservoirs and diag, a value exactly on the pixels `Reused` has one, each
+/// within [`RAO_BLACKWELLISED_BOUND`] of the CPU's where the decisions agree (control: the
+/// selected value in its place).
 #[test]
 fn reuse_passes_match_the_cpu() {
     let opened = kernel_or_skip("reuse pass parity", TEMPORAL).map(|(context, temporal)| {
@@ -825,7 +902,7 @@ fn reuse_passes_match_the_cpu() {
             };
             let cpu = cpu_reuse(&input, Some(&previous), &case.spec);
             let is_temporal = matches!(case.spec, PassSpec::Temporal { .. });
-            let mut run = |seed: u64, shift: Option<u32>, cap: Option<f32>| {
+            let mut run = |seed: u64, shift: Option<u32>, cap: Option<f32>, shade: u32| {
                 let frame = FrameParams::new(&scene, 1, Some(0), seed)
                     .buffer(&context)
                     .unwrap();
@@ -839,6 +916,7 @@ fn reuse_passes_match_the_cpu() {
                 }
                 buffers.extend([&out, &diag, &rao_blackwellised]);
                 let mut params = PassParams::new(case.pass, Some(&case.spec), true);
+                params.shade = shade;
                 if let Some(shift) = shift {
                     params.shift = shift;
                 }
@@ -858,9 +936,14 @@ fn reuse_passes_match_the_cpu() {
                     out.read::<PixelReservoir>().unwrap(),
                     diag.read::<[u32; 4]>().unwrap(),
                     timing.gpu_seconds,
+                    rao_blackwellised.read::<[f32; 4]>().unwrap(),
                 )
             };
-            let (reservoirs, diag, seconds) = run(SEED, None, None);
+            let (reservoirs, diag, seconds, untouched) = run(SEED, None, None, 0);
+            assert!(
+                untouched.iter().all(|v| *v == [0.0; 4]),
+                "{name}: selected shading wrote Rao-Blackwellised values"
+            );
             let tally = compare_pass(&cpu, &reservoirs, &diag, false);
             let label = case.spec.label();
             let moved = cpu
@@ -921,8 +1004,60 @@ fn reuse_passes_match_the_cpu() {
             if wrong_cap.is_some() {
                 controls.push(("other temporal cap", SEED, None, wrong_cap));
             }
+            // Rao-Blackwellised shading (PassParams::shade = 1): the same reservoirs and diag,
+            // and on the pixels the CPU resampled its value within RAO_BLACKWELLISED_BOUND.
+            // Control: the CPU's selected value f(Y)·W in its place is rejected on the pixels
+            // where the CPU shifted a sample.
+            let (rb_reservoirs, rb_diag, _, values) = run(SEED, None, None, 1);
+            assert_eq!(
+                (bytemuck::cast_slice::<_, u8>(&rb_reservoirs), &rb_diag),
+                (bytemuck::cast_slice::<_, u8>(&reservoirs), &diag),
+                "{name} {label}: shade = 1 changed the reservoirs or diag"
+            );
+            let want: Vec<Option<glam::Vec3>> =
+                cpu_reused(&input, Some(&previous), &case.spec, Shade::AllInputs)
+                    .iter()
+                    .map(|r| r.rao_blackwellised)
+                    .collect();
+            // Whether a pass resamples a pixel depends on the G-buffers only (bit-identical).
+            let presence = want
+                .iter()
+                .zip(&values)
+                .filter(|(w, v)| w.is_some() != (v[3] == 1.0))
+                .count();
+            assert_eq!(
+                presence, 0,
+                "{name} {label}: values written on other pixels"
+            );
+            let (compared, beyond, worst) =
+                compare_rao_blackwellised(&cpu, &want, &reservoirs, &diag, &values);
+            eprintln!(
+                "pass parity, {name} {label}: Rao-Blackwellised values: {compared} compared, {beyond} absent or beyond {RAO_BLACKWELLISED_BOUND}, worst within {worst:.2e}"
+            );
+            assert!(
+                compared > 0 && beyond == 0,
+                "{name} {label}: {beyond} Rao-Blackwellised values absent or beyond the bound"
+            );
+            let selected: Vec<Option<glam::Vec3>> = (0..n as u32)
+                .map(|pixel| {
+                    let (domain, _) = input.domain(pixel)?;
+                    want[pixel as usize]?;
+                    let shifted = cpu[pixel as usize].1[0] > 0;
+                    shifted.then(|| reuse::shade(&domain, &cpu[pixel as usize].0))
+                })
+                .collect();
+            let (shifted, rejected, _) =
+                compare_rao_blackwellised(&cpu, &selected, &reservoirs, &diag, &values);
+            let rejected = rejected as f64 / shifted.max(1) as f64;
+            eprintln!(
+                "pass parity, {name} {label}: control (selected f(Y)·W) rejected {rejected:.3}"
+            );
+            assert!(
+                rejected > 2.0 * PASS_MISMATCH_FRACTION,
+                "{name} {label}: control, the selected value passes for the Rao-Blackwellised one"
+            );
             for (control, seed, shift, cap) in controls {
-                let (reservoirs, diag, _) = run(seed, shift, cap);
+                let (reservoirs, diag, _, _) = run(seed, shift, cap, 0);
                 let rejected = compare_pass(&cpu, &reservoirs, &diag, true).rejected_fraction();
                 eprintln!(
                     "pass parity, {name} {label}: control ({control}) rejected {rejected:.3}"

@@ -298,7 +298,7 @@ mod tests {
         assert_eq!(offset_of!(GpuPixel, prim), 28);
         assert_eq!(offset_of!(GpuPixel, depth), 44);
         assert_eq!(offset_of!(GpuPixel, valid), 60);
-        assert_eq!(GBUFFER.push_bytes, 32);
+        assert_eq!(GBUFFER.push_bytes, 36);
     }
 
     /// G-buffer entries round-trip through the device layout, misses included.

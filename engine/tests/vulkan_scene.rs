@@ -15,7 +15,8 @@ use std::path::Path;
 
 use bytemuck::{Pod, Zeroable};
 use engine::vulkan::{
-    Buffer, Context, FrameParams, GBUFFER, GpuPixel, GpuScene, Kernel, Shader, groups_for,
+    Buffer, Context, FrameParams, GBUFFER, GpuPixel, GpuScene, Kernel, PassParams, Shader,
+    groups_for,
 };
 use glam::Vec3;
 use restir::rng::{Stream, StreamKey};
@@ -151,7 +152,7 @@ fn gpu_gbuffer(
         .dispatch(
             kernel,
             &buffers,
-            &[0u8; 32],
+            bytemuck::bytes_of(&PassParams::default()),
             [groups_for(count, GBUFFER.local_size), 1, 1],
         )
         .unwrap();

@@ -5,7 +5,8 @@
 //! `cargo bench -p engine --bench vulkan`. Frames default to 4 (frame 0 has no temporal
 //! history; the table averages over all frames run); `RESHIFT_BENCH_FRAMES` (1..=16) changes
 //! them, `RESHIFT_BENCH_SIZES` (e.g. `512x512,1920x1080`) the resolutions, and
-//! `RESHIFT_BENCH_SHADE=all` runs every preset with Rao-Blackwellised shading (`<preset>/shade=all`).
+//! `RESHIFT_BENCH_SHADE=all` runs every preset with Rao-Blackwellised shading (`<preset>/shade=all`),
+//! `RESHIFT_BENCH_PRESETS` (e.g. `hybrid,sequential`) only the presets it names.
 
 use engine::vulkan::VulkanError;
 use engine::{Backend, PipelineError, Preset, RunConfig, Shade};
@@ -31,6 +32,20 @@ fn shade() -> Result<Shade, String> {
     }
 }
 
+/// The presets to run: all, or those `RESHIFT_BENCH_PRESETS` names.
+fn presets() -> Result<Vec<Preset>, String> {
+    match std::env::var("RESHIFT_BENCH_PRESETS") {
+        Err(_) => Ok(Preset::all()),
+        Ok(names) => names
+            .split(',')
+            .map(|n| {
+                Preset::named(n.trim())
+                    .ok_or_else(|| format!("RESHIFT_BENCH_PRESETS: no preset {n:?}"))
+            })
+            .collect(),
+    }
+}
+
 fn sizes() -> Result<Vec<(u32, u32)>, String> {
     let text = std::env::var("RESHIFT_BENCH_SIZES").unwrap_or_else(|_| "512x512,1920x1080".into());
     text.split(',')
@@ -46,7 +61,7 @@ fn sizes() -> Result<Vec<(u32, u32)>, String> {
 }
 
 fn main() -> Result<(), String> {
-    let (frames, sizes, shade) = (frames()?, sizes()?, shade()?);
+    let (frames, sizes, shade, presets) = (frames()?, sizes()?, shade()?, presets()?);
     let backend = match Backend::vulkan(None, false) {
         Ok(b) => b,
         Err(e) => {
@@ -71,7 +86,7 @@ fn main() -> Result<(), String> {
             frames,
             collect_diagnostics: false,
         };
-        for preset in Preset::all() {
+        for preset in presets.iter().cloned() {
             let preset = match shade {
                 Shade::Selected => preset,
                 Shade::AllInputs => Preset {

@@ -1,0 +1,443 @@
+//! `single-scatter/restir` (ReSTIR on seed 000's boundary term, `sss::integrator::boundary_reuse`)
+//! is unbiased: its boundary term after several frames of a moving camera is equivalent, per
+//! region and colour channel, to the plain estimator's boundary term, with the protocol of
+//! `lab::bias` (as `unbiased.rs`), and a deliberately wrong Jacobian is caught.
+//!
+//! * Estimand: per region and channel (red, green, blue, luminance) the relative bias of the
+//!   region mean of the boundary term at frame [`FRAMES`] − 1. Only the boundary term differs
+//!   between the two methods (single and multiple scattering are the plain estimator's, drawn
+//!   from the same streams; `the_method_is_the_reused_boundary_plus_the_plain_rest` checks
+//!   the assembly bit for bit), so it is tested alone, without the other orders' noise.
+//! * Replicas: [`FRAMES`] = 8 frames of `slab`'s trajectory at 32 × 24 (the light behind the slab
+//!   shines through it: the boundary term is large), replica `i` with seed `i`, every frame with
+//!   candidates, temporal and 3 × 3 spatial reuse; the last frame is tested.
+//! * Reference: the plain estimator's boundary term (`single_scatter::path_traced`, its `zero`,
+//!   next-event estimation + escape direction with the balance heuristic: an independent
+//!   estimator of the same integral) at the same frame, [`REFERENCE_BATCHES`] batches of
+//!   [`SPP_PER_BATCH`] samples under a seed no replica uses.
+//! * Test: "equivalent within ±δ at 1 − α" with δ = 2%, α = 0.01 (99% CIs; Holm across rows
+//!   decides "biased"), every row must be equivalent.
+//! * N: the smallest N with a planned probability ≥ [`FAMILY_POWER`] that an unbiased method is
+//!   equivalent in all rows (`restir::stats::replicas_for`, Bonferroni over rows), from the
+//!   per-replica CVs [`CV`] (measured with N = 256 by `measure_cvs`, `--ignored`) times
+//!   [`CV_MARGIN`] and the reference's relative standard error bound [`REFERENCE_REL_SE`].
+//!   `power_plan` prints the plan and its power to detect a +3% bias.
+//! * Negative control, same N: the same reuse with `J × 1.01`, whose error compounds over the
+//!   passes and frames to +2.8% … +2.9% (near δ; `J × 1.03` gives +9.8%), must be Biased in at
+//!   least one row.
+//! * Measured (2026-11-24, N = 133): −0.50% … −0.28% per channel, CIs within ±1.3%. A probe with
+//!   16× the samples put the reservoir's candidates without reuse (`f/p`) at −0.23% and the plain
+//!   estimator's own next-event estimation alone at −0.15% of the reference (each ±0.1%), so the
+//!   residual ≈ 0.2% lies between the plain estimator's two techniques (or in the reference,
+//!   s.e. 0.08%), not in the reuse; far below δ.
+//! * Cost: ≈ 10 s wall on 2 shared cores (reference 64 × 64 spp of 244 pixels, 2 × 133 replicas
+//!   of 8 frames).
+
+use std::cell::RefCell;
+use std::sync::OnceLock;
+
+use engine::random_walk_method::SceneLighting;
+use glam::{DVec3, Vec3};
+use lab::bias::{BiasRow, Channel, Protocol, Table, bias_rows, summarize};
+use lab::methods::Method;
+use lab::methods::single_scatter::PURPOSE_SINGLE_SCATTER_LIGHT;
+use lab::regions::{Region, Regions};
+use restir::rng::StreamKey;
+use restir::shift::{Fail, Shift, Shifted};
+use restir::stats::{EquivalencePlan, Verdict, family_power, replicas_for};
+use sss::integrator::boundary_reuse::{
+    self, BoundaryDomain, BoundarySample, DEFAULT_CAP, ReuseSettings, SameVertices,
+    check_materials, shade_boundary,
+};
+use sss::integrator::pt;
+use sss::integrator::single_scatter::{self, SingleScatterSettings, sample_stream};
+use sss::material::Material;
+use sss::random_walk::MeshBoundary;
+use sss::scene::{GBuffer, Scene};
+
+const PROTOCOL: Protocol = Protocol {
+    delta: 0.02,
+    alpha: 0.01,
+};
+/// Planned probability that an unbiased method is equivalent in every row.
+const FAMILY_POWER: f64 = 0.95;
+/// Safety factor on the measured CVs (their own sampling error at N = 256 is ≈ 4.5%).
+const CV_MARGIN: f64 = 1.1;
+const FRAMES: u32 = 8;
+/// The slab's mean free paths × 3 (0.15, 0.075, 0.0375 against its thickness 0.05), so that
+/// light crosses it unscattered in every channel (× 1: blue `e^{−σt d} ≲ 0.02`, whose rows
+/// would need ~5 000 replicas).
+const MFP_SCALE: f32 = 3.0;
+const SIDE: [u32; 2] = [32, 24];
+const REFERENCE_SEED: u64 = 1 << 40;
+const REFERENCE_BATCHES: u32 = 64;
+const SPP_PER_BATCH: u32 = 64;
+/// Bound on the reference's relative standard error in every row (measured below).
+const REFERENCE_REL_SE: f64 = 0.0012;
+/// Keys the light samples of the region classification.
+const REGIONS_SEED: u64 = 0x5E61;
+/// The tested region: the slab's 244 pixels. Every one of them is also `penumbra` (the point
+/// light in front is visible from x1, the quad behind the slab is not), which would repeat the
+/// same rows; there is no lit or shadowed pixel in this framing.
+const REGIONS: [Region; 1] = [Region::Translucent];
+/// Per-replica CVs of the region means (rows: [`REGIONS`], columns: [`Channel::ALL`]), measured
+/// with N = 256 (seeds 0..256) by `measure_cvs` (2026-11-24). The reference's relative standard
+/// errors measured with it: 0.07%, 0.08%, 0.10%, 0.08%.
+const CV: [[f64; 4]; 1] = [[0.030, 0.029, 0.044, 0.028]];
+/// The Jacobian factor of the negative control.
+const CONTROL_JACOBIAN: f32 = 1.01;
+
+/// `slab` at [`SIDE`], its wax's lengths scaled by [`MFP_SCALE`].
+fn slab() -> Scene {
+    let mut scene = Scene::builtin("slab").expect("built-in");
+    for material in &mut scene.materials {
+        if let Material::Translucent(t) = material {
+            t.scale *= MFP_SCALE;
+        }
+    }
+    Scene {
+        camera: scene.camera.with_resolution(SIDE[0], SIDE[1]),
+        ..scene
+    }
+}
+
+/// The scene, its last frame's G-buffer and regions, computed once.
+struct Framing {
+    scene: Scene,
+    gbuffer: GBuffer,
+    regions: Regions,
+}
+
+fn framing() -> &'static Framing {
+    static FRAMING: OnceLock<Framing> = OnceLock::new();
+    FRAMING.get_or_init(|| {
+        let scene = slab();
+        let gbuffer = GBuffer::render(&scene, FRAMES - 1);
+        let regions = Regions::classify(&scene, &gbuffer, REGIONS_SEED);
+        Framing {
+            scene,
+            gbuffer,
+            regions,
+        }
+    })
+}
+
+/// The exits' lighting of `pixel` in `frame` (the method's light-selection stream).
+fn lighting(scene: &Scene, pixel: u32, frame: u32, seed: u64) -> SceneLighting<'_> {
+    let key = StreamKey {
+        pixel,
+        frame,
+        pass: 0,
+        purpose: PURPOSE_SINGLE_SCATTER_LIGHT,
+    };
+    SceneLighting {
+        scene,
+        selection: RefCell::new(key.stream(seed)),
+    }
+}
+
+/// The reused boundary term of frame `FRAMES − 1` of replica `seed` through `shift`.
+fn reused<T: for<'a> Shift<BoundaryDomain<'a>>>(scene: &Scene, seed: u64, shift: &T) -> Vec<DVec3> {
+    let media = check_materials(scene).expect("diffuse slab");
+    let reuse = ReuseSettings {
+        candidates: 1,
+        cap: DEFAULT_CAP,
+    };
+    let mut last = Vec::new();
+    boundary_reuse::run(
+        scene,
+        &media,
+        &reuse,
+        seed,
+        FRAMES,
+        FRAMES - 1,
+        shift,
+        |_, domains, reservoirs| {
+            let (image, nonfinite) = shade_boundary(domains, reservoirs);
+            assert_eq!(nonfinite, 0);
+            last = image.iter().map(|v| v.as_dvec3()).collect();
+        },
+    )
+    .expect("reuse runs");
+    last
+}
+
+/// Replicas `0..n` of the reused boundary term.
+fn replicas<T: for<'a> Shift<BoundaryDomain<'a>>>(n: usize, shift: &T) -> Vec<Vec<DVec3>> {
+    use rayon::prelude::*;
+    let scene = &framing().scene;
+    (0..n as u64)
+        .into_par_iter()
+        .map(|seed| reused(scene, seed, shift))
+        .collect()
+}
+
+/// The plain estimator's boundary term, batches of [`SPP_PER_BATCH`] samples (module doc).
+fn reference() -> &'static Vec<Vec<DVec3>> {
+    static REFERENCE: OnceLock<Vec<Vec<DVec3>>> = OnceLock::new();
+    REFERENCE.get_or_init(|| {
+        let Framing { scene, gbuffer, .. } = framing();
+        let media = check_materials(scene).unwrap();
+        let settings = SingleScatterSettings::default();
+        let frame = gbuffer.frame;
+        (0..REFERENCE_BATCHES)
+            .map(|b| {
+                let image = pt::render_pixels(
+                    gbuffer,
+                    b * SPP_PER_BATCH..(b + 1) * SPP_PER_BATCH,
+                    |pixel, g| {
+                        let domain = BoundaryDomain::new(scene, &media, g);
+                        let medium = media[scene.objects[g.object as usize].material as usize];
+                        let boundary = MeshBoundary {
+                            geometry: &scene.geometry,
+                            object: g.object,
+                            inward_winding: scene.geometry.geometric_normal(g.prim).dot(g.view)
+                                < 0.0,
+                        };
+                        let light = lighting(scene, pixel, frame, REFERENCE_SEED);
+                        (domain.zip(medium), boundary, *g, light)
+                    },
+                    |(state, boundary, g, light), pixel, sample, _| {
+                        let Some((_, medium)) = state else {
+                            return Vec3::ZERO;
+                        };
+                        let mut rng = sample_stream(pixel, frame, sample, REFERENCE_SEED);
+                        single_scatter::path_traced(
+                            boundary,
+                            medium,
+                            g.position,
+                            g.geometric_normal,
+                            g.view,
+                            light,
+                            &settings,
+                            &mut rng,
+                        )
+                        .zero
+                    },
+                );
+                assert_eq!(image.nonfinite, 0);
+                image.pixels
+            })
+            .collect()
+    })
+}
+
+/// `J × CONTROL_JACOBIAN`: the negative control (a Jacobian wrong by 1%).
+struct ScaledJacobian;
+
+impl<'a> Shift<BoundaryDomain<'a>> for ScaledJacobian {
+    fn shift(
+        &self,
+        x: &BoundarySample,
+        src: &BoundaryDomain<'a>,
+        dst: &BoundaryDomain<'a>,
+    ) -> Result<Shifted<BoundarySample>, Fail> {
+        SameVertices.shift(x, src, dst).map(|s| Shifted {
+            jacobian: CONTROL_JACOBIAN * s.jacobian,
+            ..s
+        })
+    }
+}
+
+/// Per-replica CVs `[channel]` of `images` per non-empty region.
+fn cvs(images: &[Vec<DVec3>]) -> Vec<(Region, usize, [f64; 4])> {
+    summarize(images, &framing().regions)
+        .into_iter()
+        .map(|s| {
+            let cv = Channel::ALL.map(|c| {
+                let summary = s.channel(c);
+                summary.variance.sqrt() / summary.mean
+            });
+            (s.region, s.pixels, cv)
+        })
+        .collect()
+}
+
+/// The plan: one equivalence test per region and channel.
+fn plan() -> Vec<(EquivalencePlan, f64)> {
+    let plan = EquivalencePlan {
+        delta: PROTOCOL.delta,
+        alpha: PROTOCOL.alpha,
+        reference_rel_se: REFERENCE_REL_SE,
+        reference_n: REFERENCE_BATCHES as usize,
+    };
+    CV.iter()
+        .flatten()
+        .map(|&cv| (plan, CV_MARGIN * cv))
+        .collect()
+}
+
+fn planned_n() -> usize {
+    replicas_for(&plan(), FAMILY_POWER, 100_000).expect("a feasible plan")
+}
+
+/// Measures the per-replica CVs of [`CV`] (N = 256) and the reference's relative standard
+/// errors; `cargo test --release -p lab --test single_scatter_restir -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn measure_cvs() {
+    for (region, pixels, cv) in cvs(&replicas(256, &SameVertices)) {
+        eprintln!("{region} ({pixels} px): CV {cv:.3?}");
+    }
+    for (region, pixels, cv) in cvs(reference()) {
+        let rel_se = cv.map(|c| c / (REFERENCE_BATCHES as f64).sqrt());
+        eprintln!("reference {region} ({pixels} px): rel. s.e. {rel_se:.4?}");
+    }
+}
+
+/// The plan: N, and its power to detect a +3% bias (the control's size) in any one row at the
+/// Holm level of that row (α / rows, the strictest step).
+#[test]
+fn power_plan() {
+    let plan = plan();
+    let n = planned_n();
+    let rows = plan.len() as f64;
+    let detect = plan
+        .iter()
+        .map(|(p, cv)| p.rejection_power(*cv, n, 0.03, PROTOCOL.alpha / rows))
+        .fold(1.0f64, f64::min);
+    eprintln!(
+        "N = {n} replicas: P(all {rows} rows equivalent | unbiased) ≥ {:.3}, \
+         P(detect +3% in a row) ≥ {detect:.4}",
+        family_power(&plan, n)
+    );
+    assert!(family_power(&plan, n) >= FAMILY_POWER);
+    assert!(detect >= 0.99, "the plan cannot see the control: {detect}");
+    assert!(n <= 400, "N = {n}: the test would take too long");
+}
+
+/// The rows of `images` against the reference over [`REGIONS`].
+fn rows(method: &str, images: &[Vec<DVec3>]) -> Vec<BiasRow> {
+    let regions = &framing().regions;
+    let keep = |s: &lab::bias::RegionSummary| REGIONS.contains(&s.region);
+    let estimate: Vec<_> = summarize(images, regions)
+        .into_iter()
+        .filter(keep)
+        .collect();
+    let reference: Vec<_> = summarize(reference(), regions)
+        .into_iter()
+        .filter(keep)
+        .collect();
+    let rows = bias_rows(method, &estimate, &reference, &PROTOCOL);
+    eprintln!("{}", Table(&rows));
+    for (region, pixels, cv) in cvs(images) {
+        eprintln!("measured CV {region} ({pixels} px): {cv:.3?}, planned {CV:.3?} × {CV_MARGIN}");
+    }
+    assert_eq!(rows.len(), 4 * REGIONS.len(), "every region has pixels");
+    rows
+}
+
+/// The reused boundary term is equivalent to the plain one within ±2% at 99% in every row.
+#[test]
+fn reused_boundary_term_is_unbiased() {
+    let n = planned_n();
+    let rows = rows("single-scatter/restir", &replicas(n, &SameVertices));
+    for row in &rows {
+        assert_eq!(
+            row.verdict,
+            Verdict::Equivalent,
+            "{} {}: {}",
+            row.region,
+            row.channel,
+            PROTOCOL.describe(row.verdict)
+        );
+    }
+}
+
+/// Negative control near δ: the same reuse with `J × 1.01` (+2.8% after 8 frames) is Biased in
+/// at least one row.
+#[test]
+fn a_jacobian_off_by_one_percent_is_caught() {
+    let n = planned_n();
+    let rows = rows("J × 1.01", &replicas(n, &ScaledJacobian));
+    assert!(
+        rows.iter().any(|r| r.verdict == Verdict::Biased),
+        "J × {CONTROL_JACOBIAN} was not detected"
+    );
+}
+
+/// Through the registry, `single-scatter:2/restir` renders all frames and its image is the
+/// integrator's (`boundary_reuse::render` with the documented light-selection streams), bit for
+/// bit, twice; its boundary term differs from zero on the slab and the image minus it is the
+/// plain estimator's single and multiple scattering, which is what `single-scatter:2` adds to
+/// its own boundary term: their difference on the slab is a difference of two boundary
+/// estimates, equal in expectation (checked above), and zero off the slab (Lambert pixels are
+/// the path tracer's in both, from the same streams). Controls: another seed, and the
+/// plain method, give other bits.
+#[test]
+fn the_method_is_the_reused_boundary_plus_the_plain_rest() {
+    let Framing { scene, .. } = framing();
+    let method = Method::parse("single-scatter:2/restir").unwrap();
+    let rendered = method.render(scene, FRAMES, 7).unwrap();
+    assert_eq!((rendered.frames_rendered, rendered.nonfinite), (FRAMES, 0));
+    let direct = boundary_reuse::render(
+        scene,
+        &SingleScatterSettings::default(),
+        &ReuseSettings {
+            candidates: 2,
+            cap: DEFAULT_CAP,
+        },
+        7,
+        FRAMES,
+        FRAMES - 1,
+        2,
+        |pixel, frame| lighting(scene, pixel, frame, 7),
+        &SameVertices,
+    )
+    .unwrap();
+    let last = direct.last().unwrap();
+    let bits = |pixels: &[Vec3]| -> Vec<u32> {
+        pixels
+            .iter()
+            .flat_map(|p| p.to_array().map(f32::to_bits))
+            .collect()
+    };
+    let image: Vec<Vec3> = last.image.pixels.iter().map(|p| p.as_vec3()).collect();
+    assert_eq!(bits(&rendered.image.pixels), bits(&image));
+    let again = method.render(scene, FRAMES, 7).unwrap();
+    assert_eq!(bits(&again.image.pixels), bits(&image));
+    let other = method.render(scene, FRAMES, 8).unwrap();
+    assert_ne!(bits(&other.image.pixels), bits(&image), "control: seed");
+    let plain = Method::parse("single-scatter:2")
+        .unwrap()
+        .render(scene, FRAMES, 7)
+        .unwrap();
+    assert_ne!(bits(&plain.image.pixels), bits(&image), "control: plain");
+
+    let gbuffer = &framing().gbuffer;
+    let (mut on_slab, mut lit) = (0, 0);
+    for (p, g) in gbuffer.pixels.iter().enumerate() {
+        let Some(g) = g else { continue };
+        let translucent = matches!(scene.material_of_object(g.object), Material::Translucent(_));
+        if translucent {
+            on_slab += 1;
+            lit += (last.boundary[p].max_element() > 0.0) as u32;
+        } else {
+            assert_eq!(last.boundary[p], Vec3::ZERO);
+            assert_eq!(
+                rendered.image.pixels[p].to_array().map(f32::to_bits),
+                plain.image.pixels[p].to_array().map(f32::to_bits),
+                "pixel {p} off the slab: the path tracer's, from the same streams"
+            );
+        }
+    }
+    assert!(on_slab > 200 && lit > on_slab / 2, "{lit} of {on_slab}");
+}
+
+/// On Vulkan `/restir` refuses in one line naming the method.
+#[test]
+fn on_vulkan_restir_is_refused() {
+    let Some(backend) = engine::vulkan::testing::backend_or_skip("on_vulkan_restir_is_refused")
+    else {
+        return;
+    };
+    let method = Method::parse("single-scatter:1/restir").unwrap();
+    let error = method
+        .render_on(&backend, &framing().scene, 2, 1)
+        .expect_err("CPU only")
+        .to_string();
+    assert!(
+        error.contains("single-scatter:1/restir") && !error.contains('\n') && error.len() <= 200,
+        "{error}"
+    );
+}

@@ -1,8 +1,9 @@
 #version 460
-// Parity kernel for sss/glsl/single_scatter.glsl (test only; the method kernel is not written
-// yet): sample `params.sample` of seed 000's hybrid estimator at every G-buffer pixel, with a
-// fixed directional "sun" as the exits' lighting (engine/tests/vulkan_single_scatter.rs
-// computes the same on the CPU). One dispatch per sample keeps lavapipe's loop budget.
+// Parity kernel for sss/glsl/single_scatter.glsl (test only; the method's kernel is
+// method_single_scatter.glsl): sample `params.sample` of seed 000's hybrid estimator at every
+// G-buffer pixel, with a fixed directional "sun" as the exits' lighting and the hit policy as a
+// parameter (engine/tests/vulkan_single_scatter.rs computes the same on the CPU). One dispatch
+// per sample keeps lavapipe's loop budget.
 //
 // Bindings: scene 0-8, 9 G-buffer (GPixel), 10 vec4 out (rgb = zero + single + multiple, w = 1
 // where the estimate was truncated), 11 RandomWalkMedium per material, 12 SingleScatterProfile

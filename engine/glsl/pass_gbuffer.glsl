@@ -25,9 +25,6 @@ GPixel primary_hit(uint px, uint py) {
     g.depth = 0.0;
     g.view = float[3](0.0, 0.0, 0.0);
     g.valid = 0u;
-    g.bary = float[2](0.0, 0.0);
-    g.pad0 = 0u;
-    g.pad1 = 0u;
     vec3 origin;
     vec3 dir;
     camera_ray(frame_params.camera, px, py, origin, dir);
@@ -56,7 +53,6 @@ GPixel primary_hit(uint px, uint py) {
     g.depth = hit.t;
     g.view = float[3](view.x, view.y, view.z);
     g.valid = 1u;
-    g.bary = float[2](hit.bary.x, hit.bary.y);
     return g;
 }
 

@@ -130,7 +130,8 @@ twin::contract! {
         pub has_previous: u32,
     }
 
-    /// A G-buffer pixel: `sss::scene::GPixel` with `valid = 0` where the CPU has `None`.
+    /// A G-buffer pixel: `sss::scene::GPixel` with `valid = 0` where the CPU has `None`; 64
+    /// bytes, so that a 1920×1080 G-buffer fits a 128 MiB storage-buffer range.
     #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
     pub struct GpuPixel as GPixel {
         pub position: [f32; 3],
@@ -141,9 +142,6 @@ twin::contract! {
         pub depth: f32,
         pub view: [f32; 3],
         pub valid: u32,
-        pub bary: [f32; 2],
-        pub pad0: u32,
-        pub pad1: u32,
     }
 
     /// Push constants of every pass kernel.
@@ -180,6 +178,19 @@ twin::contract! {
         pub spp: u32,
         /// `pad[0]`: the sample this dispatch runs.
         pub pad: [u32; 7],
+    }
+
+    /// Push constants of `method_single_scatter`: `spp`, the sample this dispatch runs (one
+    /// dispatch per sample) and `SingleScatterSettings`' knobs the kernel takes (the
+    /// `ChannelSelection` code, the `PtHits` code of the diffusion's probe, `max_segments`).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+    pub struct SingleScatterParams in push_constant params {
+        pub spp: u32,
+        pub sample_index: u32,
+        pub channel_selection: u32,
+        pub hits: u32,
+        pub max_segments: u32,
+        pub pad: [u32; 3],
     }
 
     /// `ImageSpaceParams::stage`: which half of a pass of `method_image_space` a dispatch runs.

@@ -13,7 +13,9 @@
 //!
 //! [`Interface::of`]: sss::random_walk::Interface::of
 //!
-//! [`SceneLighting`] adapts the scene's lights to [`ExitLighting`], with shadow rays.
+//! [`SceneLighting`] adapts the scene's lights to [`ExitLighting`], with shadow rays (GLSL twin
+//! `engine/glsl/include/scene_lighting.glsl`, shared by the random-walk and single-scatter
+//! kernels).
 
 use std::cell::RefCell;
 

@@ -37,7 +37,13 @@ const ALLOWED: [(&str, &str); 5] = [
 ];
 
 /// The GLSL folders scanned, relative to the workspace root.
-const FOLDERS: [&str; 4] = ["restir/glsl", "sss/glsl", "shifts/glsl", "engine/glsl"];
+const FOLDERS: [&str; 5] = [
+    "restir/glsl",
+    "sss/glsl",
+    "shifts/glsl",
+    "engine/glsl",
+    "engine/glsl/include",
+];
 
 /// `Some(name)` when `line` declares an integer constant by numbers only: `const <int type> NAME
 /// = <expr>;` or `#define NAME <expr>` whose expression has no identifier (only literals such as

@@ -113,8 +113,6 @@ fn compare_gbuffer(cpu: &GBuffer, gpu: &[GpuPixel]) -> GBufferDiff {
                     max_ulps(w.view, g.view),
                     max_ulps(w.geometric_normal, g.geometric_normal),
                     ulps(w.depth, g.depth),
-                    ulps(w.bary.x, g.bary.x),
-                    ulps(w.bary.y, g.bary.y),
                 ];
                 diff.max_ulps = diff.max_ulps.max(*exact.iter().max().unwrap());
                 diff.max_shading_abs = diff

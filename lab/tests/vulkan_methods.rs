@@ -291,8 +291,8 @@ fn layered_scene(layers: u32) -> Scene {
 /// Loops that the device cuts short are an error, never an image (`restir/glsl/loop_budget.glsl`).
 /// With 70 000 layers a probe's traversal loops past lavapipe's budget of 65 535 iterations per
 /// invocation group, so lavapipe must report `LoopsCut` from the candidates pass, and from
-/// `method_adaptive` for the adaptive method (one sample per dispatch); a device without such a
-/// budget must run them. Control: 16 layers run on both.
+/// `method_adaptive` and `method_single_scatter` for those methods (one sample per dispatch); a
+/// device without such a budget must run them. Control: 16 layers run on both.
 #[test]
 fn loops_cut_by_the_device_are_errors() {
     let Some(backend) = backend_or_skip("loops_cut_by_the_device_are_errors") else {
@@ -313,17 +313,22 @@ fn loops_cut_by_the_device_are_errors() {
         Ok(_) if !lavapipe => {}
         other => panic!("70 000 layers on {backend}: {:?}", other.err()),
     }
-    let adaptive = Method::parse("adaptive:b_min=1/b_max=1").unwrap();
-    let control = adaptive.render_on(&backend, &layered_scene(16), 1, 1);
-    assert!(control.is_ok(), "adaptive, 16 layers: {:?}", control.err());
-    match adaptive.render_on(&backend, &layered_scene(70_000), 1, 1) {
-        Err(engine::PipelineError::Vulkan(VulkanError::LoopsCut { shader, count })) => {
-            assert!(lavapipe, "a cut reported on {backend}");
-            assert_eq!(shader, "method_adaptive");
-            assert!(count > 0);
+    for (spec, kernel) in [
+        ("adaptive:b_min=1/b_max=1", "method_adaptive"),
+        ("single-scatter:1", "method_single_scatter"),
+    ] {
+        let method = Method::parse(spec).unwrap();
+        let control = method.render_on(&backend, &layered_scene(16), 1, 1);
+        assert!(control.is_ok(), "{spec}, 16 layers: {:?}", control.err());
+        match method.render_on(&backend, &layered_scene(70_000), 1, 1) {
+            Err(engine::PipelineError::Vulkan(VulkanError::LoopsCut { shader, count })) => {
+                assert!(lavapipe, "a cut reported on {backend}");
+                assert_eq!(shader, kernel);
+                assert!(count > 0);
+            }
+            Ok(_) if !lavapipe => {}
+            other => panic!("{spec}, 70 000 layers on {backend}: {:?}", other.err()),
         }
-        Ok(_) if !lavapipe => {}
-        other => panic!("adaptive, 70 000 layers on {backend}: {:?}", other.err()),
     }
 }
 

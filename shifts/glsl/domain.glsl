@@ -53,7 +53,6 @@ SssSample sss_sample_new(BssrdfSample b, uint light, vec3 x3) {
     s.u_angle = b.u_angle;
     s.index = b.index;
     s.p_disk = b.p_disk;
-    s.padding = uint[3](0u, 0u, 0u);
     return s;
 }
 

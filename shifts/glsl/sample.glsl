@@ -29,11 +29,9 @@ PixelReservoir reservoir_empty() {
     r.y.u_angle = 0.0;
     r.y.index = 0u;
     r.y.p_disk = 0.0;
-    r.y.padding = uint[3](0u, 0u, 0u);
     r.ucw = 0.0;
     r.confidence = 0.0;
     r.has_sample = 0u;
-    r.padding = 0u;
     return r;
 }
 

@@ -63,8 +63,7 @@ ShiftPlan shift_plan_new(SssSample x) {
                      1.0);
 }
 
-// SssSample::with_bssrdf: the same light vertex with a new BSSRDF part (padding zeroed, as
-// SssSample::new writes it).
+// SssSample::with_bssrdf: the same light vertex with a new BSSRDF part.
 SssSample shift_with_bssrdf(SssSample s, BssrdfSample b) {
     SssSample y = s;
     y.bary = float[2](b.bary.x, b.bary.y);
@@ -75,7 +74,6 @@ SssSample shift_with_bssrdf(SssSample s, BssrdfSample b) {
     y.u_angle = b.u_angle;
     y.index = b.index;
     y.p_disk = b.p_disk;
-    y.padding = uint[3](0u, 0u, 0u);
     return y;
 }
 

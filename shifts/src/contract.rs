@@ -62,11 +62,12 @@ twin::contract! {
         pub(crate) index: u32,
         /// `p_disk(x2 | x1)` of the x1 whose random numbers are stored.
         pub(crate) p_disk: f32,
-        pub(crate) padding: [u32; 3],
     }
 
     /// A stored reservoir `{y, W, c}` of one pixel [001 Alg. 2], the per-pixel buffer that the
-    /// passes read and write (a multiple of 16 bytes, so arrays of it have no gaps).
+    /// passes read and write: 64 bytes, seed 001's size [001 §5.2], reached without
+    /// quantisation — every field is a 4-byte scalar, so std430 packs sample and reservoir
+    /// without gaps (a 1920×1080 buffer is 126.6 MiB, inside a 128 MiB storage-buffer range).
     #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
     pub struct PixelReservoir {
         /// The selected sample `Y` (meaningful when `has_sample` is 1).
@@ -77,6 +78,5 @@ twin::contract! {
         pub confidence: f32,
         /// 1 when `y` holds the selected sample, 0 for an empty reservoir.
         pub has_sample: u32,
-        pub(crate) padding: u32,
     }
 }

@@ -6,9 +6,9 @@
 // The including shader enables GL_EXT_shader_explicit_arithmetic_types_int64, defines
 // SCENE_BINDING (and BVH_MAX_HITS, if not BVH_DEFAULT_MAX_HITS), includes scene.glsl, pt.glsl and random_walk.glsl,
 // defines the three exit_lighting_* functions random_walk.glsl declares (the ExitLighting of the
-// exits, e.g. method_random_walk.glsl's SceneLighting twin), and then includes this file (as
-// method_random_walk.glsl does for random_walk.glsl). Compiled with glslc -O -Werror in a
-// test kernel of that shape; no kernel of the repository includes it yet.
+// exits, e.g. engine/glsl/include/scene_lighting.glsl, the SceneLighting twin), and then
+// includes this file: the method kernel engine/glsl/method_single_scatter.glsl and the test
+// kernel engine/glsl/parity_single_scatter.glsl.
 //
 // Per material the kernel needs, besides GpuMaterial (binding 6: ior and its Fresnel
 // normalisation, the kind): the walk's RandomWalkMedium (sigma_s, sigma_t, g, boundary, eta, as
@@ -41,8 +41,8 @@
 // 1.0f32 / 3.0.
 const float SINGLE_SCATTER_ONE_THIRD = 0.333333343267440796;
 
-// MultipleScattering as the host derives it (std430, 60 bytes; its Rust layout twin is the
-// kernel's to add): per channel the full profile's albedo A(alpha), Burley d and r_max (which
+// MultipleScattering as the host derives it (std430, 60 bytes; Rust twin
+// engine::vulkan::GpuSingleScatterProfile): per channel the full profile's albedo A(alpha), Burley d and r_max (which
 // sample x2 and truncate), and the single-scattering albedo alpha/5.108 and Burley d.
 struct SingleScatterProfile {
     float full_albedo[3];

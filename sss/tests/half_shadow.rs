@@ -97,7 +97,6 @@ fn reference_matches_the_half_plane_integral_across_the_shadow_edge() {
                 shading_normal: Vec3::Y,
                 object: plane,
                 prim: hit.prim,
-                bary: hit.bary,
                 depth: 1.0,
                 view,
             }

@@ -23,6 +23,7 @@ mod random_walk;
 mod renderer;
 mod scene;
 mod shaders;
+mod single_scatter;
 pub mod testing;
 mod timing;
 
@@ -46,6 +47,10 @@ pub use random_walk::{
 };
 pub use renderer::Renderer;
 pub use scene::{GBUFFER, GpuScene};
+pub use single_scatter::{
+    GpuSingleScatterProfile, SINGLE_SCATTER, SingleScatterImage, SingleScatterPixelState,
+    render_single_scatter, scene_single_scatter_media,
+};
 
 pub use crate::contract::{
     FrameParams, GpuCamera, GpuLight, GpuMaterial, GpuPixel, GpuTriangle, MethodParams, PassParams,

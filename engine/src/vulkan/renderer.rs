@@ -1,13 +1,15 @@
 //! The front of the Vulkan backend (DESIGN §6): a [`Renderer`] holds the [`Context`], the
 //! compiled kernels and the uploaded [`GpuScene`] across runs (creating a pipeline on lavapipe
 //! compiles LLVM code, so it is done once per shader) and runs the methods on them: a preset's
-//! frames ([`FrameRun`]), the path tracer and the random walk.
+//! frames ([`FrameRun`]) and the memoryless methods (path tracer, random walk, single scattering,
+//! image space, adaptive).
 
 use std::collections::HashMap;
 use std::collections::hash_map::Entry;
 
 use sss::integrator::adaptive::AdaptiveParams;
 use sss::integrator::image_space::ImageSpaceSettings;
+use sss::integrator::single_scatter::{ChannelSelection, SingleScatterSettings};
 use sss::scene::Scene;
 
 use super::adaptive::{ADAPTIVE, AdaptiveImage, render_adaptive_frame};
@@ -19,6 +21,7 @@ use super::memory::Buffer;
 use super::random_walk::{RANDOM_WALK, render_random_walk, scene_media};
 use super::scene::{GBUFFER, GpuScene};
 use super::shaders::Shader;
+use super::single_scatter::{SINGLE_SCATTER, render_single_scatter, scene_single_scatter_media};
 use super::{FrameInput, Kernel, PT, groups_for, render_pt};
 use crate::contract::{FrameParams, GpuPixel, PassParams};
 use crate::hash::Fnv1a;
@@ -150,6 +153,34 @@ impl Renderer {
         if out.cut > 0 {
             return Err(PipelineError::Vulkan(VulkanError::LoopsCut {
                 shader: RANDOM_WALK.name,
+                count: out.cut,
+            }));
+        }
+        Ok((out.image.image, out.image.left_out))
+    }
+
+    /// The `single-scatter:spp` method at `frame` with distance channels drawn by `channels`
+    /// (the rest of [`SingleScatterSettings::default`]): the image and the samples left out.
+    pub fn single_scatter(
+        &mut self,
+        scene: &Scene,
+        frame: u32,
+        seed: u64,
+        spp: u32,
+        channels: ChannelSelection,
+    ) -> Result<(Image, u64), PipelineError> {
+        let settings = SingleScatterSettings {
+            channel: channels,
+            ..SingleScatterSettings::default()
+        };
+        let media = scene_single_scatter_media(scene)?;
+        let (gbuffer, params) = self.gbuffer(scene, frame, seed)?;
+        let (context, kernel, gpu) = self.parts(SINGLE_SCATTER)?;
+        let input = FrameInput::new(scene, gpu, &params, &gbuffer);
+        let out = render_single_scatter(context, kernel, &input, &media, &settings, spp)?;
+        if out.cut > 0 {
+            return Err(PipelineError::Vulkan(VulkanError::LoopsCut {
+                shader: SINGLE_SCATTER.name,
                 count: out.cut,
             }));
         }

@@ -6,7 +6,7 @@
 //! the camera basis and jitter, the light selection CDF) is computed here in `f32` exactly as
 //! `sss` computes it and uploaded, so the shaders never re-derive it.
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use sss::material::Material;
 use sss::scene::{Camera, GPixel, Light, Scene};
 
@@ -160,7 +160,6 @@ impl GpuPixel {
             shading_normal: Vec3::from_array(self.shading_normal),
             object: self.object,
             prim: self.prim,
-            bary: Vec2::from_array(self.bary),
             depth: self.depth,
             view: Vec3::from_array(self.view),
         })
@@ -177,9 +176,6 @@ impl GpuPixel {
             depth: g.depth,
             view: g.view.to_array(),
             valid: 1,
-            bary: g.bary.to_array(),
-            pad0: 0,
-            pad1: 0,
         })
     }
 }
@@ -297,12 +293,11 @@ mod tests {
         assert_eq!(offset_of!(FrameParams, camera), 36);
         assert_eq!(offset_of!(FrameParams, previous_camera), 104);
         assert_eq!(offset_of!(FrameParams, has_previous), 172);
-        assert_eq!((size_of::<GpuPixel>(), align_of::<GpuPixel>()), (80, 4));
+        assert_eq!((size_of::<GpuPixel>(), align_of::<GpuPixel>()), (64, 4));
         assert_eq!(offset_of!(GpuPixel, object), 12);
         assert_eq!(offset_of!(GpuPixel, prim), 28);
         assert_eq!(offset_of!(GpuPixel, depth), 44);
         assert_eq!(offset_of!(GpuPixel, valid), 60);
-        assert_eq!(offset_of!(GpuPixel, bary), 64);
         assert_eq!(GBUFFER.push_bytes, 32);
     }
 

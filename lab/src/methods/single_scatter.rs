@@ -11,14 +11,15 @@
 //! ([`SceneLighting`], the random walk's), whose light selection draws from a stream of its own
 //! per pixel ([`PURPOSE_SINGLE_SCATTER_LIGHT`]).
 //!
-//! CPU only for now: on Vulkan the method says so (its kernel is not written; the GLSL twin
-//! `sss/glsl/single_scatter.glsl` has only a parity kernel, lit by a fixed sun).
+//! On Vulkan its twin is the kernel `engine/glsl/method_single_scatter.glsl`
+//! ([`engine::vulkan::Renderer::single_scatter`]): the same sample and light-selection streams,
+//! one dispatch per sample.
 //!
 //! `/restir` replaces the boundary (zero-scattering) term by ReSTIR over the entry direction and
 //! the exit's light vertex [000 "ReSTIR Sample"] (`sss::integrator::boundary_reuse`: `spp`
 //! candidates per frame, temporal reuse with confidence cap `/cap=<κ>`, default 3, and 3 × 3
 //! spatial reuse): every frame of the trajectory is rendered and the last one kept. Diffuse
-//! boundaries only (other materials are refused); CPU only.
+//! boundaries only (other materials are refused); CPU only (refused on Vulkan in one line).
 
 use std::cell::RefCell;
 
@@ -34,9 +35,8 @@ use super::estimator::{
 };
 use super::pt::to_image;
 
-/// `purpose` of the exits' light-selection streams (ASCII "SS" + 2; the samples use
-/// `sss::integrator::single_scatter::PURPOSE_SINGLE_SCATTER`, "SS" + 1).
-pub const PURPOSE_SINGLE_SCATTER_LIGHT: u32 = 0x5353_0002;
+/// `purpose` of the exits' light-selection streams (the kernel's `PURPOSE_SINGLE_SCATTER_LIGHT`).
+pub use engine::purpose::SINGLE_SCATTER_LIGHT as PURPOSE_SINGLE_SCATTER_LIGHT;
 
 pub const ENTRY: Entry = Entry {
     family: "single-scatter",
@@ -44,7 +44,7 @@ pub const ENTRY: Entry = Entry {
     about: "path-traced zero and single scattering, diffusion with R − R1 for the rest [000]; \
             `/channels=uniform` draws distance channels uniformly (default σt·α CDF); \
             `/restir` resamples the boundary term with temporal (cap κ, default 3) and 3×3 \
-            spatial reuse over frames (diffuse boundaries); CPU only",
+            spatial reuse over frames (diffuse boundaries; CPU only)",
     build: |arg| Ok(Method::new(parse(arg)?)),
 };
 
@@ -152,18 +152,21 @@ impl Estimator for SingleScatter {
                 nonfinite: image.nonfinite,
             });
         }
-        if let Backend::Vulkan(_) = backend {
-            return Err(PipelineError::Config(format!(
-                "{} has no Vulkan implementation yet (its kernel is not written); use --backend cpu",
-                self.name()
-            )));
-        }
         let frame = frames - 1;
+        if let Some(mut renderer) = backend.renderer() {
+            let (image, nonfinite) =
+                renderer.single_scatter(scene, frame, seed, self.spp, self.channels)?;
+            return Ok(Frame {
+                image,
+                frames_rendered: 1,
+                nonfinite,
+            });
+        }
+        let gbuffer = GBuffer::render(scene, frame);
         let settings = SingleScatterSettings {
             channel: self.channels,
             ..SingleScatterSettings::default()
         };
-        let gbuffer = GBuffer::render(scene, frame);
         let (image, _truncated) =
             single_scatter::render(scene, &gbuffer, &settings, seed, 0, self.spp, |pixel| {
                 exit_lighting(scene, pixel, frame, seed)

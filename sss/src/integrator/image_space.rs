@@ -822,7 +822,6 @@ mod tests {
             shading_normal: n1,
             object: 0,
             prim: 0,
-            bary: Vec2::ZERO,
             depth: 1.0,
             view,
         };

@@ -300,7 +300,6 @@ fn hit_below(scene: &Scene, object: u32, above: Vec3) -> GPixel {
         shading_normal: Vec3::Y,
         object,
         prim: hit.prim,
-        bary: hit.bary,
         depth: above.y,
         view: Vec3::Y,
     }

@@ -33,20 +33,17 @@
 //! * Cost: ≈ 10 s wall on 2 shared cores (reference 64 × 64 spp of 244 pixels, 2 × 133 replicas
 //!   of 8 frames).
 
-use std::cell::RefCell;
 use std::sync::OnceLock;
 
-use engine::random_walk_method::SceneLighting;
 use glam::{DVec3, Vec3};
 use lab::bias::{BiasRow, Channel, Protocol, Table, bias_rows, summarize};
 use lab::methods::Method;
-use lab::methods::single_scatter::PURPOSE_SINGLE_SCATTER_LIGHT;
+use lab::methods::single_scatter::exit_lighting;
 use lab::regions::{Region, Regions};
-use restir::rng::StreamKey;
-use restir::shift::{Fail, Shift, Shifted};
+use restir::shift::Shift;
 use restir::stats::{EquivalencePlan, Verdict, family_power, replicas_for};
 use sss::integrator::boundary_reuse::{
-    self, BoundaryDomain, BoundarySample, DEFAULT_CAP, ReuseSettings, SameVertices,
+    self, BoundaryDomain, DEFAULT_CAP, ReuseSettings, SameVertices, ScaledJacobian,
     check_materials, shade_boundary,
 };
 use sss::integrator::pt;
@@ -122,20 +119,6 @@ fn framing() -> &'static Framing {
     })
 }
 
-/// The exits' lighting of `pixel` in `frame` (the method's light-selection stream).
-fn lighting(scene: &Scene, pixel: u32, frame: u32, seed: u64) -> SceneLighting<'_> {
-    let key = StreamKey {
-        pixel,
-        frame,
-        pass: 0,
-        purpose: PURPOSE_SINGLE_SCATTER_LIGHT,
-    };
-    SceneLighting {
-        scene,
-        selection: RefCell::new(key.stream(seed)),
-    }
-}
-
 /// The reused boundary term of frame `FRAMES − 1` of replica `seed` through `shift`.
 fn reused<T: for<'a> Shift<BoundaryDomain<'a>>>(scene: &Scene, seed: u64, shift: &T) -> Vec<DVec3> {
     let media = check_materials(scene).expect("diffuse slab");
@@ -194,7 +177,7 @@ fn reference() -> &'static Vec<Vec<DVec3>> {
                             inward_winding: scene.geometry.geometric_normal(g.prim).dot(g.view)
                                 < 0.0,
                         };
-                        let light = lighting(scene, pixel, frame, REFERENCE_SEED);
+                        let light = exit_lighting(scene, pixel, frame, REFERENCE_SEED);
                         (domain.zip(medium), boundary, *g, light)
                     },
                     |(state, boundary, g, light), pixel, sample, _| {
@@ -220,23 +203,6 @@ fn reference() -> &'static Vec<Vec<DVec3>> {
             })
             .collect()
     })
-}
-
-/// `J × CONTROL_JACOBIAN`: the negative control (a Jacobian wrong by 1%).
-struct ScaledJacobian;
-
-impl<'a> Shift<BoundaryDomain<'a>> for ScaledJacobian {
-    fn shift(
-        &self,
-        x: &BoundarySample,
-        src: &BoundaryDomain<'a>,
-        dst: &BoundaryDomain<'a>,
-    ) -> Result<Shifted<BoundarySample>, Fail> {
-        SameVertices.shift(x, src, dst).map(|s| Shifted {
-            jacobian: CONTROL_JACOBIAN * s.jacobian,
-            ..s
-        })
-    }
 }
 
 /// Per-replica CVs `[channel]` of `images` per non-empty region.
@@ -349,7 +315,7 @@ fn reused_boundary_term_is_unbiased() {
 #[test]
 fn a_jacobian_off_by_one_percent_is_caught() {
     let n = planned_n();
-    let rows = rows("J × 1.01", &replicas(n, &ScaledJacobian));
+    let rows = rows("J × 1.01", &replicas(n, &ScaledJacobian(CONTROL_JACOBIAN)));
     assert!(
         rows.iter().any(|r| r.verdict == Verdict::Biased),
         "J × {CONTROL_JACOBIAN} was not detected"
@@ -357,8 +323,8 @@ fn a_jacobian_off_by_one_percent_is_caught() {
 }
 
 /// Through the registry, `single-scatter:2/restir` renders all frames and its image is the
-/// integrator's (`boundary_reuse::render` with the documented light-selection streams), bit for
-/// bit, twice; its boundary term differs from zero on the slab and the image minus it is the
+/// integrator's (`boundary_reuse::render` lit by the method's `exit_lighting`, whose streams
+/// `single_scatter.rs` checks against their documentation), bit for bit, twice; its boundary term differs from zero on the slab and the image minus it is the
 /// plain estimator's single and multiple scattering, which is what `single-scatter:2` adds to
 /// its own boundary term: their difference on the slab is a difference of two boundary
 /// estimates, equal in expectation (checked above), and zero off the slab (Lambert pixels are
@@ -381,7 +347,7 @@ fn the_method_is_the_reused_boundary_plus_the_plain_rest() {
         FRAMES,
         FRAMES - 1,
         2,
-        |pixel, frame| lighting(scene, pixel, frame, 7),
+        |pixel, frame| exit_lighting(scene, pixel, frame, 7),
         &SameVertices,
     )
     .unwrap();

@@ -281,6 +281,25 @@ impl<'a> Shift<BoundaryDomain<'a>> for SameVertices {
     }
 }
 
+/// [`SameVertices`] with its Jacobian multiplied by `self.0`: deliberately wrong, the negative
+/// control of the tests (`restir::check`, the unbiasedness test of `lab`).
+#[derive(Clone, Copy, Debug)]
+pub struct ScaledJacobian(pub f32);
+
+impl<'a> Shift<BoundaryDomain<'a>> for ScaledJacobian {
+    fn shift(
+        &self,
+        x: &BoundarySample,
+        src: &BoundaryDomain<'a>,
+        dst: &BoundaryDomain<'a>,
+    ) -> Result<Shifted<BoundarySample>, Fail> {
+        SameVertices.shift(x, src, dst).map(|s| Shifted {
+            jacobian: self.0 * s.jacobian,
+            ..s
+        })
+    }
+}
+
 /// Knobs of the reuse.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ReuseSettings {

@@ -8,9 +8,11 @@
 //!   between the two methods (single and multiple scattering are the plain estimator's, drawn
 //!   from the same streams; `the_method_is_the_reused_boundary_plus_the_plain_rest` checks
 //!   the assembly bit for bit), so it is tested alone, without the other orders' noise.
-//! * Replicas: [`FRAMES`] = 8 frames of `slab`'s trajectory at 32 × 24 (the light behind the slab
-//!   shines through it: the boundary term is large), replica `i` with seed `i`, every frame with
-//!   candidates, temporal and 3 × 3 spatial reuse; the last frame is tested.
+//! * Designs: `slab` (mean free paths × 3) with its own lights (a quad behind, a point light in
+//!   front), and with a sphere, a triangle and a directional light behind it: every kind of light
+//!   vertex. The light behind the slab shines through it, so the boundary term is large.
+//! * Replicas: [`FRAMES`] = 8 frames of `slab`'s trajectory at 32 × 24, replica `i` with seed
+//!   `i`, every frame with candidates, temporal and 3 × 3 spatial reuse; the last frame is tested.
 //! * Reference: the plain estimator's boundary term (`single_scatter::path_traced`, its `zero`,
 //!   next-event estimation + escape direction with the balance heuristic: an independent
 //!   estimator of the same integral) at the same frame, [`REFERENCE_BATCHES`] batches of
@@ -19,19 +21,21 @@
 //!   decides "biased"), every row must be equivalent.
 //! * N: the smallest N with a planned probability ≥ [`FAMILY_POWER`] that an unbiased method is
 //!   equivalent in all rows (`restir::stats::replicas_for`, Bonferroni over rows), from the
-//!   per-replica CVs [`CV`] (measured with N = 256 by `measure_cvs`, `--ignored`) times
+//!   per-replica CVs `Design::cv` (measured with N = 256 by `measure_cvs`, `--ignored`) times
 //!   [`CV_MARGIN`] and the reference's relative standard error bound [`REFERENCE_REL_SE`].
 //!   `power_plan` prints the plan and its power to detect a +3% bias.
 //! * Negative control, same N: the same reuse with `J × 1.01`, whose error compounds over the
-//!   passes and frames to +2.8% … +2.9% (near δ; `J × 1.03` gives +9.8%), must be Biased in at
-//!   least one row.
-//! * Measured (2026-11-24, N = 133): −0.50% … −0.28% per channel, CIs within ±1.3%. A probe with
-//!   16× the samples put the reservoir's candidates without reuse (`f/p`) at −0.23% and the plain
-//!   estimator's own next-event estimation alone at −0.15% of the reference (each ±0.1%), so the
-//!   residual ≈ 0.2% lies between the plain estimator's two techniques (or in the reference,
-//!   s.e. 0.08%), not in the reuse; far below δ.
-//! * Cost: ≈ 10 s wall on 2 shared cores (reference 64 × 64 spp of 244 pixels, 2 × 133 replicas
-//!   of 8 frames).
+//!   passes and frames to +2.6% … +2.9% (near δ; `J × 1.03` gives +9.8%), must be Biased in at
+//!   least one row (it is in all four, on both designs).
+//! * Measured (2026-11-24): on `slab` (N = 133) −0.50% … −0.28% per channel, on the other
+//!   lights (N = 192) −0.59% … −0.45%, every CI within ±1.8%. Precise runs on `slab` (`--ignored`
+//!   probes, not kept): the reuse with N = 2000 reads −0.20% [−0.46%, +0.06%] (luminance), the
+//!   reservoir's candidates without reuse (`f/p`, 16× the samples) −0.23%, and the plain
+//!   estimator's own next-event estimation alone −0.15% (each ±0.1%): the residual ≈ 0.2% lies
+//!   between the plain estimator's two techniques (or in the reference, s.e. 0.08%), not in the
+//!   reuse; far below δ.
+//! * Cost: ≈ 15 s wall on 2 shared cores (two references of 64 × 64 spp of 244 pixels,
+//!   2 × 133 + 2 × 192 replicas of 8 frames).
 
 use std::sync::OnceLock;
 
@@ -50,7 +54,7 @@ use sss::integrator::pt;
 use sss::integrator::single_scatter::{self, SingleScatterSettings, sample_stream};
 use sss::material::Material;
 use sss::random_walk::MeshBoundary;
-use sss::scene::{GBuffer, Scene};
+use sss::scene::{GBuffer, Light, Lights, Scene};
 
 const PROTOCOL: Protocol = Protocol {
     delta: 0.02,
@@ -73,30 +77,76 @@ const SPP_PER_BATCH: u32 = 64;
 const REFERENCE_REL_SE: f64 = 0.0012;
 /// Keys the light samples of the region classification.
 const REGIONS_SEED: u64 = 0x5E61;
-/// The tested region: the slab's 244 pixels. Every one of them is also `penumbra` (the point
-/// light in front is visible from x1, the quad behind the slab is not), which would repeat the
-/// same rows; there is no lit or shadowed pixel in this framing.
+/// The tested region: the slab's 244 pixels. In both designs every one of them is also in one
+/// visibility region (`penumbra` with the slab's lights: the point light in front is visible from
+/// x1, the quad behind it is not; `shadowed` with the lights behind), which would repeat the same
+/// rows.
 const REGIONS: [Region; 1] = [Region::Translucent];
-/// Per-replica CVs of the region means (rows: [`REGIONS`], columns: [`Channel::ALL`]), measured
-/// with N = 256 (seeds 0..256) by `measure_cvs` (2026-11-24). The reference's relative standard
-/// errors measured with it: 0.07%, 0.08%, 0.10%, 0.08%.
-const CV: [[f64; 4]; 1] = [[0.030, 0.029, 0.044, 0.028]];
 /// The Jacobian factor of the negative control.
 const CONTROL_JACOBIAN: f32 = 1.01;
 
-/// `slab` at [`SIDE`], its wax's lengths scaled by [`MFP_SCALE`].
-fn slab() -> Scene {
-    let mut scene = Scene::builtin("slab").expect("built-in");
-    for material in &mut scene.materials {
-        if let Material::Translucent(t) = material {
-            t.scale *= MFP_SCALE;
-        }
-    }
-    Scene {
-        camera: scene.camera.with_resolution(SIDE[0], SIDE[1]),
-        ..scene
-    }
+/// A test scene: `slab` with its wax's lengths scaled by [`MFP_SCALE`], at [`SIDE`], lit by
+/// `lights`, and what was measured of it.
+struct Design {
+    name: &'static str,
+    lights: fn() -> Lights,
+    /// Per-replica CVs of the translucent region's mean per channel ([`Channel::ALL`]), measured
+    /// with N = 256 (seeds 0..256) by `measure_cvs` (2026-11-24).
+    cv: [f64; 4],
+    framing: OnceLock<Framing>,
+    reference: OnceLock<Vec<Vec<DVec3>>>,
 }
+
+/// The slab's own lights: a quad behind it, a point light in front. Reference relative s.e.
+/// measured: 0.07%, 0.08%, 0.10%, 0.08%.
+static SLAB: Design = Design {
+    name: "slab",
+    lights: || Scene::builtin("slab").expect("built-in").lights,
+    cv: [0.030, 0.029, 0.044, 0.028],
+    framing: OnceLock::new(),
+    reference: OnceLock::new(),
+};
+
+/// Every other kind of light vertex, behind the slab: a sphere (area measure through the cone
+/// sampling's solid-angle density), a triangle and a directional light (a delta: the vertex is the
+/// light). Reference relative s.e. measured: 0.07%, 0.09%, 0.11%, 0.08%.
+///
+/// No exit sees one light through another: where it does, the reference itself is inconsistent
+/// (`SceneLighting::radiance` returns the nearest light only, its `pdf` sums every light crossed,
+/// while next-event estimation treats lights as transparent), and the plain estimator is not
+/// additive over lights. With the sphere at (0, 0.7, −1), seen through the triangle, the plain
+/// boundary term was 6% below the sum of its one-light values, which `/restir` (lights
+/// transparent) matched.
+static BEHIND: Design = Design {
+    name: "slab lit by a sphere, a triangle and a directional light",
+    lights: || {
+        let lights = vec![
+            Light::Sphere {
+                center: Vec3::new(1.2, 0.7, -0.5),
+                radius: 0.2,
+                radiance: Vec3::splat(20.0),
+            },
+            Light::Triangle {
+                vertices: [
+                    Vec3::new(-0.5, 0.2, -0.8),
+                    Vec3::new(0.5, 0.2, -0.8),
+                    Vec3::new(0.0, 1.2, -0.8),
+                ],
+                radiance: Vec3::splat(10.0),
+            },
+            Light::Directional {
+                direction: Vec3::new(0.3, -0.2, 1.0).normalize(),
+                irradiance: Vec3::splat(3.0),
+            },
+        ];
+        Lights::new(lights, 2.0).expect("positive power")
+    },
+    cv: [0.038, 0.038, 0.053, 0.037],
+    framing: OnceLock::new(),
+    reference: OnceLock::new(),
+};
+
+const DESIGNS: [&Design; 2] = [&SLAB, &BEHIND];
 
 /// The scene, its last frame's G-buffer and regions, computed once.
 struct Framing {
@@ -105,18 +155,37 @@ struct Framing {
     regions: Regions,
 }
 
-fn framing() -> &'static Framing {
-    static FRAMING: OnceLock<Framing> = OnceLock::new();
-    FRAMING.get_or_init(|| {
-        let scene = slab();
-        let gbuffer = GBuffer::render(&scene, FRAMES - 1);
-        let regions = Regions::classify(&scene, &gbuffer, REGIONS_SEED);
-        Framing {
-            scene,
-            gbuffer,
-            regions,
+impl Design {
+    fn scene(&self) -> Scene {
+        self.scene_with((self.lights)())
+    }
+
+    fn scene_with(&self, lights: Lights) -> Scene {
+        let mut scene = Scene::builtin("slab").expect("built-in");
+        for material in &mut scene.materials {
+            if let Material::Translucent(t) = material {
+                t.scale *= MFP_SCALE;
+            }
         }
-    })
+        Scene {
+            camera: scene.camera.with_resolution(SIDE[0], SIDE[1]),
+            lights,
+            ..scene
+        }
+    }
+
+    fn framing(&self) -> &Framing {
+        self.framing.get_or_init(|| {
+            let scene = self.scene();
+            let gbuffer = GBuffer::render(&scene, FRAMES - 1);
+            let regions = Regions::classify(&scene, &gbuffer, REGIONS_SEED);
+            Framing {
+                scene,
+                gbuffer,
+                regions,
+            }
+        })
+    }
 }
 
 /// The reused boundary term of frame `FRAMES − 1` of replica `seed` through `shift`.
@@ -145,10 +214,14 @@ fn reused<T: for<'a> Shift<BoundaryDomain<'a>>>(scene: &Scene, seed: u64, shift:
     last
 }
 
-/// Replicas `0..n` of the reused boundary term.
-fn replicas<T: for<'a> Shift<BoundaryDomain<'a>>>(n: usize, shift: &T) -> Vec<Vec<DVec3>> {
+/// Replicas `0..n` of the reused boundary term on `design`.
+fn replicas<T: for<'a> Shift<BoundaryDomain<'a>>>(
+    design: &Design,
+    n: usize,
+    shift: &T,
+) -> Vec<Vec<DVec3>> {
     use rayon::prelude::*;
-    let scene = &framing().scene;
+    let scene = &design.framing().scene;
     (0..n as u64)
         .into_par_iter()
         .map(|seed| reused(scene, seed, shift))
@@ -156,10 +229,9 @@ fn replicas<T: for<'a> Shift<BoundaryDomain<'a>>>(n: usize, shift: &T) -> Vec<Ve
 }
 
 /// The plain estimator's boundary term, batches of [`SPP_PER_BATCH`] samples (module doc).
-fn reference() -> &'static Vec<Vec<DVec3>> {
-    static REFERENCE: OnceLock<Vec<Vec<DVec3>>> = OnceLock::new();
-    REFERENCE.get_or_init(|| {
-        let Framing { scene, gbuffer, .. } = framing();
+fn reference(design: &Design) -> &Vec<Vec<DVec3>> {
+    design.reference.get_or_init(|| {
+        let Framing { scene, gbuffer, .. } = design.framing();
         let media = check_materials(scene).unwrap();
         let settings = SingleScatterSettings::default();
         let frame = gbuffer.frame;
@@ -206,8 +278,8 @@ fn reference() -> &'static Vec<Vec<DVec3>> {
 }
 
 /// Per-replica CVs `[channel]` of `images` per non-empty region.
-fn cvs(images: &[Vec<DVec3>]) -> Vec<(Region, usize, [f64; 4])> {
-    summarize(images, &framing().regions)
+fn cvs(design: &Design, images: &[Vec<DVec3>]) -> Vec<(Region, usize, [f64; 4])> {
+    summarize(images, &design.framing().regions)
         .into_iter()
         .map(|s| {
             let cv = Channel::ALL.map(|c| {
@@ -219,35 +291,37 @@ fn cvs(images: &[Vec<DVec3>]) -> Vec<(Region, usize, [f64; 4])> {
         .collect()
 }
 
-/// The plan: one equivalence test per region and channel.
-fn plan() -> Vec<(EquivalencePlan, f64)> {
+/// The plan of `design`: one equivalence test per region and channel.
+fn plan(design: &Design) -> Vec<(EquivalencePlan, f64)> {
     let plan = EquivalencePlan {
         delta: PROTOCOL.delta,
         alpha: PROTOCOL.alpha,
         reference_rel_se: REFERENCE_REL_SE,
         reference_n: REFERENCE_BATCHES as usize,
     };
-    CV.iter()
-        .flatten()
-        .map(|&cv| (plan, CV_MARGIN * cv))
-        .collect()
+    design.cv.iter().map(|&cv| (plan, CV_MARGIN * cv)).collect()
 }
 
-fn planned_n() -> usize {
-    replicas_for(&plan(), FAMILY_POWER, 100_000).expect("a feasible plan")
+fn planned_n(design: &Design) -> usize {
+    replicas_for(&plan(design), FAMILY_POWER, 100_000).expect("a feasible plan")
 }
 
-/// Measures the per-replica CVs of [`CV`] (N = 256) and the reference's relative standard
+/// Measures every design's per-replica CVs (N = 256) and the reference's relative standard
 /// errors; `cargo test --release -p lab --test single_scatter_restir -- --ignored --nocapture`.
 #[test]
 #[ignore]
 fn measure_cvs() {
-    for (region, pixels, cv) in cvs(&replicas(256, &SameVertices)) {
-        eprintln!("{region} ({pixels} px): CV {cv:.3?}");
-    }
-    for (region, pixels, cv) in cvs(reference()) {
-        let rel_se = cv.map(|c| c / (REFERENCE_BATCHES as f64).sqrt());
-        eprintln!("reference {region} ({pixels} px): rel. s.e. {rel_se:.4?}");
+    for design in DESIGNS {
+        for (region, pixels, cv) in cvs(design, &replicas(design, 256, &SameVertices)) {
+            eprintln!("{}: {region} ({pixels} px): CV {cv:.3?}", design.name);
+        }
+        for (region, pixels, cv) in cvs(design, reference(design)) {
+            let rel_se = cv.map(|c| c / (REFERENCE_BATCHES as f64).sqrt());
+            eprintln!(
+                "{}: reference {region} ({pixels} px): rel. s.e. {rel_se:.4?}",
+                design.name
+            );
+        }
     }
 }
 
@@ -255,54 +329,65 @@ fn measure_cvs() {
 /// Holm level of that row (α / rows, the strictest step).
 #[test]
 fn power_plan() {
-    let plan = plan();
-    let n = planned_n();
-    let rows = plan.len() as f64;
-    let detect = plan
-        .iter()
-        .map(|(p, cv)| p.rejection_power(*cv, n, 0.03, PROTOCOL.alpha / rows))
-        .fold(1.0f64, f64::min);
-    eprintln!(
-        "N = {n} replicas: P(all {rows} rows equivalent | unbiased) ≥ {:.3}, \
-         P(detect +3% in a row) ≥ {detect:.4}",
-        family_power(&plan, n)
-    );
-    assert!(family_power(&plan, n) >= FAMILY_POWER);
-    assert!(detect >= 0.99, "the plan cannot see the control: {detect}");
-    assert!(n <= 400, "N = {n}: the test would take too long");
+    for design in DESIGNS {
+        let plan = plan(design);
+        let n = planned_n(design);
+        let rows = plan.len() as f64;
+        let detect = plan
+            .iter()
+            .map(|(p, cv)| p.rejection_power(*cv, n, 0.03, PROTOCOL.alpha / rows))
+            .fold(1.0f64, f64::min);
+        eprintln!(
+            "{}: N = {n} replicas: P(all {rows} rows equivalent | unbiased) ≥ {:.3}, \
+             P(detect +3% in a row) ≥ {detect:.4}",
+            design.name,
+            family_power(&plan, n)
+        );
+        assert!(family_power(&plan, n) >= FAMILY_POWER);
+        assert!(detect >= 0.99, "the plan cannot see the control: {detect}");
+        assert!(n <= 400, "N = {n}: the test would take too long");
+    }
 }
 
-/// The rows of `images` against the reference over [`REGIONS`].
-fn rows(method: &str, images: &[Vec<DVec3>]) -> Vec<BiasRow> {
-    let regions = &framing().regions;
+/// The rows of `images` against `design`'s reference over [`REGIONS`].
+fn rows(design: &Design, method: &str, images: &[Vec<DVec3>]) -> Vec<BiasRow> {
+    let regions = &design.framing().regions;
     let keep = |s: &lab::bias::RegionSummary| REGIONS.contains(&s.region);
     let estimate: Vec<_> = summarize(images, regions)
         .into_iter()
         .filter(keep)
         .collect();
-    let reference: Vec<_> = summarize(reference(), regions)
+    let reference: Vec<_> = summarize(reference(design), regions)
         .into_iter()
         .filter(keep)
         .collect();
     let rows = bias_rows(method, &estimate, &reference, &PROTOCOL);
-    eprintln!("{}", Table(&rows));
-    for (region, pixels, cv) in cvs(images) {
-        eprintln!("measured CV {region} ({pixels} px): {cv:.3?}, planned {CV:.3?} × {CV_MARGIN}");
+    eprintln!("{}\n{}", design.name, Table(&rows));
+    for (region, pixels, cv) in cvs(design, images) {
+        let planned = design.cv;
+        eprintln!(
+            "measured CV {region} ({pixels} px): {cv:.3?}, planned {planned:.3?} × {CV_MARGIN}"
+        );
     }
     assert_eq!(rows.len(), 4 * REGIONS.len(), "every region has pixels");
     rows
 }
 
-/// The reused boundary term is equivalent to the plain one within ±2% at 99% in every row.
-#[test]
-fn reused_boundary_term_is_unbiased() {
-    let n = planned_n();
-    let rows = rows("single-scatter/restir", &replicas(n, &SameVertices));
+/// The reused boundary term on `design` is equivalent to the plain one within ±2% at 99% in
+/// every row.
+fn unbiased_on(design: &Design) {
+    let n = planned_n(design);
+    let rows = rows(
+        design,
+        "single-scatter/restir",
+        &replicas(design, n, &SameVertices),
+    );
     for row in &rows {
         assert_eq!(
             row.verdict,
             Verdict::Equivalent,
-            "{} {}: {}",
+            "{}: {} {}: {}",
+            design.name,
             row.region,
             row.channel,
             PROTOCOL.describe(row.verdict)
@@ -310,16 +395,37 @@ fn reused_boundary_term_is_unbiased() {
     }
 }
 
-/// Negative control near δ: the same reuse with `J × 1.01` (+2.8% after 8 frames) is Biased in
-/// at least one row.
-#[test]
-fn a_jacobian_off_by_one_percent_is_caught() {
-    let n = planned_n();
-    let rows = rows("J × 1.01", &replicas(n, &ScaledJacobian(CONTROL_JACOBIAN)));
+/// Negative control near δ on `design`: the same reuse with `J × 1.01` is Biased in at least one
+/// row.
+fn control_caught_on(design: &Design) {
+    let n = planned_n(design);
+    let images = replicas(design, n, &ScaledJacobian(CONTROL_JACOBIAN));
+    let rows = rows(design, "J × 1.01", &images);
     assert!(
         rows.iter().any(|r| r.verdict == Verdict::Biased),
-        "J × {CONTROL_JACOBIAN} was not detected"
+        "{}: J × {CONTROL_JACOBIAN} was not detected",
+        design.name
     );
+}
+
+#[test]
+fn reused_boundary_term_is_unbiased() {
+    unbiased_on(&SLAB);
+}
+
+#[test]
+fn a_jacobian_off_by_one_percent_is_caught() {
+    control_caught_on(&SLAB);
+}
+
+#[test]
+fn reused_boundary_term_is_unbiased_with_every_kind_of_light() {
+    unbiased_on(&BEHIND);
+}
+
+#[test]
+fn a_jacobian_off_by_one_percent_is_caught_with_every_kind_of_light() {
+    control_caught_on(&BEHIND);
 }
 
 /// Through the registry, `single-scatter:2/restir` renders all frames and its image is the
@@ -332,7 +438,7 @@ fn a_jacobian_off_by_one_percent_is_caught() {
 /// plain method, give other bits.
 #[test]
 fn the_method_is_the_reused_boundary_plus_the_plain_rest() {
-    let Framing { scene, .. } = framing();
+    let Framing { scene, gbuffer, .. } = SLAB.framing();
     let method = Method::parse("single-scatter:2/restir").unwrap();
     let rendered = method.render(scene, FRAMES, 7).unwrap();
     assert_eq!((rendered.frames_rendered, rendered.nonfinite), (FRAMES, 0));
@@ -360,7 +466,10 @@ fn the_method_is_the_reused_boundary_plus_the_plain_rest() {
     };
     let image: Vec<Vec3> = last.image.pixels.iter().map(|p| p.as_vec3()).collect();
     assert_eq!(bits(&rendered.image.pixels), bits(&image));
-    let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let one_thread = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
     let again = one_thread.install(|| method.render(scene, FRAMES, 7).unwrap());
     assert_eq!(bits(&again.image.pixels), bits(&image), "one thread");
     let other = method.render(scene, FRAMES, 8).unwrap();
@@ -371,7 +480,6 @@ fn the_method_is_the_reused_boundary_plus_the_plain_rest() {
         .unwrap();
     assert_ne!(bits(&plain.image.pixels), bits(&image), "control: plain");
 
-    let gbuffer = &framing().gbuffer;
     let (mut on_slab, mut lit) = (0, 0);
     for (p, g) in gbuffer.pixels.iter().enumerate() {
         let Some(g) = g else { continue };
@@ -400,7 +508,7 @@ fn on_vulkan_restir_is_refused() {
     };
     let method = Method::parse("single-scatter:1/restir").unwrap();
     let error = method
-        .render_on(&backend, &framing().scene, 2, 1)
+        .render_on(&backend, &SLAB.framing().scene, 2, 1)
         .expect_err("CPU only")
         .to_string();
     assert!(

@@ -191,38 +191,62 @@ fn mis_weights_partition_unity() {
 
 /// The candidates' density is the one they report, and `f/p` is finite: over 4 000 candidates
 /// of 40 slab pixels, `pdf(x)` equals the drawn density bit for bit and every contribution is
-/// finite; some candidates are lit (the test sees light), none has `p̂ > 0` outside the
-/// shift's support. With both lights of the scene (quad and point light).
+/// finite; some candidates are lit on every light (the test sees light), and every direction
+/// enters the surface. With the scene's quad and point light, and with a sphere, a triangle and
+/// a directional light behind the slab (every kind of vertex).
 #[test]
 fn candidates_report_their_density() {
-    let scene = Scene::builtin("slab").unwrap();
-    let scene = Scene {
-        camera: scene.camera.with_resolution(32, 24),
-        ..scene
-    };
-    let media = check_materials(&scene).unwrap();
-    let all = domains(&scene, &media, 3);
-    let (mut lit, mut drawn, mut point_light) = (0, 0, 0);
-    for (i, domain) in all.iter().step_by(all.len() / 40).enumerate() {
-        let mut rng = StreamKey::new(i as u32, 0, 0, PURPOSE_BOUNDARY_CANDIDATES).stream(2);
-        for _ in 0..100 {
-            let Some((x, pdf)) = Candidates.sample(domain, &mut rng) else {
-                continue;
-            };
-            drawn += 1;
-            point_light += (x.light == 1) as u32;
-            assert_eq!(pdf, Candidates.pdf(domain, &x));
-            let f = domain.contribution(&x);
-            assert!(
-                f.is_finite() && (f / pdf).is_finite(),
-                "{x:?}: f = {f}, p = {pdf}"
-            );
-            assert!(x.dir.dot(domain.normal()) < 0.0);
-            lit += (domain.target(&x) > 0.0) as u32;
+    let behind = vec![
+        Light::Sphere {
+            center: Vec3::new(0.0, 0.7, -1.0),
+            radius: 0.2,
+            radiance: Vec3::splat(20.0),
+        },
+        Light::Triangle {
+            vertices: [
+                Vec3::new(-0.5, 0.2, -0.8),
+                Vec3::new(0.5, 0.2, -0.8),
+                Vec3::new(0.0, 1.2, -0.8),
+            ],
+            radiance: Vec3::splat(10.0),
+        },
+        Light::Directional {
+            direction: Vec3::new(0.3, -0.2, 1.0).normalize(),
+            irradiance: Vec3::splat(3.0),
+        },
+    ];
+    let own = Scene::builtin("slab").unwrap().lights;
+    for lights in [own, Lights::new(behind, 2.0).unwrap()] {
+        let slab = Scene::builtin("slab").unwrap();
+        let scene = Scene {
+            camera: slab.camera.with_resolution(32, 24),
+            lights,
+            ..slab
+        };
+        let media = check_materials(&scene).unwrap();
+        let all = domains(&scene, &media, 3);
+        let mut lit = vec![0u32; scene.lights.len()];
+        let mut drawn = 0;
+        for (i, domain) in all.iter().step_by(all.len() / 40).enumerate() {
+            let mut rng = StreamKey::new(i as u32, 0, 0, PURPOSE_BOUNDARY_CANDIDATES).stream(2);
+            for _ in 0..100 {
+                let Some((x, pdf)) = Candidates.sample(domain, &mut rng) else {
+                    continue;
+                };
+                drawn += 1;
+                assert_eq!(pdf, Candidates.pdf(domain, &x));
+                let f = domain.contribution(&x);
+                assert!(
+                    f.is_finite() && (f / pdf).is_finite(),
+                    "{x:?}: f = {f}, p = {pdf}"
+                );
+                assert!(x.dir.dot(domain.normal()) < 0.0);
+                lit[x.light as usize] += (domain.target(&x) > 0.0) as u32;
+            }
         }
+        eprintln!("{drawn} candidates, lit per light {lit:?}");
+        assert!(drawn > 2000 && lit.iter().all(|&n| n > 0), "{lit:?}");
     }
-    eprintln!("{drawn} candidates, {lit} lit, {point_light} on the point light");
-    assert!(drawn > 2000 && lit > 100 && point_light > 0);
 }
 
 /// Dielectric and index-matched boundaries are refused in one line naming the material's

@@ -1,5 +1,5 @@
 //! ReSTIR on seed 000's boundary (zero-scattering) term [000 "ReSTIR Sample"]: the option
-//! `/restir` of [`single_scatter`]. Single scattering and the `R − R1` diffusion part are the
+//! `/restir` of [`single_scatter`](super::single_scatter). Single scattering and the `R − R1` diffusion part are the
 //! plain estimator's; only the boundary term `e^{−σt d0} f0 L0` [000 slide 60] is replaced by
 //! the estimate `f(Y) · W_Y` of a per-pixel reservoir, reused over frames and pixels.
 //!
@@ -15,8 +15,10 @@
 //! the chord's transmittance, both transmission factors and the exit's shadow ray; a pixel is
 //! shaded with `f(Y) · W_Y`. The plain estimator reaches the same integral with next-event
 //! estimation and an escape direction (balance heuristic); the reservoir's candidates use light
-//! sampling alone ([`Candidates`]: `ω` cosine-distributed, `y` from [`Lights::sample`] at
-//! `x_e`), whose density is positive wherever `f` is.
+//! sampling alone ([`Candidates`]: `ω` cosine-distributed, `y` from
+//! [`Lights::sample`](crate::scene::Lights::sample) at `x_e`), whose density is positive wherever
+//! `f` is. `V` tests the scene's geometry only: lights do not occlude one another, as in
+//! next-event estimation.
 //!
 //! **Shift** ([`SameVertices`]): the destination reuses the same world direction and the same
 //! light vertex, `J = 1` in those measures; it fails where `ω` does not enter the destination's

@@ -359,8 +359,7 @@ pub fn check_materials(scene: &Scene) -> Result<Vec<Option<Medium>>, InputError>
                     BoundaryKind::Dielectric => "\"dielectric\"",
                     _ => "\"index-matched\"",
                 },
-                "ReSTIR on the boundary term needs boundary = \"diffuse\" \
-                 (entry and exit are deltas otherwise)",
+                "ReSTIR on the boundary term needs \"diffuse\" (this one's entry and exit are deltas)",
             ));
         }
     }

@@ -12,8 +12,9 @@
 //! * Printed: MSE per method with its 95% CI, and the ratio restir / plain with its 95% CI on the
 //!   log scale.
 //!
-//! `cargo run --release -p lab --example boundary_restir_mse -- [scene] [WxH] [replicas] [ref spp]`
-//! (defaults: `slab 64x48 32 4096`).
+//! `cargo run --release -p lab --example boundary_restir_mse -- [scene] [WxH] [replicas] [ref spp]
+//! [mfp scale]` (defaults: `slab 64x48 32 4096 1`; the scale multiplies every translucent
+//! material's `scale`).
 
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -22,6 +23,7 @@ use sss::integrator::boundary_reuse::{
 };
 use sss::integrator::pt;
 use sss::integrator::single_scatter::{self, Shading, SingleScatterSettings, sample_stream};
+use sss::material::Material;
 use sss::random_walk::Medium;
 use sss::scene::{FRAMES, GBuffer, Scene};
 
@@ -106,8 +108,14 @@ fn main() {
     let size = args.get(2).map_or("64x48", |s| s.as_str());
     let replicas: u64 = args.get(3).map_or(32, |s| s.parse().unwrap());
     let reference_spp: u32 = args.get(4).map_or(4096, |s| s.parse().unwrap());
+    let mfp_scale: f32 = args.get(5).map_or(1.0, |s| s.parse().unwrap());
     let (w, h) = size.split_once('x').unwrap();
     let mut scene = Scene::builtin(name).unwrap();
+    for material in &mut scene.materials {
+        if let Material::Translucent(t) = material {
+            t.scale *= mfp_scale;
+        }
+    }
     scene.camera = scene
         .camera
         .with_resolution(w.parse().unwrap(), h.parse().unwrap());
@@ -182,8 +190,8 @@ fn main() {
         .collect();
 
     println!(
-        "{name} {size}, {replicas} replicas, references {reference_spp} spp ({BATCHES} batches), \
-         translucent pixels; MSE per pixel and channel, 95% CIs"
+        "{name} (mfp × {mfp_scale}) {size}, {replicas} replicas, references {reference_spp} spp \
+         ({BATCHES} batches), translucent pixels; MSE per pixel and channel, 95% CIs"
     );
     println!("| frame | term | plain | /restir | ratio /restir ÷ plain | reference variance |");
     println!("|---:|---|---:|---:|---:|---:|");

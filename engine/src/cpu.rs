@@ -10,7 +10,7 @@ use std::time::Instant;
 use glam::Vec3;
 use rayon::prelude::*;
 use restir::rng::StreamKey;
-use shifts::{Hybrid, SssDomain};
+use shifts::{Hybrid, SssDomain, Target};
 use sss::integrator::pt::{self, PtSettings, Shading};
 use sss::scene::{GBuffer, Scene};
 
@@ -81,6 +81,7 @@ pub(crate) fn run(
         scene,
         config,
         shade: preset.shade,
+        target: preset.target,
         width,
         cells: vec![Cell::default(); n],
         rao_blackwellised: vec![None; n],
@@ -139,6 +140,7 @@ struct Frame<'a> {
     scene: &'a Scene,
     config: &'a RunConfig,
     shade: Shade,
+    target: Target,
     width: u32,
     /// The output of the running pass per pixel (its reservoir and diagnostics).
     cells: Vec<Cell>,
@@ -183,6 +185,7 @@ impl Frame<'_> {
                 rao_blackwellised,
                 step.pass,
                 seed,
+                self.target,
             )));
         };
         let input = PassInput {
@@ -192,6 +195,7 @@ impl Frame<'_> {
             pass: step.pass,
             seed,
             collect_diagnostics: self.config.collect_diagnostics,
+            target: self.target,
         };
         let previous = self.previous_gbuffer.as_ref().map(|gbuffer| Previous {
             gbuffer,
@@ -347,6 +351,7 @@ fn shade(
     rao_blackwellised: &[Option<Vec3>],
     pass: u32,
     seed: u64,
+    target: Target,
 ) -> (Image, u64) {
     let mut pixels = vec![Vec3::ZERO; reservoirs.len()];
     let settings = PtSettings::default();
@@ -357,6 +362,7 @@ fn shade(
         pass,
         seed,
         collect_diagnostics: false,
+        target,
     };
     let nans = std::sync::atomic::AtomicU64::new(0);
     let Ok(()) = per_pixel::<_, Infallible>(&mut pixels, gbuffer.width, |pixel, out| {
@@ -674,7 +680,7 @@ mod tests {
         let bad = Preset {
             name: "bad".into(),
             passes: preset.passes[1..].to_vec(),
-            shade: preset.shade,
+            ..preset.clone()
         };
         assert!(matches!(
             run(&scene, &bad, &RunConfig::default()),

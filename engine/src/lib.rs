@@ -44,7 +44,7 @@ pub use diagnostics::Diagnostics;
 pub use image::Image;
 pub use restir::mis::MisKind;
 pub use shifts::preset::{PassSpec, Preset, PresetError, RadiusRule, Shade};
-pub use shifts::{PixelReservoir, ShiftKind};
+pub use shifts::{PixelReservoir, ShiftKind, Target};
 
 /// What a run does besides the preset: the replica seed, the number of frames of the camera
 /// trajectory, and whether diagnostics are collected (they re-apply shifts and cost time).

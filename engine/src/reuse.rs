@@ -10,7 +10,7 @@ use restir::resample::{Observed, ResampleError, Source, resample_observed};
 use restir::reservoir::{Reservoir, cap_confidence};
 use restir::rng::StreamKey;
 use restir::shift::{Domain, Fail, Shift};
-use shifts::{SssDomain, SssSample, resolve_deferred_index};
+use shifts::{SssDomain, SssSample, Target, resolve_deferred_index};
 use sss::scene::{GBuffer, GPixel, Scene};
 
 use crate::purpose;
@@ -80,6 +80,8 @@ pub struct PassInput<'a> {
     pub pass: u32,
     pub seed: u64,
     pub collect_diagnostics: bool,
+    /// The preset's target function `p̂` of every domain of the pass.
+    pub target: Target,
 }
 
 impl<'a> PassInput<'a> {
@@ -93,7 +95,8 @@ impl<'a> PassInput<'a> {
             self.gbuffer.frame,
             self.pass,
             self.seed,
-        )?;
+        )?
+        .with_target(self.target);
         Some((domain, g))
     }
 }
@@ -236,7 +239,8 @@ pub fn temporal(
         let q = prev.gbuffer.reproject(&input.scene.camera, g)?;
         let g_prev = prev.gbuffer.pixels[q as usize].as_ref()?;
         let frame = prev.gbuffer.frame;
-        let domain = SssDomain::new(input.scene, g_prev, q, frame, input.pass, input.seed)?;
+        let domain = SssDomain::new(input.scene, g_prev, q, frame, input.pass, input.seed)?
+            .with_target(input.target);
         let mut reservoir = prev.reservoirs[q as usize].get();
         reservoir.confidence = cap_confidence(reservoir.confidence, canonical.confidence, cap);
         Some((domain, reservoir))
@@ -397,6 +401,7 @@ mod tests {
             pass: 0,
             seed,
             collect_diagnostics: false,
+            target: Target::Luminance,
         };
         (0..gbuffer.pixels.len() as u32)
             .map(|pixel| {
@@ -427,6 +432,7 @@ mod tests {
             pass: 1,
             seed: 4,
             collect_diagnostics: false,
+            target: Target::Luminance,
         };
         let shift = ShiftKind::InvertingDeferred;
         let (mut moved, mut unknown, mut raw_unknown) = (0, 0, 0);

@@ -21,6 +21,7 @@ use restir::rng::StreamKey;
 use restir::shift::Domain;
 use shifts::ShiftKind;
 use shifts::SssSample;
+use shifts::Target;
 use shifts::preset::{PassSpec, Preset, Shade, TEMPORAL_CAP};
 use sss::scene::{GBuffer, Scene};
 
@@ -362,6 +363,7 @@ fn pass_input<'a>(
         pass,
         seed,
         collect_diagnostics: true,
+        target: Target::Luminance,
     }
 }
 

@@ -5,11 +5,11 @@
 //! Without Vulkan each test prints why it is skipped and passes, unless `RESHIFT_REQUIRE_VULKAN=1`,
 //! which makes it fail.
 
-use engine::PixelReservoir;
 use engine::contract::KEPT_HITS;
 use engine::reuse::{self, PassInput};
 use engine::vulkan::testing::{UploadedFrame, kernel_or_skip};
 use engine::vulkan::{Buffer, FrameInput, PT, SHADE, VulkanError, render_pt_hits, shade};
+use engine::{PixelReservoir, Target};
 use engine::{candidates, purpose};
 use glam::{DVec3, Vec3};
 use restir::rng::StreamKey;
@@ -43,6 +43,7 @@ fn cpu_reservoirs(scene: &Scene, gbuffer: &GBuffer, seed: u64) -> Vec<PixelReser
         pass: 0,
         seed,
         collect_diagnostics: false,
+        target: Target::Luminance,
     };
     let mut hits = Vec::new();
     (0..gbuffer.pixels.len() as u32)
@@ -103,6 +104,7 @@ fn cpu_shade(
         pass,
         seed,
         collect_diagnostics: false,
+        target: Target::Luminance,
     };
     let settings = PtSettings::default();
     (0..gbuffer.pixels.len() as u32)

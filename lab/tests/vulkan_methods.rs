@@ -140,7 +140,7 @@ fn sequential_run_matches_the_cpu_within_monte_carlo_noise() {
         let prefix = Preset {
             name: format!("sequential[..{k}]"),
             passes: preset.passes[..k].to_vec(),
-            shade: preset.shade,
+            ..preset.clone()
         };
         let gpu = backend.run(&scene, &prefix, &config(1, 1)).unwrap();
         let cpu = engine::run(&scene, &prefix, &config(1, 1)).unwrap();
@@ -221,16 +221,21 @@ fn gpu_runs_are_deterministic() {
     assert_ne!(bits(&one).0, bits(&other).0, "control: another seed");
 }
 
-/// Rao-Blackwellised shading and the unclamped spatial radius have no Vulkan kernel: the backend
-/// refuses each with one line naming the preset, and the same preset with selected shading and
-/// the clamped radius runs (control).
+/// Rao-Blackwellised shading, the unclamped spatial radius and targets other than the luminance
+/// have no Vulkan kernel: the backend refuses each with one line naming the preset, and the same
+/// preset with selected shading, the clamped radius and the luminance target runs (control).
 #[test]
 fn cpu_only_modifiers_are_refused_in_one_line() {
     let Some(backend) = backend_or_skip("cpu_only_modifiers_are_refused_in_one_line") else {
         return;
     };
     let scene = scene("bumpy", 16, 12);
-    for spec in ["hybrid/shade=all", "hybrid/radius=unclamped"] {
+    for spec in [
+        "hybrid/shade=all",
+        "hybrid/radius=unclamped",
+        "hybrid/target=mean",
+        "hybrid/target=l2",
+    ] {
         let cpu_only = restir::preset(Some(spec)).unwrap();
         let line = backend
             .run(&scene, &cpu_only, &config(0, 2))
@@ -241,8 +246,10 @@ fn cpu_only_modifiers_are_refused_in_one_line() {
             "{line}"
         );
     }
-    let clamped = restir::preset(Some("hybrid/radius=clamped")).unwrap();
-    backend.run(&scene, &clamped, &config(0, 2)).unwrap();
+    for control in ["hybrid/radius=clamped", "hybrid/target=luminance"] {
+        let preset = restir::preset(Some(control)).unwrap();
+        backend.run(&scene, &preset, &config(0, 2)).unwrap();
+    }
     let selected = restir::preset(Some("hybrid/shade=selected")).unwrap();
     backend.run(&scene, &selected, &config(0, 2)).unwrap();
 }

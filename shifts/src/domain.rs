@@ -15,6 +15,7 @@ use sss::scene::{DIRECTIONAL_DISTANCE, GPixel, Light, Scene};
 use crate::contract::{PARTNER_PIXEL_MASK, SHADOW_EPSILON};
 pub(crate) use crate::contract::{PURPOSE_INVERSION, PURPOSE_PICK};
 use crate::sample::SssSample;
+use crate::target::Target;
 
 /// The direction toward the light vertex seen from x2, and what the light sends along it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -46,6 +47,7 @@ pub struct SssDomain<'s> {
     material: Translucent,
     x1: ExitPoint,
     selection: TechniqueSelection,
+    target: Target,
     pixel: u32,
     frame: u32,
     pass: u32,
@@ -82,6 +84,7 @@ impl<'s> SssDomain<'s> {
             material,
             x1,
             selection,
+            target: Target::Luminance,
             pixel,
             frame,
             pass,
@@ -92,6 +95,11 @@ impl<'s> SssDomain<'s> {
     /// The same domain with another technique selection (e.g. the channel CDF of seed 000).
     pub fn with_selection(self, selection: TechniqueSelection) -> Self {
         SssDomain { selection, ..self }
+    }
+
+    /// The same domain with another target function `p̂`.
+    pub fn with_target(self, target: Target) -> Self {
+        SssDomain { target, ..self }
     }
 
     pub fn scene(&self) -> &'s Scene {
@@ -222,9 +230,9 @@ impl fmt::Debug for SssDomain<'_> {
 impl Domain for SssDomain<'_> {
     type Sample = SssSample;
 
-    /// `p̂ = luminance(f)`, unshadowed (DESIGN §9).
+    /// `p̂` of the unshadowed `f` (DESIGN §9), luminance unless [`SssDomain::with_target`].
     fn target(&self, y: &SssSample) -> f32 {
-        bssrdf::target(self.contribution(y)).max(0.0)
+        self.target.of(self.contribution(y)).max(0.0)
     }
 }
 

@@ -30,6 +30,7 @@ mod kind;
 pub mod preset;
 mod reconnection;
 mod sample;
+mod target;
 
 pub use contract::{IndexPolicy, PixelReservoir, SssSample};
 pub use delayed::DelayedReconnection;
@@ -40,3 +41,4 @@ pub use inversion::{InvertingReconnection, resolve_deferred_index};
 pub use kind::{ShiftKind, StoredNumbers};
 pub use reconnection::{Identity, Reconnection};
 pub use sss::contract::bssrdf::INDEX_UNKNOWN;
+pub use target::Target;

@@ -14,6 +14,7 @@ use sss::scene::Camera;
 
 use crate::IndexPolicy;
 use crate::kind::ShiftKind;
+use crate::target::Target;
 
 /// One pass of a frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -130,6 +131,8 @@ pub struct Preset {
     pub name: String,
     pub passes: Vec<PassSpec>,
     pub shade: Shade,
+    /// The target function `p̂` of every pass's domains.
+    pub target: Target,
 }
 
 /// Why a preset cannot run.
@@ -223,6 +226,7 @@ impl Preset {
             name: name.into(),
             passes: vec![candidates(), temporal(shift), spatial(shift, 4)],
             shade: Shade::Selected,
+            target: Target::Luminance,
         }
     }
 
@@ -244,6 +248,7 @@ impl Preset {
                 spatial(ShiftKind::DelayedReconnection, 2),
             ],
             shade: Shade::Selected,
+            target: Target::Luminance,
         }
     }
 
@@ -524,6 +529,7 @@ mod tests {
                 shared_light: false,
             }],
             shade: Shade::Selected,
+            target: Target::Luminance,
         };
         assert!(p.validate().is_err());
     }
@@ -575,6 +581,7 @@ mod tests {
             name: "spatial-only".into(),
             passes: vec![candidates(), spatial(shifts[0], 2), spatial(shifts[1], 2)],
             shade: Shade::Selected,
+            target: Target::Luminance,
         };
         use ShiftKind::{DelayedReconnection as D, Reconnection as R};
         spatial_only([D, R]).validate().unwrap();

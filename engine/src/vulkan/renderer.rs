@@ -28,6 +28,7 @@ use crate::hash::Fnv1a;
 use crate::image::Image;
 use crate::plan::Plan;
 use crate::{PipelineError, Run, RunConfig};
+use shifts::Target;
 use shifts::preset::{PassSpec, Preset, RadiusRule, Shade};
 
 /// A Vulkan device with its kernels and the last uploaded scene, reused across runs.
@@ -247,8 +248,9 @@ impl Renderer {
     /// Renders `config.frames` frames of `scene` with `preset` (validated by the caller) on
     /// the device: the GPU twin of [`crate::run`]. `Run::timings` are GPU seconds from the
     /// timestamps; they are empty on a queue that writes no timestamps. [`Shade::AllInputs`] has
-    /// no kernel and the spatial kernel clamps its radius ([`RadiusRule::Clamped`]): any other
-    /// choice is a one-line configuration error.
+    /// no kernel, the spatial kernel clamps its radius ([`RadiusRule::Clamped`]) and every kernel
+    /// targets the luminance ([`Target::Luminance`]): any other choice is a one-line
+    /// configuration error.
     pub fn run(
         &mut self,
         scene: &Scene,
@@ -259,6 +261,13 @@ impl Renderer {
             return Err(PipelineError::Config(format!(
                 "preset `{}`: {:?} shading has no Vulkan kernel; use the CPU backend",
                 preset.name, preset.shade
+            )));
+        }
+        if preset.target != Target::Luminance {
+            return Err(PipelineError::Config(format!(
+                "preset `{}`: target {} has no Vulkan kernel (p̂ = luminance there); use the CPU backend",
+                preset.name,
+                preset.target.name()
             )));
         }
         if let Some(pass) = preset.passes.iter().find(

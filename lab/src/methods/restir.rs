@@ -1,15 +1,18 @@
-//! `restir:<preset>[/temporal=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/radius=<clamped|unclamped>][/shade=<selected|all>]`:
+//! `restir:<preset>[/temporal=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/radius=<clamped|unclamped>][/target=<luminance|mean|l2>][/shade=<selected|all>]`:
 //! the ReSTIR SSS frame pipeline with a registered preset [001 §5.1] (DESIGN §6). Every frame of
 //! the trajectory is rendered (temporal reuse) and the last one is kept; `/temporal=<shift>`
 //! swaps the shift of the temporal pass [001 Fig. 10], `/cap=<κ>` sets its confidence cap,
 //! `/spatial-cap=<κ>` caps every spatial neighbour's confidence at κ × the receiver's,
-//! `/neighbours=<n>` sets every spatial pass's neighbour count, `/shade=all` shades with all
-//! inputs of the last reuse pass (`Shade::AllInputs`).
+//! `/neighbours=<n>` sets every spatial pass's neighbour count, `/target=<p̂>` the target function
+//! of every domain (`Target`), `/shade=all` shades with all inputs of the last reuse pass
+//! (`Shade::AllInputs`).
 //!
 //! The only file of the lab that names presets and shift kinds: when presets move crates, the
 //! import below is the one to change.
 
-use engine::{Backend, PassSpec, PipelineError, Preset, RadiusRule, RunConfig, Shade, ShiftKind};
+use engine::{
+    Backend, PassSpec, PipelineError, Preset, RadiusRule, RunConfig, Shade, ShiftKind, Target,
+};
 use shifts::preset::PRESET_NAMES;
 use sss::scene::Scene;
 
@@ -17,13 +20,14 @@ use super::estimator::{Entry, Estimator, Frame, Method, Trajectory};
 
 pub const ENTRY: Entry = Entry {
     family: "restir",
-    usage: "restir:<reconnection|delayed|hybrid|sequential|sequential-exact>[/temporal=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/radius=<clamped|unclamped>][/shade=<selected|all>]",
+    usage: "restir:<reconnection|delayed|hybrid|sequential|sequential-exact>[/temporal=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/radius=<clamped|unclamped>][/target=<luminance|mean|l2>][/shade=<selected|all>]",
     about: "ReSTIR SSS with spatiotemporal reuse and the preset's shift mapping [001 §5.1]; \
             `/temporal=<shift>` swaps the temporal pass's shift (001 Fig. 10); \
             `/cap=<κ>` sets the temporal confidence cap (default 3; seed 001 uses 20); \
             `/spatial-cap=<κ>` caps spatial neighbours' confidence (default none); \
             `/neighbours=<n>` sets the spatial passes' neighbour count; \
             `/radius=unclamped` drops the spatial disk's [5, 30] px clamp (floor 1 px; CPU only); \
+            `/target=<mean|l2>` sets p̂ to the channel mean or the L2 norm of f (default luminance; CPU only); \
             `/shade=all` paints the last reuse pass's Rao-Blackwellised value over all its inputs \
             (CPU backend only)",
     build: |arg| Ok(Method::new(Restir(preset(arg)?))),
@@ -37,8 +41,8 @@ pub struct Restir(pub Preset);
 /// `/temporal=<shift>` (the temporal pass's shift becomes the [`ShiftKind`] named `<shift>`),
 /// `/cap=<κ>` (the temporal confidence cap, finite and > 0), `/spatial-cap=<κ>` (every spatial
 /// pass's cap), `/neighbours=<n>` (every spatial pass's count), `/radius=<clamped|unclamped>`
-/// (every spatial pass's [`RadiusRule`]) and `/shade=<selected|all>`
-/// ([`Shade`]). A modified preset is named `arg`.
+/// (every spatial pass's [`RadiusRule`]), `/target=<luminance|mean|l2>` (the [`Target`] `p̂`)
+/// and `/shade=<selected|all>` ([`Shade`]). A modified preset is named `arg`.
 pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
     let arg = arg.ok_or("needs a preset, e.g. restir:hybrid")?;
     let mut parts = arg.split('/');
@@ -64,6 +68,11 @@ pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
                 RadiusRule::named(value)
                     .ok_or_else(|| format!("radius {value:?} is not clamped or unclamped"))?,
             ),
+            Some(("target", value)) => Preset {
+                target: Target::named(value)
+                    .ok_or_else(|| format!("target {value:?} is not luminance, mean or l2"))?,
+                ..preset
+            },
             Some(("shade", "selected")) => Preset {
                 shade: Shade::Selected,
                 ..preset
@@ -86,7 +95,7 @@ pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
 }
 
 /// The modifiers [`preset`] knows, for its error message.
-const MODIFIERS: &str = "temporal=<shift>, cap=<κ>, spatial-cap=<κ>, neighbours=<n>, radius=<clamped|unclamped>, shade=<selected|all>";
+const MODIFIERS: &str = "temporal=<shift>, cap=<κ>, spatial-cap=<κ>, neighbours=<n>, radius=<clamped|unclamped>, target=<luminance|mean|l2>, shade=<selected|all>";
 
 /// A confidence cap: a finite number > 0.
 fn positive(value: &str) -> Result<f32, String> {
@@ -254,6 +263,15 @@ mod tests {
             preset(Some("hybrid/radius=clamped")).unwrap().passes,
             Preset::named("hybrid").unwrap().passes
         );
+        for target in Target::ALL {
+            let spec = format!("hybrid/target={}", target.name());
+            let p = preset(Some(&spec)).unwrap();
+            assert_eq!(
+                (p.target, &p.passes),
+                (target, &Preset::named("hybrid").unwrap().passes)
+            );
+        }
+        assert_eq!(preset(Some("hybrid")).unwrap().target, Target::Luminance);
         let refused = Method::parse("restir:hybrid/radius=wide").expect_err("radius=wide");
         assert!(!refused.to_string().contains('\n'), "{refused}");
         assert!(refused.to_string().contains("wide"), "{refused}");
@@ -265,6 +283,8 @@ mod tests {
             "restir:hybrid/shade=some",
             "restir:hybrid/radius=",
             "restir:hybrid/radius=Unclamped",
+            "restir:hybrid/target=max",
+            "restir:hybrid/target=",
             "restir:hybrid/cap=0",
             "restir:hybrid/cap=-1",
             "restir:hybrid/cap=nan",

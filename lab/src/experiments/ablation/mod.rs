@@ -10,7 +10,7 @@
 mod rows;
 mod tables;
 
-use rows::{CPU_ONLY, Framing, NOT_KNOBS, Variation, variations};
+use rows::{CPU_ONLY, Framing, Variation, variations};
 
 use engine::RunConfig;
 use serde_json::json;
@@ -133,7 +133,7 @@ pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, E
     let table = markdown(&measured, scene_name, settings);
     let findings = findings(&measured);
     let json = json!({
-        "schema": "reshift-ablation/1",
+        "schema": "reshift-ablation/2",
         "scene": scene_name,
         "replicas": settings.replicas,
         "frames": FRAMES,
@@ -141,10 +141,6 @@ pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, E
         "interval": INTERVAL_METHOD,
         "confidence": crate::uncertainty::CONFIDENCE,
         "rows": measured.iter().map(row_json).collect::<Vec<_>>(),
-        "not_knobs": NOT_KNOBS
-            .iter()
-            .map(|(k, why)| json!({ "knob": k, "note": why }))
-            .collect::<Vec<_>>(),
         "runs": runs,
     });
     write_text(&root.join("telemetry.md"), &telemetry_markdown(&measured))?;

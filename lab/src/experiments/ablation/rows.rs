@@ -5,14 +5,13 @@ use sss::scene::Scene;
 /// The resolution rows: the run's resolution times these factors (128×96 → 256×192, 384×288).
 pub const RESOLUTION_FACTORS: [u32; 2] = [2, 3];
 
-/// Knobs of issue 10's list that the engine does not have: named in the table's notes.
-pub const NOT_KNOBS: [(&str, &str); 1] = [(
-    "target p̂",
-    "not a knob yet: p̂ is the luminance of the contribution f (`SssDomain::target`) in both backends",
-)];
-
 /// Modifiers without a Vulkan kernel: their rows run on the CPU backend only.
-pub const CPU_ONLY: [&str; 2] = ["/shade=all", "/radius=unclamped"];
+pub const CPU_ONLY: [&str; 4] = [
+    "/shade=all",
+    "/radius=unclamped",
+    "/target=mean",
+    "/target=l2",
+];
 
 /// How the camera moves over the trajectory.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -88,6 +87,8 @@ pub fn variations(base: &str, resolution: (u32, u32)) -> Vec<Variation> {
         here("neighbours 2", "/neighbours=2"),
         here("neighbours 8", "/neighbours=8"),
         here("radius unclamped", "/radius=unclamped"),
+        here("target mean", "/target=mean"),
+        here("target l2", "/target=l2"),
         here("shade=all", "/shade=all"),
     ];
     for (label, moving, jitter) in [
@@ -132,6 +133,8 @@ mod tests {
             "neighbours 2",
             "neighbours 8",
             "radius unclamped",
+            "target mean",
+            "target l2",
             "shade=all",
             "static camera",
             "no jitter",

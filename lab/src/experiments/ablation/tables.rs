@@ -7,7 +7,7 @@ use crate::regions::Region;
 use crate::report::tables::{verdict_word, with_ci};
 use crate::telemetry;
 
-use super::rows::{CPU_ONLY, NOT_KNOBS};
+use super::rows::CPU_ONLY;
 use super::{FRAMES, Measurement, Settings};
 
 /// One telemetry table per row ([`telemetry::markdown`]).
@@ -110,11 +110,9 @@ pub(super) fn markdown(measured: &[Measurement], scene: &str, settings: &Setting
             ));
         }
     }
-    let mut notes = String::from("\nNot varied:\n\n");
-    for (knob, why) in NOT_KNOBS {
-        notes.push_str(&format!("- {knob}: {why}\n"));
-    }
+    let mut notes = String::new();
     if !matches!(settings.backend, engine::Backend::Cpu) {
+        notes.push_str("\nNot varied:\n\n");
         for modifier in CPU_ONLY {
             notes.push_str(&format!(
                 "- {}: left out, it has no Vulkan kernel (CPU backend only)\n",

@@ -130,20 +130,22 @@ impl ExitLighting for SceneLighting<'_> {
             .sum()
     }
 
-    /// `L_e` of the nearest light along `wi`, if no geometry blocks it.
+    /// Σ, in light order, of `L_e` of every area light along `wi` that no geometry blocks: lights
+    /// are transparent, as for the shadow rays of [`ExitLighting::sample`], so this is the
+    /// radiance whose light-sampling density [`ExitLighting::pdf`] sums over the same lights.
     fn radiance(&self, point: Vec3, wi: Vec3) -> Vec3 {
         let lights = &self.scene.lights;
-        let nearest = (0..lights.len() as u32)
-            .filter_map(|l| intersect_light(lights.get(l), point, wi).map(|(t, p)| (l, t, p)))
-            .min_by(|a, b| a.1.total_cmp(&b.1));
-        let Some((light, t, hit)) = nearest else {
-            return Vec3::ZERO;
-        };
-        let ray = Ray::new(Vec3A::from(point), Vec3A::from(wi), 1e-4, t - 1e-4);
-        if self.scene.geometry.occluded(&ray) {
-            return Vec3::ZERO;
+        let mut total = Vec3::ZERO;
+        for l in 0..lights.len() as u32 {
+            let Some((t, hit)) = intersect_light(lights.get(l), point, wi) else {
+                continue;
+            };
+            let ray = Ray::new(Vec3A::from(point), Vec3A::from(wi), 1e-4, t - 1e-4);
+            if !self.scene.geometry.occluded(&ray) {
+                total += lights.radiance(l, hit, point);
+            }
         }
-        lights.radiance(light, hit, point)
+        total
     }
 }
 
@@ -245,6 +247,7 @@ pub fn render(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use sss::scene::{Lights, luminance};
 
     fn bumpy(w: u32, h: u32) -> Scene {
         let scene = Scene::builtin("bumpy").expect("built-in");
@@ -296,6 +299,85 @@ mod tests {
         assert_eq!(
             lighting.radiance(Vec3::new(0.0, 2.0, 0.0), away),
             Vec3::ZERO
+        );
+    }
+
+    /// Two area lights one behind the other, as seen from points below both: the irradiance at
+    /// the point by light sampling (`sample`, shadow rays through lights) and by cosine-sampled
+    /// directions whose `radiance` is looked up agree, because `radiance` sums every unblocked
+    /// light along the direction, the lights `pdf` sums over. z-test at α = 1e-4 (|z| < 3.9) with
+    /// N = 2¹⁶ samples per estimator (relative standard error ≈ 0.6%, so a 3% gap is z ≈ 5);
+    /// negative control: the nearest light's `L_e` alone (the old rule) reads ≈ 9% low and is
+    /// rejected.
+    #[test]
+    fn overlapping_lights_irradiance_agrees_by_both_techniques() {
+        let mut scene = bumpy(8, 6);
+        let lower = Light::Quad {
+            corner: Vec3::new(-0.5, 3.0, -0.5),
+            edge_u: Vec3::new(1.0, 0.0, 0.0),
+            edge_v: Vec3::new(0.0, 0.0, 1.0),
+            radiance: Vec3::new(1.0, 2.0, 3.0),
+        };
+        let upper = Light::Quad {
+            corner: Vec3::new(-1.0, 4.0, -1.0),
+            edge_u: Vec3::new(2.0, 0.0, 0.0),
+            edge_v: Vec3::new(0.0, 0.0, 2.0),
+            radiance: Vec3::new(0.5, 0.5, 0.5),
+        };
+        scene.lights = Lights::new(vec![lower, upper], 2.0).unwrap();
+        let lighting = SceneLighting {
+            scene: &scene,
+            selection: RefCell::new(StreamKey::new(0, 0, 1, 2).stream(5)),
+        };
+        let point = Vec3::new(0.0, 2.5, 0.0);
+        assert_eq!(
+            lighting.radiance(point, Vec3::Y),
+            scene.lights.radiance(0, Vec3::new(0.0, 3.0, 0.0), point)
+                + scene.lights.radiance(1, Vec3::new(0.0, 4.0, 0.0), point)
+        );
+        let nearest_only = |wi: Vec3| {
+            (0..2u32)
+                .filter_map(|l| intersect_light(scene.lights.get(l), point, wi).map(|h| (l, h)))
+                .min_by(|a, b| a.1.0.total_cmp(&b.1.0))
+                .map_or(Vec3::ZERO, |(l, (_, hit))| {
+                    scene.lights.radiance(l, hit, point)
+                })
+        };
+        const N: usize = 1 << 16;
+        let mut s = StreamKey::new(0, 0, 1, 3).stream(5);
+        let (mut nee, mut bsdf, mut old) = (Vec::new(), Vec::new(), Vec::new());
+        for _ in 0..N {
+            let u = [s.next_f32(), s.next_f32()];
+            nee.push(lighting.sample(point, Vec3::Y, u).map_or(0.0, |l| {
+                luminance(l.radiance_over_pdf) as f64 * l.wi.y as f64
+            }));
+            let (r, phi) = (
+                s.next_f32().sqrt(),
+                2.0 * std::f32::consts::PI * s.next_f32(),
+            );
+            let wi = Vec3::new(r * phi.cos(), (1.0 - r * r).max(0.0).sqrt(), r * phi.sin());
+            // Cosine-weighted: L cos / (cos/π) = π L.
+            bsdf.push(std::f64::consts::PI * luminance(lighting.radiance(point, wi)) as f64);
+            old.push(std::f64::consts::PI * luminance(nearest_only(wi)) as f64);
+        }
+        let z = |a: &[f64], b: &[f64]| {
+            let stats = |x: &[f64]| {
+                let m = x.iter().sum::<f64>() / x.len() as f64;
+                let v = x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (x.len() - 1) as f64;
+                (m, v / x.len() as f64)
+            };
+            let ((ma, va), (mb, vb)) = (stats(a), stats(b));
+            (ma - mb) / (va + vb).sqrt()
+        };
+        let agree = z(&nee, &bsdf);
+        assert!(
+            agree.abs() < 3.9,
+            "light sampling vs cosine sampling: z = {agree}"
+        );
+        let control = z(&nee, &old);
+        assert!(
+            control > 3.9,
+            "the nearest light alone must read low: z = {control}"
         );
     }
 

@@ -4,8 +4,8 @@
 //!
 //! Scenes `bumpy` and `half-shadow` at 24×18, the full 16-frame trajectory, seed 7: every
 //! registered ReSTIR preset and those of [`MODIFIED`] (all frames and the last frame's
-//! reservoirs), `pt:2`, `random-walk:2`, `image-space:2` and `adaptive` (the last frame, with
-//! its sample counts). On a mismatch the test prints every current hash, so the
+//! reservoirs), `pt:2`, `random-walk:2`, `image-space:2`, `adaptive` (the last frame, with
+//! its sample counts), `single-scatter:2` and `single-scatter:2/restir` (the last frame). On a mismatch the test prints every current hash, so the
 //! table below can be updated in one edit.
 
 use engine::hash::Fnv1a;
@@ -34,6 +34,8 @@ const PINNED: &[(&str, &str, u64)] = &[
     ("bumpy", "random-walk:2", 0xa192fbb86f2b56e0),
     ("bumpy", "image-space:2", 0xf869c5e060f72386),
     ("bumpy", "adaptive", 0x65fa3f3c584f613a),
+    ("bumpy", "single-scatter:2", 0x3b733e131aa7fb0c),
+    ("bumpy", "single-scatter:2/restir", 0xea5fa5dfb8834d94),
     ("half-shadow", "restir:reconnection", 0x27491b386196bee1),
     ("half-shadow", "restir:delayed", 0x1bb750a5c40a8897),
     ("half-shadow", "restir:hybrid", 0x8ef9ce5725707535),
@@ -45,6 +47,9 @@ const PINNED: &[(&str, &str, u64)] = &[
     ("half-shadow", "random-walk:2", 0x9bdf417661ddd47f),
     ("half-shadow", "image-space:2", 0x695cec2a8113e190),
     ("half-shadow", "adaptive", 0x1dd0ee67606b8a9d),
+    // A plane: unscattered chords never reach the boundary again, so both boundary terms are 0.
+    ("half-shadow", "single-scatter:2", 0x3a6b5e3f20683b3d),
+    ("half-shadow", "single-scatter:2/restir", 0x3a6b5e3f20683b3d),
 ];
 
 fn hash_pixels(hash: &mut Fnv1a, pixels: &[glam::Vec3]) {
@@ -88,7 +93,14 @@ fn current_hashes() -> Vec<(String, String, u64)> {
                 hash.finish(),
             ));
         }
-        for spec in ["pt:2", "random-walk:2", "image-space:2", "adaptive"] {
+        for spec in [
+            "pt:2",
+            "random-walk:2",
+            "image-space:2",
+            "adaptive",
+            "single-scatter:2",
+            "single-scatter:2/restir",
+        ] {
             let method = Method::parse(spec).expect("registered method");
             let rendered = method.render(&scene, FRAMES, SEED).expect("method renders");
             let mut hash = Fnv1a::new();

@@ -1,6 +1,7 @@
 //! The whole frame pipeline on Vulkan against the CPU backend: every preset and method runs on
 //! every built-in scene; a 16-frame `sequential` run agrees with the CPU run of the same seed
-//! far better than two CPU seeds agree with each other; GPU runs are deterministic.
+//! far better than two CPU seeds agree with each other, and so do the pass-parameter modifiers;
+//! GPU runs are deterministic.
 //!
 //! Without Vulkan (no loader, no device, or a build without glslc) each test says why it is
 //! skipped and passes, unless `RESHIFT_REQUIRE_VULKAN=1`, which makes it fail.
@@ -423,4 +424,40 @@ fn probes_with_more_hits_than_kept_are_errors() {
             .run(&layered_scene(17), &preset, &config(1, 1))
             .is_ok()
     );
+}
+
+/// The modifiers that are pass parameters of the Vulkan kernels — `/neighbours=n`,
+/// `/spatial-cap=κ` and `/cap=κ` — give the CPU run of the same seed on the device: 8 frames of
+/// `bumpy` at 32×24, `R = relMSE(GPU a, CPU a) / relMSE(CPU b, CPU a) < 1e-3` (R as in
+/// [`sequential_run_matches_the_cpu_within_monte_carlo_noise`]; 1e-3 allows about six diverged
+/// pixel-frames of 6144; measured on lavapipe: R ≤ 2e-14). Control: the GPU run of the
+/// unmodified preset against the modified CPU run must give R ≥ 1e-3 (measured 8.1e-3 for two
+/// against four neighbours, 0.055 for eight with the spatial cap), so a kernel that ignored the
+/// parameter would be caught.
+#[test]
+fn pass_parameter_modifiers_match_the_cpu() {
+    let Some(backend) = backend_or_skip("pass_parameter_modifiers_match_the_cpu") else {
+        return;
+    };
+    const BOUND: f64 = 1e-3;
+    let scene = scene("bumpy", 32, 24);
+    for spec in [
+        "hybrid/neighbours=8/spatial-cap=1",
+        "reconnection/neighbours=2",
+        "sequential/cap=20/spatial-cap=0.5",
+    ] {
+        let modified = restir::preset(Some(spec)).unwrap();
+        let plain = Preset::named(spec.split('/').next().unwrap()).unwrap();
+        let gpu_a = backend.run(&scene, &modified, &config(1, 8)).unwrap();
+        let gpu_plain = backend.run(&scene, &plain, &config(1, 8)).unwrap();
+        let cpu_a = engine::run(&scene, &modified, &config(1, 8)).unwrap();
+        let cpu_b = engine::run(&scene, &modified, &config(2, 8)).unwrap();
+        let noise = rel_mse(&cpu_b, &cpu_a);
+        let ratio = rel_mse(&gpu_a, &cpu_a) / noise;
+        let control = rel_mse(&gpu_plain, &cpu_a) / noise;
+        println!("{spec}: R(GPU a) = {ratio:.3e}; control R(GPU, unmodified) = {control:.4}");
+        assert!(noise > 0.0 && gpu_a.nan_count == 0, "{spec}");
+        assert!(ratio < BOUND, "{spec}: R = {ratio} ≥ {BOUND}");
+        assert!(control >= BOUND, "{spec}: control R = {control} < {BOUND}");
+    }
 }

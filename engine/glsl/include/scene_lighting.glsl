@@ -107,32 +107,25 @@ float exit_lighting_pdf(vec3 point, vec3 normal, vec3 wi) {
     return total;
 }
 
-// SceneLighting::radiance: L_e of the nearest light along wi (the first of equally near ones),
-// zero when geometry blocks it.
+// SceneLighting::radiance: the sum, in light order, of L_e of every area light along wi that
+// geometry does not block (lights are transparent, as for the shadow rays of exit_lighting_sample).
 vec3 exit_lighting_radiance(vec3 point, vec3 wi) {
-    uint nearest = 0xFFFFFFFFu;
-    float nearest_t = 0.0;
-    vec3 nearest_point = vec3(0.0);
+    precise vec3 total = vec3(0.0);
     for (uint l = 0u; l < LIGHT_COUNT; l++) {
         float t;
         vec3 hit;
-        if (random_walk_method_intersect_light(l, point, wi, t, hit)
-            && (nearest == 0xFFFFFFFFu || t < nearest_t)) {
-            nearest = l;
-            nearest_t = t;
-            nearest_point = hit;
+        if (!random_walk_method_intersect_light(l, point, wi, t, hit)) {
+            continue;
         }
+        precise float t_max = t - SCENE_LIGHTING_EPSILON;
+        BvhRay ray;
+        if (bvh_prepare(point, wi, SCENE_LIGHTING_EPSILON, t_max, ray)
+            && bvh_traverse(ray, BVH_OCCLUDED, BVH_NO_HIT).prim != BVH_NO_HIT) {
+            continue;
+        }
+        total += lights_radiance(l, hit, point);
     }
-    if (nearest == 0xFFFFFFFFu) {
-        return vec3(0.0);
-    }
-    precise float t_max = nearest_t - SCENE_LIGHTING_EPSILON;
-    BvhRay ray;
-    if (bvh_prepare(point, wi, SCENE_LIGHTING_EPSILON, t_max, ray)
-        && bvh_traverse(ray, BVH_OCCLUDED, BVH_NO_HIT).prim != BVH_NO_HIT) {
-        return vec3(0.0);
-    }
-    return lights_radiance(nearest, nearest_point, point);
+    return total;
 }
 
 #endif

@@ -77,21 +77,33 @@ pub trait Estimator: fmt::Debug + Send + Sync + 'static {
         frames: u32,
         seed: u64,
     ) -> Result<Trajectory, PipelineError> {
-        let mut trajectory = Trajectory {
-            frames: Vec::with_capacity(frames as usize),
-            frames_rendered: 0,
-            nonfinite: 0,
-            counts: None,
-        };
-        for f in 1..=frames {
-            let (frame, counts) = self.render_counted(backend, scene, f, seed)?;
-            trajectory.frames.push(frame.image);
-            trajectory.frames_rendered += frame.frames_rendered;
-            trajectory.nonfinite += frame.nonfinite;
-            trajectory.counts = counts;
-        }
-        Ok(trajectory)
+        memoryless_trajectory(self, backend, scene, frames, seed)
     }
+}
+
+/// The default [`Estimator::render_trajectory`]: each frame `f` rendered on its own
+/// (`render_counted` of `f + 1` frames).
+pub fn memoryless_trajectory<E: Estimator + ?Sized>(
+    estimator: &E,
+    backend: &Backend,
+    scene: &Scene,
+    frames: u32,
+    seed: u64,
+) -> Result<Trajectory, PipelineError> {
+    let mut trajectory = Trajectory {
+        frames: Vec::with_capacity(frames as usize),
+        frames_rendered: 0,
+        nonfinite: 0,
+        counts: None,
+    };
+    for f in 1..=frames {
+        let (frame, counts) = estimator.render_counted(backend, scene, f, seed)?;
+        trajectory.frames.push(frame.image);
+        trajectory.frames_rendered += frame.frames_rendered;
+        trajectory.nonfinite += frame.nonfinite;
+        trajectory.counts = counts;
+    }
+    Ok(trajectory)
 }
 
 /// The samples each pixel of a frame took, for a method that chooses them per pixel.

@@ -18,7 +18,8 @@ pub mod single_scatter;
 use std::fmt;
 
 pub use estimator::{
-    Entry, Estimator, Frame, Method, Rendered, SampleCounts, Trajectory, parse_spp,
+    Entry, Estimator, Frame, Method, Rendered, SampleCounts, Trajectory, memoryless_trajectory,
+    parse_spp,
 };
 
 /// Every method family the CLI knows, in the order `reshift methods` lists them.

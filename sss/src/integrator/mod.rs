@@ -5,6 +5,7 @@
 //! variance-guided adaptive sampler of seed 004 ([`adaptive`]).
 
 pub mod adaptive;
+pub mod boundary_reuse;
 pub mod exact;
 pub mod image_space;
 pub mod pt;

@@ -1,7 +1,7 @@
 //! The whole frame pipeline on Vulkan against the CPU backend: every preset and method runs on
 //! every built-in scene; a 16-frame `sequential` run agrees with the CPU run of the same seed
-//! far better than two CPU seeds agree with each other, and so do the pass-parameter modifiers;
-//! GPU runs are deterministic.
+//! far better than two CPU seeds agree with each other, and so do the pass-parameter modifiers
+//! and Rao-Blackwellised shading (`/shade=all`); GPU runs are deterministic.
 //!
 //! Without Vulkan (no loader, no device, or a build without glslc) each test says why it is
 //! skipped and passes, unless `RESHIFT_REQUIRE_VULKAN=1`, which makes it fail.

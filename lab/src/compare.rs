@@ -26,9 +26,11 @@ use crate::regions::Regions;
 use crate::report::results::{FrameReferenceEntry, MethodEntry, ReferenceEntry, Results, RunEntry};
 use crate::report::{html, output_dir, plots, tables, write_text};
 
-/// The default method list: the path tracer and the four main presets [001 §5.1].
-pub const DEFAULT_METHODS: &str =
-    "pt,restir:reconnection,restir:delayed,restir:hybrid,restir:sequential";
+/// The default method list: the path tracer, the four main presets [001 §5.1], and reshift's
+/// best measured configuration, reconnection with Rao-Blackwellised shading and 2 neighbours
+/// (docs/experiments.md, issue 10).
+pub const DEFAULT_METHODS: &str = "pt,restir:reconnection,restir:delayed,restir:hybrid,\
+                                   restir:sequential,restir:reconnection/shade=all/neighbours=2";
 
 /// The method whose samples per pixel an equal-time budget sets: the bare path tracer.
 pub const EQUAL_TIME_SPEC: &str = "pt";

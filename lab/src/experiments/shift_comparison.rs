@@ -1,7 +1,7 @@
 //! Fig. 6 (`bumpy`, one large light) and Fig. 7 (`many-lights`) of seed 001: the four presets,
 //! equal-time `pt` and `pt:1`, and which shift wins in which region.
 
-use crate::compare::{self, DEFAULT_METHODS};
+use crate::compare;
 use crate::error::Error;
 use crate::findings::{self, Finding, Quantity, all_below, cost_below, mse_below};
 use crate::method_result::MethodResult;
@@ -23,8 +23,7 @@ pub fn run(
     name: &str,
     progress: &mut dyn Progress,
 ) -> Result<Report, Error> {
-    let methods = format!("{DEFAULT_METHODS},pt:1");
-    let methods: Vec<&str> = methods.split(',').collect();
+    let methods: Vec<&str> = ["pt"].into_iter().chain(PRESETS).chain(["pt:1"]).collect();
     let plan = equal_time_plan(settings, scene, &methods, &settings.out_dir(name))?;
     let outcome = compare::run(&plan, progress)?;
     let table = findings::markdown(&shift_findings(&outcome.rows));

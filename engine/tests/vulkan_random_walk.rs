@@ -6,20 +6,16 @@
 //! `RESHIFT_REQUIRE_VULKAN=1`, which makes it fail.
 
 use engine::vulkan::testing::{UploadedFrame, kernel_or_skip, rel_mse_pixels};
-use std::cell::RefCell;
 use std::path::Path;
 
-use engine::random_walk_method::{PURPOSE_WALK, PURPOSE_WALK_LIGHT, SceneLighting, render};
+use engine::random_walk_method::{PixelWalk, render};
 use engine::vulkan::{
     Context, GpuMedium, Kernel, RANDOM_WALK, RandomWalkImage, WalkStats, render_random_walk,
     scene_media,
 };
 use glam::{DVec3, Vec3};
-use restir::rng::StreamKey;
 use sss::material::Material;
-use sss::random_walk::{
-    Interface, Medium, MeshBoundary, WalkEnd, WalkSettings, estimate_exitant_with,
-};
+use sss::random_walk::{Interface, Medium, WalkEnd, WalkSettings, estimate_exitant_with};
 use sss::scene::{GBuffer, Scene};
 
 const WIDTH: u32 = 40;
@@ -62,20 +58,12 @@ fn cpu_walks(scene: &Scene, gbuffer: &GBuffer, seed: u64, spp: u32) -> (Vec<[u32
             continue;
         };
         let medium = Medium::from_translucent(t, Path::new("x"), "m").unwrap();
-        let n = scene.geometry.geometric_normal(g.prim);
-        let inward_winding = n.dot(g.view) < 0.0;
-        let boundary = MeshBoundary {
-            geometry: &scene.geometry,
-            object: g.object,
-            inward_winding,
-        };
-        let n1 = if inward_winding { -n } else { n };
-        let key = |purpose| StreamKey::new(index as u32, gbuffer.frame, 0, purpose);
-        let lighting = SceneLighting {
-            scene,
-            selection: RefCell::new(key(PURPOSE_WALK_LIGHT).stream(seed)),
-        };
-        let mut stream = key(PURPOSE_WALK).stream(seed);
+        let PixelWalk {
+            boundary,
+            n1,
+            lighting,
+            mut stream,
+        } = PixelWalk::new(scene, g, index as u32, gbuffer.frame, seed);
         let (mut sum, mut finite) = (DVec3::ZERO, 0u32);
         for _ in 0..spp {
             let sample = estimate_exitant_with(

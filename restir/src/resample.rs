@@ -128,8 +128,11 @@ where
 /// `targets[j] = p̂_{←j}(y)` via [`Shift::target_from`], and `p̂_i(x_i) / J_i` for the
 /// sample's own domain. Confidences are used as given: cap them before the call.
 ///
+/// Forward shifts and back-shifts go through [`Shift::shift_supported`]: only samples with a
+/// positive target weigh.
+///
 /// Failure convention (seed 001's): a neighbour whose forward shift fails, or whose reservoir is
-/// empty, contributes weight 0 but its confidence is still added. This does not darken the
+/// empty or has `W = 0`, contributes weight 0 but its confidence is still added. This does not darken the
 /// estimate because the MIS weights of the other samples already give that domain
 /// `m_j(y) = 0` wherever its shift fails
 /// (test: `failed_forward_shifts_keep_confidence_and_do_not_darken`).
@@ -216,14 +219,16 @@ where
         if !(input.ucw.is_finite() && input.ucw >= 0.0) {
             return Err(wrap(InvalidCandidate::Ucw(input.ucw)));
         }
-        let Some(x) = input.y else {
+        // An input with W = 0 has weight 0 whatever its shift gives (and its target is not
+        // read), so it is streamed like an empty one and its shift, often a ray, is skipped.
+        let Some(x) = input.y.filter(|_| input.ucw > 0.0) else {
             ris.skip(input.confidence).map_err(wrap)?;
             continue;
         };
         let (y, jacobian, own_target) = if i == 0 {
             (x, 1.0, None)
         } else {
-            match shift.shift(&x, domain_of(i), r) {
+            match shift.shift_supported(&x, domain_of(i), r) {
                 Ok(s) => {
                     if !(s.jacobian.is_finite() && s.jacobian > 0.0) {
                         return Err(ResampleError::BadJacobian {
@@ -243,7 +248,7 @@ where
         if !(target.is_finite() && target >= 0.0) {
             return Err(wrap(InvalidCandidate::Target(target)));
         }
-        let m = if target > 0.0 && input.ucw > 0.0 {
+        let m = if target > 0.0 {
             let targets = &mut targets[..n];
             targets.fill(0.0);
             targets[0] = target;

@@ -34,8 +34,8 @@ pub trait Shift<D: Domain>: Sync {
     /// the same `Ok` wherever that holds, and may fail (with any [`Fail`]) where it does not.
     /// Resampling is such a caller: a shifted sample with `p̂_r = 0` has weight 0, which is what
     /// a failed shift contributes, and `p̂_{←j} = 0` either way ([`Shift::target_from`]). A
-    /// shift overrides it to test the target before work that cannot change the result then
-    /// (a shadow ray); the default is [`Shift::shift`].
+    /// shift overrides it to rule out `p̂_dst = 0` cheaply before work that cannot change the
+    /// result then (a shadow ray); the default is [`Shift::shift`].
     fn shift_supported(&self, x: &D::Sample, src: &D, dst: &D) -> Result<Shifted<D::Sample>, Fail> {
         self.shift(x, src, dst)
     }

@@ -2,7 +2,7 @@
 //! then reconnection to the kept light vertex x3 (DESIGN §5, §9).
 
 use glam::Vec3;
-use restir::shift::{Domain, Fail, Shift, Shifted};
+use restir::shift::{Fail, Shift, Shifted};
 use sss::bssrdf::{BssrdfSample, EntryPoint, pick_hit};
 use sss::scene::{Light, Lights};
 
@@ -42,7 +42,7 @@ impl Shift<SssDomain<'_>> for DelayedReconnection {
         replay(x, src, dst, Checks::ALL)?.finish(dst, false, Wanted::Every)
     }
 
-    /// The target at `dst` before the shadow ray.
+    /// Whether light reaches y2 at all ([`SssDomain::lit`]) before the shadow ray.
     fn shift_supported(
         &self,
         x: &SssSample,
@@ -90,9 +90,10 @@ pub(crate) struct Replayed {
 impl Replayed {
     /// The shifted sample, or `Rejected` if the caller's own criterion `rejected` holds,
     /// `Occluded` if y2–x3 is occluded (with [`Checks`]' visibility bit). For
-    /// [`Wanted::Supported`] the criterion and the target `p̂_dst > 0` (`OutOfSupport`) are
-    /// tested before the ray; for [`Wanted::Every`] the criterion after it, so a sample that
-    /// fails both reads `Occluded` as on the GPU.
+    /// [`Wanted::Supported`] the criterion and whether light reaches y2 at all
+    /// ([`SssDomain::lit`], else `OutOfSupport`: `p̂_dst = 0`) are tested before the ray; for
+    /// [`Wanted::Every`] the criterion after it, so a sample that fails both reads `Occluded`
+    /// as on the GPU.
     pub(crate) fn finish(
         self,
         dst: &SssDomain,
@@ -104,7 +105,7 @@ impl Replayed {
             if rejected {
                 return Err(Fail::Rejected);
             }
-            if dst.target(y) <= 0.0 {
+            if !dst.lit(y) {
                 return Err(Fail::OutOfSupport);
             }
         }

@@ -186,6 +186,19 @@ impl<'s> SssDomain<'s> {
         if f.is_finite() { f } else { Vec3::ZERO }
     }
 
+    /// Whether light from y's light vertex arrives above x2's shading normal: `false` only where
+    /// `f(y) = 0` (no x2 or light path, `n2·ωi ≤ 0`, no emitted radiance), decided without the
+    /// BSSRDF, as [`sss::bssrdf::contribution`] decides it before evaluating the BSSRDF.
+    pub fn lit(&self, y: &SssSample) -> bool {
+        let Some(x2) = self.entry_point(y) else {
+            return false;
+        };
+        let Some(light) = self.light_path(x2.position, y) else {
+            return false;
+        };
+        x2.shading_normal.dot(light.wi) > 0.0 && light.radiance != Vec3::ZERO
+    }
+
     /// Whether the segment x2–x3 of `y` is unoccluded (the shadow test of the canonical sample
     /// and of delayed reconnection, DESIGN §9 "Visibility"). `false` outside the support.
     pub fn visible(&self, y: &SssSample) -> bool {

@@ -78,7 +78,8 @@ impl Shift<SssDomain<'_>> for Hybrid {
         self.shift_checked(x, src, dst, true, Wanted::Every)
     }
 
-    /// The offset path's criterion and the target at `dst` before the shadow ray.
+    /// The offset path's criterion and whether light reaches y2 at all ([`SssDomain::lit`])
+    /// before the shadow ray.
     fn shift_supported(
         &self,
         x: &SssSample,

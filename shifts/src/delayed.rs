@@ -42,7 +42,7 @@ impl Shift<SssDomain<'_>> for DelayedReconnection {
         replay(x, src, dst, Checks::ALL)?.finish(dst, false, Wanted::Every)
     }
 
-    /// Whether light reaches y2 at all ([`SssDomain::lit`]) before the shadow ray.
+    /// Whether light reaches y2 at all ([`SssDomain::visible_if_lit`]) before the shadow ray.
     fn shift_supported(
         &self,
         x: &SssSample,
@@ -90,10 +90,10 @@ pub(crate) struct Replayed {
 impl Replayed {
     /// The shifted sample, or `Rejected` if the caller's own criterion `rejected` holds,
     /// `Occluded` if y2–x3 is occluded (with [`Checks`]' visibility bit). For
-    /// [`Wanted::Supported`] the criterion and whether light reaches y2 at all
-    /// ([`SssDomain::lit`], else `OutOfSupport`: `p̂_dst = 0`) are tested before the ray; for
-    /// [`Wanted::Every`] the criterion after it, so a sample that fails both reads `Occluded`
-    /// as on the GPU.
+    /// [`Wanted::Supported`] the criterion comes first, and a y2 that light does not reach
+    /// ([`SssDomain::visible_if_lit`]: `p̂_dst = 0`) fails `OutOfSupport` without the shadow
+    /// ray; for [`Wanted::Every`] the criterion comes after the ray, so a sample that fails both
+    /// reads `Occluded`, as on the GPU.
     pub(crate) fn finish(
         self,
         dst: &SssDomain,
@@ -101,16 +101,17 @@ impl Replayed {
         wanted: Wanted,
     ) -> Result<Shifted<SssSample>, Fail> {
         let y = &self.shifted.y;
-        if wanted == Wanted::Supported {
-            if rejected {
-                return Err(Fail::Rejected);
-            }
-            if !dst.lit(y) {
-                return Err(Fail::OutOfSupport);
-            }
+        if wanted == Wanted::Supported && rejected {
+            return Err(Fail::Rejected);
         }
-        if self.checks.has(DELAYED_CHECK_VISIBILITY) && !dst.visible(y) {
-            return Err(Fail::Occluded);
+        if self.checks.has(DELAYED_CHECK_VISIBILITY) {
+            let visible = match wanted {
+                Wanted::Every => dst.visible(y),
+                Wanted::Supported => dst.visible_if_lit(y).ok_or(Fail::OutOfSupport)?,
+            };
+            if !visible {
+                return Err(Fail::Occluded);
+            }
         }
         if rejected {
             return Err(Fail::Rejected);

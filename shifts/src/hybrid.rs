@@ -78,7 +78,7 @@ impl Shift<SssDomain<'_>> for Hybrid {
         self.shift_checked(x, src, dst, true, Wanted::Every)
     }
 
-    /// The offset path's criterion and whether light reaches y2 at all ([`SssDomain::lit`])
+    /// The offset path's criterion and whether light reaches y2 at all ([`SssDomain::visible_if_lit`])
     /// before the shadow ray.
     fn shift_supported(
         &self,

@@ -176,7 +176,10 @@ impl<'s> SssDomain<'s> {
 
     /// `f(ȳ) = S · max(0, n2·ωi) · L_e`, unshadowed, RGB (DESIGN §9); 0 outside the support.
     pub fn contribution(&self, y: &SssSample) -> Vec3 {
-        let Some((x2, light)) = self.segment(y) else {
+        let Some(x2) = self.entry_point(y) else {
+            return Vec3::ZERO;
+        };
+        let Some(light) = self.light_path(x2.position, y) else {
             return Vec3::ZERO;
         };
         let f = bssrdf::contribution(&self.material, &self.x1, &x2, light.wi, light.radiance);

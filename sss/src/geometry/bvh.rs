@@ -410,7 +410,7 @@ mod tests {
         // Nested triangles shrinking geometrically toward a point: the binary tree is a chain,
         // deeper than the inline traversal storage, so queries run on the heap stack.
         let mesh = TriangleMesh {
-            positions: (0..300)
+            positions: (0..600)
                 .flat_map(|i| {
                     let s = 0.95f32.powi(i);
                     [
@@ -420,7 +420,7 @@ mod tests {
                     ]
                 })
                 .collect(),
-            indices: (0..300).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect(),
+            indices: (0..600).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect(),
             normals: None,
         };
         let mut geometry = Geometry::new(&[mesh]);

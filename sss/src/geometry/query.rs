@@ -138,6 +138,8 @@ struct OccludedVisitor<'a, K: Kernel> {
 }
 
 impl<K: Kernel> Visitor for OccludedVisitor<'_, K> {
+    const EAGER_LEAVES: bool = true;
+
     #[inline(always)]
     unsafe fn leaf(&mut self, packets: &[Packet], t_max: &mut f32) -> bool {
         for chunk in packets.chunks(PACKETS_AT_ONCE) {
@@ -170,7 +172,7 @@ impl Query for Occluded {
                 occluded: false,
             };
             let mut t_max = ray.t_max;
-            bvh.traverse_any::<K, true>(&lanes_ray, entries, &mut t_max, &mut visitor);
+            bvh.traverse_any::<K, _, true>(&lanes_ray, entries, &mut t_max, &mut visitor);
             visitor.occluded
         }
     }
@@ -232,7 +234,7 @@ impl Query for AllHits<'_> {
                 out: self.out,
             };
             let mut t_max = ray.t_max;
-            bvh.traverse_any::<K, true>(&lanes_ray, entries, &mut t_max, &mut visitor);
+            bvh.traverse_any::<K, _, true>(&lanes_ray, entries, &mut t_max, &mut visitor);
         }
     }
 }

@@ -32,6 +32,12 @@ const BREADTH_WINDOW: usize = 64;
 
 /// What a query does at a leaf.
 pub(super) trait Visitor {
+    /// Whether [`WideBvh::traverse_any`] tests a node's hit leaves at once, before the pending
+    /// children: worth it for a query that stops at its first hit, which only a leaf can give
+    /// (measured +5–12% on occlusion, and nothing gained for all hits, whose leaves are better
+    /// queued behind their prefetch).
+    const EAGER_LEAVES: bool = false;
+
     /// Tests the leaf's packets; may shrink `t_max` (which prunes boxes in nearest-first
     /// traversal); returns `true` to stop.
     ///
@@ -198,12 +204,12 @@ impl WideBvh {
     /// # Safety
     /// `K`'s instruction set must be available.
     #[inline(always)]
-    pub(super) unsafe fn traverse_any<K: Kernel, const BREADTH: bool>(
+    pub(super) unsafe fn traverse_any<K: Kernel, V: Visitor, const BREADTH: bool>(
         &self,
         ray: &K::Ray,
         entries: &mut [MaybeUninit<Entry>],
         t_max: &mut f32,
-        visitor: &mut impl Visitor,
+        visitor: &mut V,
     ) {
         let Some(mut current) = self.root else {
             return;
@@ -218,6 +224,21 @@ impl WideBvh {
                 let mut entry = [0.0f32; 8];
                 // SAFETY: forwarded from the caller.
                 let mut mask = unsafe { self.hit_children::<K>(node, ray, *t_max, &mut entry) };
+                if V::EAGER_LEAVES {
+                    let mut leaves = mask;
+                    while leaves != 0 {
+                        let i = leaves.trailing_zeros() as usize;
+                        leaves &= leaves - 1;
+                        if is_leaf(node.children[i]) {
+                            mask &= !(1 << i);
+                            let (first, count) = leaf_packets(node.children[i]);
+                            // SAFETY: forwarded from the caller.
+                            if unsafe { visitor.leaf(&self.packets[first..first + count], t_max) } {
+                                return;
+                            }
+                        }
+                    }
+                }
                 while mask != 0 {
                     let i = mask.trailing_zeros() as usize;
                     mask &= mask - 1;

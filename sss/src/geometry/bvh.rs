@@ -1,284 +1,92 @@
-//! All objects' triangles in one obvhs CWBVH (compressed 8-wide BVH, Ylitie et al. 2017), with
-//! our own traversal kernel over obvhs's node layout (the layout is uploaded as-is to the GPU).
+//! The scene's triangles and the ray queries over them (closest hit, occlusion, closest hit and
+//! all hits on one object).
 //!
-//! Why our own node test instead of `CwBvhNode::intersect_ray`: obvhs 0.4 clamps box entry to an
-//! absolute 1e-4 (ignoring the ray's `t_min`, so hits closer than 1e-4 are lost) and uses
-//! `±1/ε` for near-zero direction components, which shortens slabs. Here box entry is clamped to
-//! `t_min`, inverse directions are exact down to 1e-20, and box exits are pushed out by `2γ₃` of
-//! their magnitude (Ize 2013, *Robust BVH Ray Traversal*) so rounding cannot cull a box the ray
-//! touches. Residual limit: a ray with a zero direction component that runs exactly in a child
-//! box's far face plane can miss that box (a measure-zero grazing case).
-//! Triangles use the watertight test of Woop, Benthin & Wald 2013, so a ray through a shared edge
-//! or vertex of a closed mesh cannot slip between triangles.
+//! One obvhs binary BVH (PLOC + reinsertion) is built over all objects' triangles and converted
+//! twice: into obvhs's CWBVH (compressed 8-wide, Ylitie et al. 2017), exported as is for the
+//! GPU twin (`sss/glsl/bvh.glsl`), and into the CPU layout of `wide.rs` (uncompressed 8-wide
+//! nodes, four-triangle packets), traversed by `traverse.rs` with the SIMD kernels of
+//! `kernel.rs`. Scenes of several objects also get one such tree per object, walked by the
+//! object-restricted queries (the BSSRDF probe's), which then never visit another object's
+//! nodes. Triangles use the watertight test of Woop, Benthin & Wald 2013
+//! (`watertight.rs`), so a ray through a shared edge or vertex of a closed mesh cannot slip
+//! between triangles, and every kernel returns the same hits bit for bit.
+//!
+//! Box entry is clamped to the ray's `t_min`, inverse directions are exact down to 1e-20, and
+//! box exits are pushed out by `2γ₃` of their magnitude (Ize 2013, *Robust BVH Ray Traversal*)
+//! so rounding cannot cull a box the ray touches. (obvhs's own `CwBvhNode::intersect_ray` clamps
+//! entry to an absolute 1e-4 and uses `±1/ε` for near-zero direction components.) Residual
+//! limit: a ray with a zero direction component that runs exactly in a child box's face plane
+//! can miss that box (a measure-zero grazing case).
 
-use std::time::Duration;
+use std::mem::MaybeUninit;
 
-use glam::{Mat3A, UVec2, Vec2, Vec3, Vec3A};
+use glam::{Vec2, Vec3};
 use obvhs::{
     BvhBuildParams,
-    cwbvh::{CwBvh, builder::build_cwbvh_from_tris, node::CwBvhNode},
+    bvh2::{Bvh2, reinsertion::ReinsertionOptimizer},
+    cwbvh::{CwBvh, bvh2_to_cwbvh::bvh2_to_cwbvh},
+    ploc::PlocBuilder,
     triangle::Triangle,
 };
 
-use super::mesh::TriangleMesh;
-use super::ray::{Hit, Ray};
-
-/// `2γ₃` with `γₙ = nε / (1 − nε)`, `ε = 2⁻²⁴` (Ize 2013): box exits move out by this fraction
-/// of their magnitude, `exit + |exit| · 2γ₃`.
-const BOX_EXIT_MARGIN: f32 = 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
-/// Direction components smaller than this in magnitude use `±1/MIN_DIR` as their inverse, which
-/// keeps every slab distance finite (no `0 · ∞ = NaN`).
-const MIN_DIR: f32 = 1e-20;
-
-/// A ray prepared for traversal: slab inverses and the watertight shear.
-struct PreparedRay {
-    origin: Vec3A,
-    inv_dir: Vec3A,
-    negative: [bool; 3],
-    /// Rows: `e_kx − S_x e_kz`, `e_ky − S_y e_kz`, `S_z e_kz` [Woop et al. 2013, §3].
-    shear: Mat3A,
-    t_min: f32,
-    t_max: f32,
-}
-
-impl PreparedRay {
-    /// `None` for a zero or non-finite direction, or an empty/non-finite interval.
-    fn new(ray: &Ray) -> Option<PreparedRay> {
-        let d = ray.dir + Vec3A::ZERO;
-        let valid = d.is_finite()
-            && d != Vec3A::ZERO
-            && ray.origin.is_finite()
-            && !ray.t_min.is_nan()
-            && !ray.t_max.is_nan()
-            && ray.t_min < ray.t_max;
-        if !valid {
-            return None;
-        }
-        let inv = |x: f32| {
-            if x.abs() < MIN_DIR {
-                1.0 / MIN_DIR.copysign(x)
-            } else {
-                1.0 / x
-            }
-        };
-        let abs = d.abs();
-        let kz = if abs.x >= abs.y && abs.x >= abs.z {
-            0
-        } else if abs.y >= abs.z {
-            1
-        } else {
-            2
-        };
-        let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
-        if d[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
-        let (sx, sy, sz) = (d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
-        let mut rows = [[0.0f32; 3]; 3];
-        rows[0][kx] = 1.0;
-        rows[0][kz] = -sx;
-        rows[1][ky] = 1.0;
-        rows[1][kz] = -sy;
-        rows[2][kz] = sz;
-        Some(PreparedRay {
-            origin: ray.origin,
-            inv_dir: Vec3A::new(inv(d.x), inv(d.y), inv(d.z)),
-            negative: [d.x < 0.0, d.y < 0.0, d.z < 0.0],
-            shear: Mat3A::from_cols_array_2d(&rows).transpose(),
-            t_min: ray.t_min,
-            t_max: ray.t_max,
-        })
-    }
-}
-
-/// Watertight ray–triangle test [Woop et al. 2013]: `(t, (u, v))` with `t_min < t < t_max`.
-/// Edge functions that evaluate to exactly zero are recomputed in `f64` (paper §4).
-#[inline(always)]
-fn intersect_triangle(tri: &[Vec3; 3], ray: &PreparedRay, t_max: f32) -> Option<(f32, Vec2)> {
-    let a = ray.shear * (Vec3A::from(tri[0]) - ray.origin);
-    let b = ray.shear * (Vec3A::from(tri[1]) - ray.origin);
-    let c = ray.shear * (Vec3A::from(tri[2]) - ray.origin);
-    let mut u = c.x * b.y - c.y * b.x;
-    let mut v = a.x * c.y - a.y * c.x;
-    let mut w = b.x * a.y - b.y * a.x;
-    if u == 0.0 || v == 0.0 || w == 0.0 {
-        let (a, b, c) = (a.as_dvec3(), b.as_dvec3(), c.as_dvec3());
-        u = (c.x * b.y - c.y * b.x) as f32;
-        v = (a.x * c.y - a.y * c.x) as f32;
-        w = (b.x * a.y - b.y * a.x) as f32;
-    }
-    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
-        return None;
-    }
-    let det = u + v + w;
-    if det == 0.0 {
-        return None;
-    }
-    let t = (u * a.z + v * b.z + w * c.z) / det;
-    (t > ray.t_min && t < t_max).then(|| (t, Vec2::new(v / det, w / det)))
-}
-
-/// Children of `node` whose boxes the ray overlaps within `[t_min, t_max]`, as the hit mask the
-/// obvhs `traverse!` macro expects (inner children in the top byte, leaf triangles below).
-#[inline(always)]
-fn intersect_node(
-    node: &CwBvhNode,
-    ray: &PreparedRay,
-    oct_inv4: u32,
-    t_max: f32,
-    nodes: &[CwBvhNode],
-    leaf_triangles: &[[Vec3; 3]],
-) -> u32 {
-    #[cfg(target_arch = "x86_64")]
-    let overlap = overlap_mask_sse2(node, ray, t_max);
-    #[cfg(not(target_arch = "x86_64"))]
-    let overlap = overlap_mask_scalar(node, ray, t_max);
-    let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
-    let mut hit_mask = 0u32;
-    let mut remaining = overlap;
-    while remaining != 0 {
-        let child = remaining.trailing_zeros();
-        remaining &= remaining - 1;
-        let child_bits = ((child_bits8 >> (child * 8)) & 0xff) as u32;
-        let bit_index = ((bit_index8 >> (child * 8)) & 0xff) as u32;
-        hit_mask |= child_bits << bit_index;
-        prefetch_child(node, child as usize, nodes, leaf_triangles);
-    }
-    hit_mask
-}
-
-/// Asks the cache for an overlapped child's node or leaf triangles while the traversal works
-/// on its siblings: incoherent rays are bound by these loads.
-#[inline(always)]
-fn prefetch_child(
-    node: &CwBvhNode,
-    child: usize,
-    nodes: &[CwBvhNode],
-    leaf_triangles: &[[Vec3; 3]],
-) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        let (first, last): (*const i8, *const i8) = if !node.is_leaf(child) {
-            let target = nodes
-                .as_ptr()
-                .wrapping_add(node.child_node_index(child) as usize);
-            (target.cast(), target.wrapping_add(1).cast())
-        } else {
-            let (start, count) = node.child_primitives(child);
-            let target = leaf_triangles.as_ptr().wrapping_add(start as usize);
-            (target.cast(), target.wrapping_add(count as usize).cast())
-        };
-        let mut line = first.wrapping_sub(first as usize % 64);
-        while line < last {
-            // SAFETY: prefetching is a hint and never faults, even for addresses out of bounds.
-            unsafe { _mm_prefetch::<_MM_HINT_T0>(line) };
-            line = line.wrapping_add(64);
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = (node, child, nodes, leaf_triangles);
-}
-
-/// Per-axis child planes the ray meets first and last: `(near, far)` quantised coordinates.
-#[inline(always)]
-fn near_far<'a>(lo: &'a [u8; 8], hi: &'a [u8; 8], negative: bool) -> (&'a [u8; 8], &'a [u8; 8]) {
-    if negative { (hi, lo) } else { (lo, hi) }
-}
-
-/// Bit `i` set when child slot `i`'s box overlaps the ray (empty slots may be set; their
-/// metadata contributes no bits). Child box planes are `p + q · 2^e` for quantised
-/// `q ∈ [0, 255]`; the ray is moved into that grid instead: `t = q · (2^e / d) + (p − o) / d`.
+use super::kernel::KernelKind;
 #[cfg(any(test, not(target_arch = "x86_64")))]
-#[inline(always)]
-fn overlap_mask_scalar(node: &CwBvhNode, ray: &PreparedRay, t_max: f32) -> u32 {
-    let scale = node.compute_extent() * ray.inv_dir;
-    let offset = (Vec3A::from(node.p) - ray.origin) * ray.inv_dir;
-    let (near_x, far_x) = near_far(&node.child_min_x, &node.child_max_x, ray.negative[0]);
-    let (near_y, far_y) = near_far(&node.child_min_y, &node.child_max_y, ray.negative[1]);
-    let (near_z, far_z) = near_far(&node.child_min_z, &node.child_max_z, ray.negative[2]);
-    let mut mask = 0;
-    for child in 0..8 {
-        let entry = (near_x[child] as f32 * scale.x + offset.x)
-            .max(near_y[child] as f32 * scale.y + offset.y)
-            .max(near_z[child] as f32 * scale.z + offset.z)
-            .max(ray.t_min);
-        let exit = (far_x[child] as f32 * scale.x + offset.x)
-            .min(far_y[child] as f32 * scale.y + offset.y)
-            .min(far_z[child] as f32 * scale.z + offset.z);
-        let exit = (exit + exit.abs() * BOX_EXIT_MARGIN).min(t_max);
-        mask |= u32::from(entry <= exit) << child;
-    }
-    mask
-}
-
-/// [`overlap_mask_scalar`] four children at a time with SSE2 (baseline on x86_64). Same
-/// arithmetic in the same order, so the same result bit for bit (no NaN can arise: all slab
-/// distances are finite).
+use super::kernel::Portable;
 #[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn overlap_mask_sse2(node: &CwBvhNode, ray: &PreparedRay, t_max: f32) -> u32 {
-    use std::arch::x86_64::*;
-    let scale = node.compute_extent() * ray.inv_dir;
-    let offset = (Vec3A::from(node.p) - ray.origin) * ray.inv_dir;
-    // SAFETY: SSE2 is part of the x86_64 baseline; the loads read exactly 8 bytes.
-    unsafe {
-        let zero = _mm_setzero_si128();
-        let widen = |q: &[u8; 8]| {
-            let bytes = _mm_unpacklo_epi8(_mm_loadl_epi64(q.as_ptr().cast()), zero);
-            [
-                _mm_unpacklo_epi16(bytes, zero),
-                _mm_unpackhi_epi16(bytes, zero),
-            ]
-            .map(|v| _mm_cvtepi32_ps(v))
-        };
-        let planes = |q: &[u8; 8], scale: f32, offset: f32| {
-            widen(q).map(|v| _mm_add_ps(_mm_mul_ps(v, _mm_set1_ps(scale)), _mm_set1_ps(offset)))
-        };
-        let (near_x, far_x) = near_far(&node.child_min_x, &node.child_max_x, ray.negative[0]);
-        let (near_y, far_y) = near_far(&node.child_min_y, &node.child_max_y, ray.negative[1]);
-        let (near_z, far_z) = near_far(&node.child_min_z, &node.child_max_z, ray.negative[2]);
-        let (nx, ny, nz) = (
-            planes(near_x, scale.x, offset.x),
-            planes(near_y, scale.y, offset.y),
-            planes(near_z, scale.z, offset.z),
-        );
-        let (fx, fy, fz) = (
-            planes(far_x, scale.x, offset.x),
-            planes(far_y, scale.y, offset.y),
-            planes(far_z, scale.z, offset.z),
-        );
-        let mut mask = 0;
-        for half in 0..2 {
-            let entry = _mm_max_ps(
-                _mm_max_ps(_mm_max_ps(nx[half], ny[half]), nz[half]),
-                _mm_set1_ps(ray.t_min),
-            );
-            let exit = _mm_min_ps(_mm_min_ps(fx[half], fy[half]), fz[half]);
-            let magnitude = _mm_andnot_ps(_mm_set1_ps(-0.0), exit);
-            let exit = _mm_add_ps(exit, _mm_mul_ps(magnitude, _mm_set1_ps(BOX_EXIT_MARGIN)));
-            let exit = _mm_min_ps(exit, _mm_set1_ps(t_max));
-            mask |= (_mm_movemask_ps(_mm_cmple_ps(entry, exit)) as u32) << (4 * half);
-        }
-        mask
-    }
-}
+use super::kernel::{Avx2, Sse2};
+use super::mesh::TriangleMesh;
+use super::query::{AllHits, Closest, Occluded, Query};
+use super::ray::{Hit, Ray};
+use super::traverse::Entry;
+use super::watertight::PreparedRay;
+use super::wide::WideBvh;
 
-/// The scene's triangles: per-triangle data by global id, and a CWBVH over all of them.
+/// The scene's triangles: per-triangle data by global id, the device CWBVH and the CPU BVH.
 ///
 /// Global triangle ids concatenate the objects' triangles in object order. Degenerate triangles
 /// are kept (so ids match the input meshes) but never hit; drop them beforehand with
 /// [`TriangleMesh::drop_degenerate`].
 pub struct Geometry {
+    /// The device export (obvhs CWBVH), not traversed on the CPU.
     bvh: CwBvh,
-    /// Triangle vertices in BVH leaf order (`bvh.primitive_indices` maps slot → global id).
-    leaf_triangles: Vec<[Vec3; 3]>,
-    leaf_objects: Vec<u32>,
+    /// Every object's triangles, for the unrestricted queries.
+    wide: WideBvh,
+    /// One tree per object for the object-restricted queries (the SSS probe's), which then
+    /// never visit another object's nodes; empty when the scene has one object (`wide` serves).
+    object_trees: Vec<WideBvh>,
+    /// The box and triangle tests' instruction set (all give the same hits).
+    kernel: KernelKind,
     vertices: Vec<[Vec3; 3]>,
     /// Per-vertex shading normals by global id (the geometric normal where a mesh has none).
     shading_normals: Vec<[Vec3; 3]>,
     objects: Vec<u32>,
     object_count: u32,
+}
+
+/// obvhs's medium preset with a full reinsertion pass (every node considered once) and the PLOC
+/// search widened from depth 1: on the traversal benchmark's meshes this costs about three times
+/// the build time (≈ 0.35 s for 100k triangles) and saves 5–20% of the traversal time of every
+/// query (`docs/performance.md`).
+fn build_params() -> BvhBuildParams {
+    BvhBuildParams {
+        reinsertion_batch_ratio: 1.0,
+        search_depth_threshold: 1,
+        ..BvhBuildParams::medium_build()
+    }
+}
+
+/// obvhs's binary BVH as `build_cwbvh_from_tris` builds it without spatial splits: PLOC, then
+/// reinsertion.
+fn build_bvh2(triangles: &[Triangle], params: &BvhBuildParams) -> Bvh2 {
+    let mut bvh2 = PlocBuilder::with_capacity(triangles.len()).build(
+        params.ploc_search_distance,
+        triangles,
+        (0..triangles.len() as u32).collect(),
+        params.sort_precision,
+        params.search_depth_threshold,
+    );
+    ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
+    bvh2
 }
 
 impl Geometry {
@@ -287,11 +95,11 @@ impl Geometry {
     /// Panics if a mesh indexes past its positions or has non-finite vertices (the loaders and
     /// shapes never produce such meshes; this is a programming error, not bad input).
     pub fn new(objects: &[TriangleMesh]) -> Geometry {
-        Geometry::with_build_params(objects, BvhBuildParams::medium_build())
+        Geometry::with_build_params(objects, build_params())
     }
 
     /// [`Geometry::new`] with explicit obvhs build parameters (quality vs build time).
-    /// `pre_split` is forced off: with spatial splits a triangle can sit in several leaves, and
+    /// `pre_split` is ignored: with spatial splits a triangle can sit in several leaves, and
     /// all-hits queries would report it more than once.
     pub fn with_build_params(objects: &[TriangleMesh], params: BvhBuildParams) -> Geometry {
         let mut vertices = Vec::new();
@@ -327,32 +135,39 @@ impl Geometry {
                 v2: v2.into(),
             })
             .collect();
-        let params = BvhBuildParams {
-            pre_split: false,
-            ..params
-        };
-        let bvh = if triangles.is_empty() {
-            CwBvh::default()
+        let (bvh, wide) = if triangles.is_empty() {
+            (CwBvh::default(), WideBvh::default())
         } else {
-            build_cwbvh_from_tris(&triangles, params, &mut Duration::default())
+            let bvh2 = build_bvh2(&triangles, &params);
+            (
+                bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false),
+                WideBvh::from_bvh2(&bvh2, &vertices, &object_of),
+            )
         };
-        let leaf_triangles = bvh
-            .primitive_indices
-            .iter()
-            .map(|&prim| {
-                let t = &triangles[prim as usize];
-                [t.v0, t.v1, t.v2].map(Vec3::from)
-            })
-            .collect();
-        let leaf_objects = bvh
-            .primitive_indices
-            .iter()
-            .map(|&prim| object_of[prim as usize])
-            .collect();
+        let mut object_trees = Vec::new();
+        if objects.len() > 1 {
+            let mut first = 0;
+            for mesh in objects {
+                let own = &triangles[first..first + mesh.indices.len()];
+                let tree = if own.is_empty() {
+                    WideBvh::default()
+                } else {
+                    let mut bvh2 = build_bvh2(own, &params);
+                    // Local triangle indices to global ids (objects are contiguous).
+                    bvh2.primitive_indices
+                        .iter_mut()
+                        .for_each(|prim| *prim += first as u32);
+                    WideBvh::from_bvh2(&bvh2, &vertices, &object_of)
+                };
+                object_trees.push(tree);
+                first += mesh.indices.len();
+            }
+        }
         Geometry {
             bvh,
-            leaf_triangles,
-            leaf_objects,
+            wide,
+            object_trees,
+            kernel: KernelKind::detect(),
             vertices,
             shading_normals,
             objects: object_of,
@@ -360,118 +175,70 @@ impl Geometry {
         }
     }
 
-    /// Visits the leaf slots whose boxes the ray overlaps; `visit(slot, t_max)` returns the new
-    /// `t_max` (shrinking it prunes boxes) or `None` to stop.
+    /// The tree that holds `object`'s triangles with the fewest others.
+    fn tree_of(&self, object: Option<u32>) -> &WideBvh {
+        object
+            .and_then(|o| self.object_trees.get(o as usize))
+            .unwrap_or(&self.wide)
+    }
+
+    /// Runs `query` on `bvh` with this geometry's kernel.
     #[inline(always)]
-    fn traverse(&self, ray: &PreparedRay, mut visit: impl FnMut(usize, f32) -> Option<f32>) {
-        let mut state = self.bvh.new_traversal(ray.inv_dir);
-        let mut t_max = ray.t_max;
-        let mut node;
-        'traversal: {
-            obvhs::traverse!(
-                self.bvh,
-                node,
-                state,
-                intersect_node(
-                    node,
-                    ray,
-                    state.oct_inv4,
-                    t_max,
-                    &self.bvh.nodes,
-                    &self.leaf_triangles
-                ),
-                {
-                    match visit(state.primitive_id as usize, t_max) {
-                        Some(t) => t_max = t,
-                        None => break 'traversal,
-                    }
-                }
-            );
-        }
-    }
-
-    fn hit_at(&self, slot: usize, t: f32, bary: Vec2) -> Hit {
-        Hit {
-            t,
-            prim: self.bvh.primitive_indices[slot],
-            object: self.leaf_objects[slot],
-            bary,
-        }
-    }
-
-    /// Closest hit in `(t_min, t_max)`, restricted to `object` when given. Equal `t` goes to the
-    /// lower triangle id, so the result does not depend on traversal order.
-    fn closest(&self, ray: &Ray, object: Option<u32>) -> Option<Hit> {
-        let prepared = PreparedRay::new(ray)?;
-        let mut best: Option<Hit> = None;
-        self.traverse(&prepared, |slot, t_max| {
-            if object.is_some_and(|o| o != self.leaf_objects[slot]) {
-                return Some(t_max);
-            }
-            // Accept t equal to the best so far (boxes are tested with `entry ≤ t_max`, so a tie
-            // reaches here); the ray's own t_max stays exclusive.
-            let limit = best.map_or(prepared.t_max, |b| b.t.next_up());
-            if let Some((t, bary)) =
-                intersect_triangle(&self.leaf_triangles[slot], &prepared, limit)
-            {
-                let hit = self.hit_at(slot, t, bary);
-                let better = best.is_none_or(|b| t < b.t || (t == b.t && hit.prim < b.prim));
-                if better {
-                    best = Some(hit);
-                    return Some(t);
-                }
-            }
-            Some(t_max)
-        });
-        best
+    fn run<Q: Query>(&self, bvh: &WideBvh, query: Q, ray: &PreparedRay) -> Q::Output {
+        bvh.with_entries(|entries| match self.kernel {
+            // SAFETY: `KernelKind::detect` found AVX2 on this machine.
+            #[cfg(target_arch = "x86_64")]
+            KernelKind::Avx2 => unsafe { run_avx2(query, bvh, ray, entries) },
+            // SAFETY: SSE2 is part of the x86-64 baseline.
+            #[cfg(target_arch = "x86_64")]
+            KernelKind::Sse2 => unsafe { query.run::<Sse2>(bvh, ray, entries) },
+            // SAFETY: plain Rust.
+            #[cfg(any(test, not(target_arch = "x86_64")))]
+            KernelKind::Portable => unsafe { query.run::<Portable>(bvh, ray, entries) },
+        })
     }
 
     /// The closest hit with `t_min < t < t_max`; ties in `t` go to the lower triangle id.
     pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
-        self.closest(ray, None)
+        self.run(
+            &self.wide,
+            Closest { object: None },
+            &PreparedRay::new(ray)?,
+        )
     }
 
-    /// The closest hit on triangles of `object` only.
+    /// The closest hit on triangles of `object` only (none for an object id out of range).
     pub fn closest_hit_on_object(&self, ray: &Ray, object: u32) -> Option<Hit> {
-        self.closest(ray, Some(object))
+        if object >= self.object_count {
+            return None;
+        }
+        self.run(
+            self.tree_of(Some(object)),
+            Closest {
+                object: Some(object),
+            },
+            &PreparedRay::new(ray)?,
+        )
     }
 
     /// Whether any triangle is hit with `t_min < t < t_max` (shadow rays).
     pub fn occluded(&self, ray: &Ray) -> bool {
-        let Some(prepared) = PreparedRay::new(ray) else {
-            return false;
-        };
-        let mut occluded = false;
-        self.traverse(&prepared, |slot, t_max| {
-            if intersect_triangle(&self.leaf_triangles[slot], &prepared, t_max).is_some() {
-                occluded = true;
-                return None;
-            }
-            Some(t_max)
-        });
-        occluded
+        PreparedRay::new(ray).is_some_and(|ray| self.run(&self.wide, Occluded, &ray))
     }
 
-    /// Clears `out` and fills it with every hit on `object` in `(t_min, t_max)`, sorted by `t`,
-    /// ties broken by triangle id: the rank of a hit in `out` is the BSSRDF probe's
-    /// intersection index [001 §2.1] and must not depend on traversal order.
+    /// Clears `out` and fills it with every hit on `object` in `(t_min, t_max)` (none for an
+    /// object id out of range), sorted by `t`, ties broken by triangle id: the rank of a hit in
+    /// `out` is the BSSRDF probe's intersection index [001 §2.1] and must not depend on
+    /// traversal order.
     pub fn all_hits_on_object(&self, ray: &Ray, object: u32, out: &mut Vec<Hit>) {
         out.clear();
-        let Some(prepared) = PreparedRay::new(ray) else {
+        if object >= self.object_count {
             return;
-        };
-        self.traverse(&prepared, |slot, t_max| {
-            if self.leaf_objects[slot] != object {
-                return Some(t_max);
-            }
-            if let Some((t, bary)) =
-                intersect_triangle(&self.leaf_triangles[slot], &prepared, t_max)
-            {
-                out.push(self.hit_at(slot, t, bary));
-            }
-            Some(t_max)
-        });
-        out.sort_unstable_by(|a, b| a.t.total_cmp(&b.t).then(a.prim.cmp(&b.prim)));
+        }
+        if let Some(ray) = PreparedRay::new(ray) {
+            self.run(self.tree_of(Some(object)), AllHits { object, out }, &ray);
+            out.sort_unstable_by(|a, b| a.t.total_cmp(&b.t).then(a.prim.cmp(&b.prim)));
+        }
     }
 
     pub fn object_of(&self, prim: u32) -> u32 {
@@ -522,121 +289,46 @@ impl Geometry {
         self.vertices.len() as u32
     }
 
+    /// The CPU BVH, for the kernel and layout tests.
+    #[cfg(test)]
+    pub(super) fn wide(&self) -> &WideBvh {
+        &self.wide
+    }
+
     /// The CWBVH (nodes and leaf-slot → triangle id map), for upload to the GPU.
     pub fn bvh(&self) -> &CwBvh {
         &self.bvh
     }
 }
 
+/// [`Query::run`] compiled for AVX2.
+///
+/// # Safety
+/// AVX2 must be available.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn run_avx2<Q: Query>(
+    query: Q,
+    bvh: &WideBvh,
+    ray: &PreparedRay,
+    entries: &mut [MaybeUninit<Entry>],
+) -> Q::Output {
+    // SAFETY: forwarded from the caller.
+    unsafe { query.run::<Avx2>(bvh, ray, entries) }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::geometry::shapes;
-    use glam::{Affine3A, Quat, Vec3};
+    use crate::geometry::testing::{brute_force, hit_bits, rays, scene, unit_vector};
+    use crate::geometry::traverse::INLINE_ENTRIES;
+    use crate::geometry::watertight::intersect_triangle;
+    use glam::{Affine3A, Vec3, Vec3A};
     use obvhs::ray::RayHit;
-    use restir::rng::{Stream, StreamKey};
+    use restir::rng::StreamKey;
 
     const SEED: u64 = 0x6E0;
-
-    fn unit_vector(rng: &mut Stream) -> Vec3A {
-        let z = 1.0 - 2.0 * rng.next_f32();
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        let phi = std::f32::consts::TAU * rng.next_f32();
-        Vec3A::new(r * phi.cos(), r * phi.sin(), z)
-    }
-
-    /// Three objects that overlap in space: a bumpy sphere, a torus knot through it, and a box
-    /// with a quad (flat faces, so axis-aligned rays graze edges and hit faces head-on).
-    fn scene() -> Vec<TriangleMesh> {
-        let mut boxes = shapes::cuboid(Vec3::new(0.4, 0.3, 0.5));
-        let quad = shapes::quad(3.0, 3.0)
-            .transformed(&Affine3A::from_translation(Vec3::new(0.0, -1.2, 0.0)));
-        let base = boxes.positions.len() as u32;
-        boxes.positions.extend(&quad.positions);
-        boxes
-            .indices
-            .extend(quad.indices.iter().map(|t| t.map(|i| i + base)));
-        vec![
-            shapes::bumpy_sphere(1.0, 0.1, 3.0, 5, 3),
-            shapes::torus_knot(2, 3, 1.2, 0.15, 96, 8).transformed(
-                &Affine3A::from_rotation_translation(
-                    Quat::from_rotation_y(0.4),
-                    Vec3::new(0.2, 0.1, 0.0),
-                ),
-            ),
-            boxes.transformed(&Affine3A::from_translation(Vec3::new(0.5, 0.2, 0.3))),
-        ]
-    }
-
-    /// Random rays through the scene bounds, then the same rays with axis-aligned directions and
-    /// with `±0.0` direction components (each sign of zero in each slot).
-    fn rays(count: usize) -> Vec<Ray> {
-        let (lo, hi) = (Vec3A::splat(-2.0), Vec3A::splat(2.0));
-        let mut rng = StreamKey::new(0, 0, 0, 0xB0B).stream(SEED);
-        let mut rays = Vec::new();
-        let axes = [Vec3A::X, Vec3A::Y, Vec3A::Z];
-        for i in 0..count {
-            let origin =
-                lo + (hi - lo) * Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
-            let dir = unit_vector(&mut rng);
-            let t_min = if i % 3 == 0 {
-                0.0
-            } else {
-                0.5 * rng.next_f32()
-            };
-            let t_max = if i % 2 == 0 {
-                f32::INFINITY
-            } else {
-                t_min + 3.0 * rng.next_f32()
-            };
-            let signed_zero = |x: f32, keep: bool| {
-                if keep {
-                    x
-                } else {
-                    if x < 0.0 { -0.0 } else { 0.0 }
-                }
-            };
-            let axis = axes[i % 3] * if rng.next_f32() < 0.5 { -1.0 } else { 1.0 };
-            let (zx, zy) = (i % 4 < 2, i % 2 == 0);
-            let zeroed = Vec3A::new(signed_zero(dir.x, zx), signed_zero(dir.y, zy), dir.z);
-            for d in [dir, axis, -axis * 0.5, zeroed, -zeroed] {
-                // Raw struct (not Ray::new) so that −0.0 reaches the queries uncanonicalised.
-                rays.push(Ray {
-                    origin,
-                    dir: d,
-                    t_min,
-                    t_max,
-                });
-            }
-        }
-        assert!(rays.iter().any(|r| {
-            r.dir
-                .to_array()
-                .iter()
-                .any(|x| x.to_bits() == (-0.0f32).to_bits())
-        }));
-        rays
-    }
-
-    /// Every hit of `ray` over all triangles, sorted by (t, prim): the reference for all queries.
-    fn brute_force(geometry: &Geometry, ray: &Ray) -> Vec<Hit> {
-        let Some(prepared) = PreparedRay::new(ray) else {
-            return Vec::new();
-        };
-        let mut hits: Vec<Hit> = (0..geometry.triangle_count())
-            .filter_map(|prim| {
-                let tri = geometry.vertices(prim);
-                intersect_triangle(&tri, &prepared, prepared.t_max).map(|(t, bary)| Hit {
-                    t,
-                    prim,
-                    object: geometry.object_of(prim),
-                    bary,
-                })
-            })
-            .collect();
-        hits.sort_by(|a, b| a.t.total_cmp(&b.t).then(a.prim.cmp(&b.prim)));
-        hits
-    }
 
     /// Stock obvhs 0.4 closest hit (its own node test and ±0.0 handling), same triangle test.
     fn stock_obvhs_closest(geometry: &Geometry, ray: &Ray) -> Option<(u32, f32)> {
@@ -644,8 +336,8 @@ mod tests {
         let stock = obvhs::ray::Ray::new(ray.origin, ray.dir, ray.t_min, ray.t_max);
         let mut hit = RayHit::none();
         geometry.bvh.ray_traverse(stock, &mut hit, |r, slot| {
-            intersect_triangle(&geometry.leaf_triangles[slot], &prepared, r.tmax)
-                .map_or(f32::INFINITY, |h| h.0)
+            let tri = geometry.vertices(geometry.bvh.primitive_indices[slot]);
+            intersect_triangle(&tri, &prepared, r.tmax).map_or(f32::INFINITY, |h| h.0)
         });
         (hit.t < ray.t_max).then(|| {
             (
@@ -655,42 +347,126 @@ mod tests {
         })
     }
 
-    #[test]
-    fn queries_match_brute_force() {
-        let geometry = Geometry::new(&scene());
-        let rays = rays(400);
+    /// Every query with every kernel of this machine against brute force, bit for bit;
+    /// returns (hits, chords with two or more hits on one object) to show what was exercised.
+    fn assert_matches_brute_force(geometry: &mut Geometry, rays: &[Ray]) -> (usize, usize) {
+        let bits = |hits: &[Hit]| hits.iter().map(hit_bits).collect::<Vec<_>>();
         let (mut hits_total, mut multi) = (0, 0);
         let mut out = Vec::new();
-        for ray in &rays {
-            let reference = brute_force(&geometry, ray);
-            let closest = reference.first().copied();
-            assert_eq!(geometry.closest_hit(ray), closest, "closest hit, {ray:?}");
-            assert_eq!(
-                geometry.occluded(ray),
-                closest.is_some(),
-                "occluded, {ray:?}"
-            );
-            for object in 0..geometry.object_count() {
-                let on_object: Vec<Hit> = reference
-                    .iter()
-                    .copied()
-                    .filter(|h| h.object == object)
-                    .collect();
-                geometry.all_hits_on_object(ray, object, &mut out);
-                assert_eq!(out, on_object, "all hits on object {object}, {ray:?}");
+        for kernel in KernelKind::available() {
+            geometry.kernel = kernel;
+            for ray in rays {
+                let reference = brute_force(geometry, ray);
+                let closest = reference.first().copied();
                 assert_eq!(
-                    geometry.closest_hit_on_object(ray, object),
-                    on_object.first().copied()
+                    bits(geometry.closest_hit(ray).as_slice()),
+                    bits(closest.as_slice()),
+                    "{kernel:?}: closest hit, {ray:?}"
                 );
-                multi += usize::from(on_object.len() >= 2);
+                assert_eq!(
+                    geometry.occluded(ray),
+                    closest.is_some(),
+                    "{kernel:?}: occluded, {ray:?}"
+                );
+                for object in 0..geometry.object_count() {
+                    let on_object: Vec<Hit> = reference
+                        .iter()
+                        .copied()
+                        .filter(|h| h.object == object)
+                        .collect();
+                    geometry.all_hits_on_object(ray, object, &mut out);
+                    assert_eq!(
+                        bits(&out),
+                        bits(&on_object),
+                        "{kernel:?}: all hits on object {object}, {ray:?}"
+                    );
+                    assert_eq!(
+                        bits(geometry.closest_hit_on_object(ray, object).as_slice()),
+                        bits(&on_object[..on_object.len().min(1)]),
+                        "{kernel:?}: closest hit on object {object}, {ray:?}"
+                    );
+                    multi += usize::from(on_object.len() >= 2);
+                }
+                hits_total += reference.len();
             }
-            hits_total += reference.len();
         }
+        (hits_total, multi)
+    }
+
+    #[test]
+    fn queries_match_brute_force() {
+        let rays = rays(400);
+        let (hits, multi) = assert_matches_brute_force(&mut Geometry::new(&scene()), &rays);
         // The comparison must exercise something: many hits, and many multi-hit chords.
+        let kernels = KernelKind::available().len();
         assert!(
-            hits_total > rays.len() / 4 && multi > rays.len() / 10,
-            "{hits_total} hits, {multi} multi-hit"
+            hits > kernels * rays.len() / 4 && multi > kernels * rays.len() / 10,
+            "{hits} hits, {multi} multi-hit"
         );
+    }
+
+    #[test]
+    fn deep_trees_use_a_heap_stack() {
+        // Nested triangles shrinking geometrically toward a point: the binary tree is a chain,
+        // deeper than the inline traversal storage, so queries run on the heap stack.
+        let mesh = TriangleMesh {
+            positions: (0..600)
+                .flat_map(|i| {
+                    let s = 0.95f32.powi(i);
+                    [
+                        Vec3::new(s, 0.0, 0.0),
+                        Vec3::new(s, s, 0.0),
+                        Vec3::new(s, 0.0, s),
+                    ]
+                })
+                .collect(),
+            indices: (0..600).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect(),
+            normals: None,
+        };
+        let mut geometry = Geometry::new(&[mesh]);
+        assert!(
+            geometry.wide.entries_needed() > INLINE_ENTRIES,
+            "stack depth {}",
+            geometry.wide.stack_depth
+        );
+        let mut rng = StreamKey::new(0, 0, 0, 0xDEE9).stream(SEED);
+        let rays: Vec<Ray> = (0..300)
+            .map(|_| {
+                let target = Vec3A::new(0.3, 0.05, 0.05) * rng.next_f32();
+                let origin = Vec3A::new(-1.0, 0.02, 0.02) + 0.01 * unit_vector(&mut rng);
+                Ray::new(origin, target - origin, 0.0, f32::INFINITY)
+            })
+            .collect();
+        let (hits, multi) = assert_matches_brute_force(&mut geometry, &rays);
+        assert!(hits > 1000 && multi > 100, "{hits} hits, {multi} multi-hit");
+    }
+
+    #[test]
+    fn device_export_is_the_obvhs_cwbvh() {
+        // The GPU traverses `Geometry::bvh()`: it must stay exactly what obvhs builds.
+        let meshes = scene();
+        let triangles: Vec<Triangle> = meshes
+            .iter()
+            .flat_map(|m| (0..m.triangle_count()).map(|i| m.triangle(i)))
+            .map(|[v0, v1, v2]| Triangle {
+                v0: v0.into(),
+                v1: v1.into(),
+                v2: v2.into(),
+            })
+            .collect();
+        let stock = obvhs::cwbvh::builder::build_cwbvh_from_tris(
+            &triangles,
+            build_params(),
+            &mut std::time::Duration::default(),
+        );
+        assert!(Geometry::new(&meshes).bvh() == &stock);
+        // Negative control: another build preset gives another tree.
+        let other = obvhs::cwbvh::builder::build_cwbvh_from_tris(
+            &triangles,
+            BvhBuildParams::fast_build(),
+            &mut std::time::Duration::default(),
+        );
+        assert!(Geometry::new(&meshes).bvh() != &other);
     }
 
     #[test]
@@ -899,35 +675,6 @@ mod tests {
         assert!(
             cracked_missed > count / 10,
             "negative control: cracked test missed {cracked_missed} of {count}"
-        );
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[test]
-    fn sse2_node_test_matches_scalar() {
-        let geometry = Geometry::new(&scene());
-        let (mut compared, mut overlaps, mut control_differs) = (0, 0, 0);
-        for ray in rays(100) {
-            let Some(prepared) = PreparedRay::new(&ray) else {
-                continue;
-            };
-            let flipped = PreparedRay {
-                negative: prepared.negative.map(|n| !n),
-                ..PreparedRay::new(&ray).unwrap()
-            };
-            for node in &geometry.bvh.nodes {
-                let t_max = prepared.t_max.min(4.0);
-                let simd = overlap_mask_sse2(node, &prepared, t_max);
-                assert_eq!(simd, overlap_mask_scalar(node, &prepared, t_max), "{ray:?}");
-                // Negative control: near and far planes swapped (wrong octant) must be detected.
-                control_differs += usize::from(simd != overlap_mask_scalar(node, &flipped, t_max));
-                overlaps += simd.count_ones() as usize;
-                compared += 1;
-            }
-        }
-        assert!(
-            overlaps > 1000 && 4 * control_differs > overlaps,
-            "{compared} nodes, {overlaps} overlaps, control differs on {control_differs}"
         );
     }
 

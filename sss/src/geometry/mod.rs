@@ -4,14 +4,22 @@
 //! Ray conventions: hits satisfy `t_min < t < t_max` (open at both ends, so `t_min = hit.t`
 //! continues past a hit); `t` is in units of `dir` (not normalised); ties in `t` go to the lower
 //! global triangle id. For the GPU twin, [`Geometry::bvh`] exposes the obvhs CWBVH as built
-//! (80-byte `CwBvhNode`s and the leaf-slot → triangle-id map `primitive_indices`).
+//! (80-byte `CwBvhNode`s and the leaf-slot → triangle-id map `primitive_indices`); the CPU
+//! traverses its own uncompressed layout of the same tree ([`wide`]).
 
 pub mod bvh;
 pub mod frame;
+mod kernel;
 pub mod load;
 pub mod mesh;
+mod query;
 pub mod ray;
 pub mod shapes;
+#[cfg(test)]
+mod testing;
+mod traverse;
+mod watertight;
+mod wide;
 
 pub use bvh::Geometry;
 pub use frame::Frame;

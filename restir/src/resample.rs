@@ -128,8 +128,11 @@ where
 /// `targets[j] = p̂_{←j}(y)` via [`Shift::target_from`], and `p̂_i(x_i) / J_i` for the
 /// sample's own domain. Confidences are used as given: cap them before the call.
 ///
+/// Forward shifts and back-shifts go through [`Shift::shift_supported`]: only samples with a
+/// positive target weigh.
+///
 /// Failure convention (seed 001's): a neighbour whose forward shift fails, or whose reservoir is
-/// empty, contributes weight 0 but its confidence is still added. This does not darken the
+/// empty or has `W = 0`, contributes weight 0 but its confidence is still added. This does not darken the
 /// estimate because the MIS weights of the other samples already give that domain
 /// `m_j(y) = 0` wherever its shift fails
 /// (test: `failed_forward_shifts_keep_confidence_and_do_not_darken`).
@@ -216,14 +219,16 @@ where
         if !(input.ucw.is_finite() && input.ucw >= 0.0) {
             return Err(wrap(InvalidCandidate::Ucw(input.ucw)));
         }
-        let Some(x) = input.y else {
+        // An input with W = 0 has weight 0 whatever its shift gives (and its target is not
+        // read), so it is streamed like an empty one and its shift, often a ray, is skipped.
+        let Some(x) = input.y.filter(|_| input.ucw > 0.0) else {
             ris.skip(input.confidence).map_err(wrap)?;
             continue;
         };
         let (y, jacobian, own_target) = if i == 0 {
             (x, 1.0, None)
         } else {
-            match shift.shift(&x, domain_of(i), r) {
+            match shift.shift_supported(&x, domain_of(i), r) {
                 Ok(s) => {
                     if !(s.jacobian.is_finite() && s.jacobian > 0.0) {
                         return Err(ResampleError::BadJacobian {
@@ -243,7 +248,7 @@ where
         if !(target.is_finite() && target >= 0.0) {
             return Err(wrap(InvalidCandidate::Target(target)));
         }
-        let m = if target > 0.0 && input.ucw > 0.0 {
+        let m = if target > 0.0 {
             let targets = &mut targets[..n];
             targets.fill(0.0);
             targets[0] = target;
@@ -507,6 +512,68 @@ mod tests {
         let near: Vec<f64> = rb.iter().map(|v| v * (1.0 + 1.5 * DELTA)).collect();
         let near = verdict(&near, reference);
         assert_eq!(near.verdict, Verdict::Biased, "control at 1.5δ: {near}");
+    }
+
+    /// [`Translation`] that counts its calls out of the domain centred at `.1` (forward shifts
+    /// of that neighbour; the MIS back-shifts start at the receiver).
+    struct Counted(std::sync::atomic::AtomicU32, [f32; 2]);
+
+    impl Shift<ToyPixel> for Counted {
+        fn shift(&self, x: &Point, src: &ToyPixel, dst: &ToyPixel) -> Result<Shifted<Point>, Fail> {
+            if src.centre == self.1 {
+                self.0.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            }
+            Translation.shift(x, src, dst)
+        }
+    }
+
+    /// A neighbour with `W = 0` is streamed like an empty one of the same confidence (same
+    /// reservoir, bit for bit, under every scheme) and its forward shift is not evaluated; one
+    /// with `W > 0` is (control: the shift is called for it).
+    #[test]
+    fn zero_weight_inputs_are_not_shifted() {
+        let receiver = pixel([0.3, 0.6]);
+        let neighbour = pixel([0.4, 0.5]);
+        for mis in [&Gbh as &dyn MisScheme, &Pairwise, &DefensivePairwise] {
+            for i in 0..200u64 {
+                let key = |purpose| StreamKey::new(0, 0, 0, purpose).stream(i);
+                let canonical =
+                    generate_candidates(&receiver, &LinearSampler, 1, &mut key(0)).unwrap();
+                let other =
+                    generate_candidates(&neighbour, &LinearSampler, 4, &mut key(1)).unwrap();
+                let run = |input: &Reservoir<Point>| {
+                    let shift = Counted(std::sync::atomic::AtomicU32::new(0), neighbour.centre);
+                    let r = resample(
+                        Source {
+                            domain: &receiver,
+                            reservoir: &canonical,
+                        },
+                        &[Source {
+                            domain: &neighbour,
+                            reservoir: input,
+                        }],
+                        &shift,
+                        mis,
+                        &mut key(2),
+                    )
+                    .unwrap();
+                    (r, shift.0.into_inner())
+                };
+                let zero = Reservoir { ucw: 0.0, ..other };
+                let empty = Reservoir { y: None, ..zero };
+                let ((with_zero, zero_calls), (with_empty, _)) = (run(&zero), run(&empty));
+                assert_eq!(zero_calls, 0, "{}: replica {i}", mis.name());
+                assert_eq!(with_zero.y, with_empty.y);
+                assert_eq!(with_zero.ucw.to_bits(), with_empty.ucw.to_bits());
+                assert_eq!(
+                    with_zero.confidence.to_bits(),
+                    with_empty.confidence.to_bits()
+                );
+                if other.y.is_some() && other.ucw > 0.0 {
+                    assert!(run(&other).1 > 0, "control: {}: replica {i}", mis.name());
+                }
+            }
+        }
     }
 
     /// A domain whose target is NaN, a shift with a NaN Jacobian, a sampler with pdf 0.

@@ -30,11 +30,21 @@ pub struct Shifted<S> {
 pub trait Shift<D: Domain>: Sync {
     fn shift(&self, x: &D::Sample, src: &D, dst: &D) -> Result<Shifted<D::Sample>, Fail>;
 
+    /// [`Shift::shift`] for a caller that uses `T(x)` only where `p̂_dst(T(x)) > 0`: it returns
+    /// the same `Ok` wherever that holds, and may fail (with any [`Fail`]) where it does not.
+    /// Resampling is such a caller: a shifted sample with `p̂_r = 0` has weight 0, which is what
+    /// a failed shift contributes, and `p̂_{←j} = 0` either way ([`Shift::target_from`]). A
+    /// shift overrides it to rule out `p̂_dst = 0` cheaply before work that cannot change the
+    /// result then (a shadow ray); the default is [`Shift::shift`].
+    fn shift_supported(&self, x: &D::Sample, src: &D, dst: &D) -> Result<Shifted<D::Sample>, Fail> {
+        self.shift(x, src, dst)
+    }
+
     /// `p̂_{←j}(y) = p̂_j(T_{r→j}(y)) · |T'_{r→j}(y)|`, 0 when the back-shift fails
     /// (DESIGN §9, [001 Eq. 7]). A shift with a cheaper exact way to evaluate this may override
     /// it; `restir::check::partition_of_unity` catches overrides that ignore failures.
     fn target_from(&self, y: &D::Sample, receiver: &D, other: &D) -> f32 {
-        match self.shift(y, receiver, other) {
+        match self.shift_supported(y, receiver, other) {
             Ok(back) => other.target(&back.y) * back.jacobian,
             Err(_) => 0.0,
         }

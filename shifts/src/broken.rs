@@ -4,7 +4,7 @@
 use restir::shift::{Fail, Shift, Shifted};
 
 use crate::contract::{BROKEN_JACOBIAN_ERROR, DELAYED_CHECK_JACOBIAN, DELAYED_CHECK_VISIBILITY};
-use crate::delayed::{Checks, replay};
+use crate::delayed::{Checks, Wanted, replay};
 use crate::domain::SssDomain;
 use crate::hybrid::Hybrid;
 use crate::sample::SssSample;
@@ -21,7 +21,11 @@ impl Shift<SssDomain<'_>> for DelayedWithoutJacobian {
         src: &SssDomain,
         dst: &SssDomain,
     ) -> Result<Shifted<SssSample>, Fail> {
-        replay(x, src, dst, Checks::ALL.without(DELAYED_CHECK_JACOBIAN)).map(|(s, _)| s)
+        replay(x, src, dst, Checks::ALL.without(DELAYED_CHECK_JACOBIAN))?.finish(
+            dst,
+            false,
+            Wanted::Every,
+        )
     }
 }
 
@@ -36,7 +40,11 @@ impl Shift<SssDomain<'_>> for DelayedWithoutVisibility {
         src: &SssDomain,
         dst: &SssDomain,
     ) -> Result<Shifted<SssSample>, Fail> {
-        replay(x, src, dst, Checks::ALL.without(DELAYED_CHECK_VISIBILITY)).map(|(s, _)| s)
+        replay(x, src, dst, Checks::ALL.without(DELAYED_CHECK_VISIBILITY))?.finish(
+            dst,
+            false,
+            Wanted::Every,
+        )
     }
 }
 
@@ -53,7 +61,7 @@ impl Shift<SssDomain<'_>> for HybridIgnoringCriterion {
         src: &SssDomain,
         dst: &SssDomain,
     ) -> Result<Shifted<SssSample>, Fail> {
-        Hybrid::for_material(src.material()).shift_checked(x, src, dst, false)
+        Hybrid::for_material(src.material()).shift_checked(x, src, dst, false, Wanted::Every)
     }
 }
 
@@ -71,7 +79,8 @@ impl Shift<SssDomain<'_>> for DelayedJacobianOff {
         src: &SssDomain,
         dst: &SssDomain,
     ) -> Result<Shifted<SssSample>, Fail> {
-        replay(x, src, dst, Checks::ALL).map(|(s, _)| Shifted {
+        let s = replay(x, src, dst, Checks::ALL)?.finish(dst, false, Wanted::Every)?;
+        Ok(Shifted {
             jacobian: s.jacobian * BROKEN_JACOBIAN_ERROR,
             ..s
         })

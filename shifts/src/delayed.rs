@@ -39,7 +39,17 @@ impl Shift<SssDomain<'_>> for DelayedReconnection {
         src: &SssDomain,
         dst: &SssDomain,
     ) -> Result<Shifted<SssSample>, Fail> {
-        replay(x, src, dst, Checks::ALL).map(|(shifted, _)| shifted)
+        replay(x, src, dst, Checks::ALL)?.finish(dst, false, Wanted::Every)
+    }
+
+    /// Whether light reaches y2 at all ([`SssDomain::visible_if_lit`]) before the shadow ray.
+    fn shift_supported(
+        &self,
+        x: &SssSample,
+        src: &SssDomain,
+        dst: &SssDomain,
+    ) -> Result<Shifted<SssSample>, Fail> {
+        replay(x, src, dst, Checks::ALL)?.finish(dst, false, Wanted::Supported)
     }
 }
 
@@ -61,13 +71,62 @@ impl Checks {
     }
 }
 
-/// Delayed reconnection of `x` from `src` into `dst`; also returns y2 (the hybrid tests it).
+/// Which shifted samples the caller of a shift uses: every one ([`Shift::shift`], whose failure
+/// kinds the diagnostics count), or only those with `p̂_dst > 0` ([`Shift::shift_supported`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Wanted {
+    Every,
+    Supported,
+}
+
+/// Delayed reconnection up to its last test, the y2–x3 shadow ray ([`Replayed::finish`]).
+pub(crate) struct Replayed {
+    pub shifted: Shifted<SssSample>,
+    /// y2, which the hybrid tests.
+    pub y2: EntryPoint,
+    checks: Checks,
+}
+
+impl Replayed {
+    /// The shifted sample, or `Rejected` if the caller's own criterion `rejected` holds,
+    /// `Occluded` if y2–x3 is occluded (with [`Checks`]' visibility bit). For
+    /// [`Wanted::Supported`] the criterion comes first, and a y2 that light does not reach
+    /// ([`SssDomain::visible_if_lit`]: `p̂_dst = 0`) fails `OutOfSupport` without the shadow
+    /// ray; for [`Wanted::Every`] the criterion comes after the ray, so a sample that fails both
+    /// reads `Occluded`, as on the GPU.
+    pub(crate) fn finish(
+        self,
+        dst: &SssDomain,
+        rejected: bool,
+        wanted: Wanted,
+    ) -> Result<Shifted<SssSample>, Fail> {
+        let y = &self.shifted.y;
+        if wanted == Wanted::Supported && rejected {
+            return Err(Fail::Rejected);
+        }
+        if self.checks.has(DELAYED_CHECK_VISIBILITY) {
+            let visible = match wanted {
+                Wanted::Every => dst.visible(y),
+                Wanted::Supported => dst.visible_if_lit(y).ok_or(Fail::OutOfSupport)?,
+            };
+            if !visible {
+                return Err(Fail::Occluded);
+            }
+        }
+        if rejected {
+            return Err(Fail::Rejected);
+        }
+        Ok(self.shifted)
+    }
+}
+
+/// Delayed reconnection of `x` from `src` into `dst` before its visibility test.
 pub(crate) fn replay(
     x: &SssSample,
     src: &SssDomain,
     dst: &SssDomain,
     checks: Checks,
-) -> Result<(Shifted<SssSample>, EntryPoint), Fail> {
+) -> Result<Replayed, Fail> {
     // Replay traces on y1's object; a neighbour on another object is rejected both ways.
     if src.x1().object != dst.x1().object {
         return Err(Fail::Rejected);
@@ -104,10 +163,11 @@ pub(crate) fn replay(
     if !(jacobian > 0.0 && jacobian.is_finite()) {
         return Err(Fail::Degenerate);
     }
-    if checks.has(DELAYED_CHECK_VISIBILITY) && !dst.visible(&y) {
-        return Err(Fail::Occluded);
-    }
-    Ok((Shifted { y, jacobian }, y2))
+    Ok(Replayed {
+        shifted: Shifted { y, jacobian },
+        y2,
+        checks,
+    })
 }
 
 /// `|cos θ_y / cos θ_x| · ‖x3 − x2‖² / ‖x3 − y2‖²`, θ at x3 between the light's normal and the

@@ -189,12 +189,28 @@ impl<'s> SssDomain<'s> {
     /// Whether the segment x2–x3 of `y` is unoccluded (the shadow test of the canonical sample
     /// and of delayed reconnection, DESIGN §9 "Visibility"). `false` outside the support.
     pub fn visible(&self, y: &SssSample) -> bool {
-        let Some(x2) = self.entry_point(y) else {
-            return false;
-        };
-        let Some(light) = self.light_path(x2.position, y) else {
-            return false;
-        };
+        self.segment(y)
+            .is_some_and(|(x2, light)| self.unoccluded(&x2, &light))
+    }
+
+    /// [`SssDomain::visible`] for a sample that counts only where `f(y) > 0`: `None`, without
+    /// the shadow ray, where `f(y) = 0` for want of light (no x2 or light path, `n2·ωi ≤ 0`, no
+    /// emitted radiance: the test [`sss::bssrdf::contribution`] makes before the BSSRDF).
+    pub fn visible_if_lit(&self, y: &SssSample) -> Option<bool> {
+        let (x2, light) = self.segment(y)?;
+        let lit = x2.shading_normal.dot(light.wi) > 0.0 && light.radiance != Vec3::ZERO;
+        lit.then(|| self.unoccluded(&x2, &light))
+    }
+
+    /// x2 of `y` and the light path from it; `None` outside the support.
+    fn segment(&self, y: &SssSample) -> Option<(EntryPoint, LightPath)> {
+        let x2 = self.entry_point(y)?;
+        let light = self.light_path(x2.position, y)?;
+        Some((x2, light))
+    }
+
+    /// The shadow ray from x2 toward the light.
+    fn unoccluded(&self, x2: &EntryPoint, light: &LightPath) -> bool {
         let n = x2.geometric_normal;
         let side = if n.dot(light.wi) < 0.0 { -1.0 } else { 1.0 };
         let from = x2.position + side * SHADOW_EPSILON * n;

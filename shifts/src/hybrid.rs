@@ -6,7 +6,7 @@ use restir::shift::{Fail, Shift, Shifted};
 use sss::bssrdf::{EntryPoint, ExitPoint};
 use sss::material::Translucent;
 
-use crate::delayed::{Checks, replay};
+use crate::delayed::{Checks, Wanted, replay};
 use crate::domain::SssDomain;
 use crate::reconnection::reconnect;
 use crate::sample::SssSample;
@@ -40,14 +40,15 @@ impl Hybrid {
         src.entry_point(x).map(|x2| self.connectable(src.x1(), &x2))
     }
 
-    /// The hybrid shift; `respect_offset = false` is the negative control that skips the test on
-    /// the offset path.
+    /// The hybrid shift for a caller that uses the samples `wanted`; `respect_offset = false` is
+    /// the negative control that skips the test on the offset path.
     pub(crate) fn shift_checked(
         &self,
         x: &SssSample,
         src: &SssDomain,
         dst: &SssDomain,
         respect_offset: bool,
+        wanted: Wanted,
     ) -> Result<Shifted<SssSample>, Fail> {
         let x2 = src.entry_point(x).ok_or(Fail::Rejected)?;
         if self.connectable(src.x1(), &x2) {
@@ -57,11 +58,9 @@ impl Hybrid {
             }
             Ok(Shifted { y, jacobian: 1.0 })
         } else {
-            let (shifted, y2) = replay(x, src, dst, Checks::ALL)?;
-            if respect_offset && self.connectable(dst.x1(), &y2) {
-                return Err(Fail::Rejected);
-            }
-            Ok(shifted)
+            let replayed = replay(x, src, dst, Checks::ALL)?;
+            let rejected = respect_offset && self.connectable(dst.x1(), &replayed.y2);
+            replayed.finish(dst, rejected, wanted)
         }
     }
 }
@@ -76,6 +75,17 @@ impl Shift<SssDomain<'_>> for Hybrid {
         src: &SssDomain,
         dst: &SssDomain,
     ) -> Result<Shifted<SssSample>, Fail> {
-        self.shift_checked(x, src, dst, true)
+        self.shift_checked(x, src, dst, true, Wanted::Every)
+    }
+
+    /// The offset path's criterion and whether light reaches y2 at all ([`SssDomain::visible_if_lit`])
+    /// before the shadow ray.
+    fn shift_supported(
+        &self,
+        x: &SssSample,
+        src: &SssDomain,
+        dst: &SssDomain,
+    ) -> Result<Shifted<SssSample>, Fail> {
+        self.shift_checked(x, src, dst, true, Wanted::Supported)
     }
 }

@@ -374,3 +374,46 @@ impl CandidateSampler<SssDomain<'_>> for UnknownIndex {
         VISIBLE.pdf(domain, x)
     }
 }
+
+/// `shift_supported` of the delayed and hybrid shifts returns `shift`'s result bit for bit
+/// wherever `p̂_dst(T(x)) > 0`, and elsewhere fails or returns that result, on spatial pairs of both scenes with
+/// unshadowed samples (`UNSHADOWED`, so occluded offset paths occur). The case it exists for,
+/// an `Ok` of `shift` with `p̂_dst = 0` (a shadow ray it skips; on `bumpy` a y2 facing away
+/// from the light), must occur, or the test does not exercise the early failure.
+#[test]
+fn shift_supported_agrees_with_shift_where_the_target_is_positive() {
+    let hybrid = |d: &SssDomain| Hybrid::for_material(d.material());
+    let mut skipped = 0;
+    for scene in common::SCENES {
+        let f = fixture(scene);
+        let mut agreed = 0;
+        for (k, (src, dst)) in f.spatial_pairs(64, 0x5AFE).into_iter().enumerate() {
+            let mut rng = StreamKey::new(src.pixel(), 1, 0, 0x5AFF).stream(SEED + k as u64);
+            for _ in 0..16 {
+                let Some((x, _)) = UNSHADOWED.sample(&src, &mut rng) else {
+                    continue;
+                };
+                let shifts: [&dyn for<'s> Shift<SssDomain<'s>>; 2] =
+                    [&DelayedReconnection, &hybrid(&dst)];
+                for shift in shifts {
+                    let full = shift.shift(&x, &src, &dst);
+                    let supported = shift.shift_supported(&x, &src, &dst);
+                    match full {
+                        Ok(s) if dst.target(&s.y) > 0.0 => {
+                            assert_eq!(supported, Ok(s), "{scene}: pair {k}");
+                            agreed += 1;
+                        }
+                        Ok(s) => match supported {
+                            Err(_) => skipped += 1,
+                            Ok(t) => assert_eq!(t, s, "{scene}: pair {k}"),
+                        },
+                        Err(_) => assert!(supported.is_err(), "{scene}: pair {k}"),
+                    }
+                }
+            }
+        }
+        println!("{scene}: {agreed} agree; {skipped} with p̂_dst = 0 failed early so far");
+        assert!(agreed > 50, "{scene}: only {agreed} supported shifts");
+    }
+    assert!(skipped > 0, "no shift with p̂_dst = 0 was exercised");
+}

@@ -326,6 +326,11 @@ mod tests {
     const ALPHA: f64 = 1e-3;
     const N: usize = 20_000;
 
+    /// A `resample` argument: `reservoir` in `domain`.
+    fn source<'a>(domain: &'a ToyPixel, reservoir: &'a Reservoir<Point>) -> Source<'a, ToyPixel> {
+        Source { domain, reservoir }
+    }
+
     fn pixel(centre: [f32; 2]) -> ToyPixel {
         ToyPixel {
             centre,
@@ -404,14 +409,8 @@ mod tests {
                         failures += Translation.shift(&x, &neighbour, &receiver).is_err() as usize;
                     }
                     let r = resample(
-                        Source {
-                            domain: &receiver,
-                            reservoir: &canonical,
-                        },
-                        &[Source {
-                            domain: &neighbour,
-                            reservoir: &other,
-                        }],
+                        source(&receiver, &canonical),
+                        &[source(&neighbour, &other)],
                         &Translation,
                         mis,
                         &mut key(2),
@@ -460,14 +459,8 @@ mod tests {
             let (mut sum, mut p_sum, mut wrong) = (0.0f64, 0.0f64, 0.0f64);
             let mut chosen = None;
             let r = resample_observed(
-                Source {
-                    domain: &receiver,
-                    reservoir: &canonical,
-                },
-                &[Source {
-                    domain: &neighbour,
-                    reservoir: &other,
-                }],
+                source(&receiver, &canonical),
+                &[source(&neighbour, &other)],
                 &Translation,
                 &Gbh,
                 &mut key(2),
@@ -544,14 +537,8 @@ mod tests {
                 let run = |input: &Reservoir<Point>| {
                     let shift = Counted(std::sync::atomic::AtomicU32::new(0), neighbour.centre);
                     let r = resample(
-                        Source {
-                            domain: &receiver,
-                            reservoir: &canonical,
-                        },
-                        &[Source {
-                            domain: &neighbour,
-                            reservoir: input,
-                        }],
+                        source(&receiver, &canonical),
+                        &[source(&neighbour, input)],
                         &shift,
                         mis,
                         &mut key(2),
@@ -671,14 +658,8 @@ mod tests {
             },
         ] {
             let got = resample(
-                Source {
-                    domain: &toy,
-                    reservoir: &canonical,
-                },
-                &[Source {
-                    domain: &toy,
-                    reservoir: &bad,
-                }],
+                source(&toy, &canonical),
+                &[source(&toy, &bad)],
                 &Translation,
                 &DefensivePairwise,
                 &mut rng,
@@ -694,14 +675,8 @@ mod tests {
             confidence: 0.0,
         };
         let got = resample(
-            Source {
-                domain: &toy,
-                reservoir: &zero,
-            },
-            &[Source {
-                domain: &toy,
-                reservoir: &zero,
-            }],
+            source(&toy, &zero),
+            &[source(&toy, &zero)],
             &Translation,
             &Gbh,
             &mut rng,

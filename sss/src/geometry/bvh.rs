@@ -5,9 +5,9 @@
 //! twice: into obvhs's CWBVH (compressed 8-wide, Ylitie et al. 2017), exported as is for the
 //! GPU twin (`sss/glsl/bvh.glsl`), and into the CPU layout of `wide.rs` (uncompressed 8-wide
 //! nodes, four-triangle packets), traversed by `traverse.rs` with the SIMD kernels of
-//! `kernel.rs`. Scenes of several objects also get one such tree per object, walked by the
-//! object-restricted queries (the BSSRDF probe's), which then never visit another object's
-//! nodes. Triangles use the watertight test of Woop, Benthin & Wald 2013
+//! `kernel.rs`. Scenes of several objects also get one such tree per object: the
+//! object-restricted queries (the BSSRDF probe's) walk it, so it is their object filter and they
+//! never visit another object's nodes. Triangles use the watertight test of Woop, Benthin & Wald 2013
 //! (`watertight.rs`), so a ray through a shared edge or vertex of a closed mesh cannot slip
 //! between triangles, and every kernel returns the same hits bit for bit.
 //!
@@ -175,11 +175,10 @@ impl Geometry {
         }
     }
 
-    /// The tree that holds `object`'s triangles with the fewest others.
-    fn tree_of(&self, object: Option<u32>) -> &WideBvh {
-        object
-            .and_then(|o| self.object_trees.get(o as usize))
-            .unwrap_or(&self.wide)
+    /// The tree of `object`'s triangles alone (`object` < `object_count`): its own, or with a
+    /// single object the scene's.
+    fn tree_of(&self, object: u32) -> &WideBvh {
+        self.object_trees.get(object as usize).unwrap_or(&self.wide)
     }
 
     /// Runs `query` on `bvh` with this geometry's kernel.
@@ -200,11 +199,7 @@ impl Geometry {
 
     /// The closest hit with `t_min < t < t_max`; ties in `t` go to the lower triangle id.
     pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
-        self.run(
-            &self.wide,
-            Closest { object: None },
-            &PreparedRay::new(ray)?,
-        )
+        self.run(&self.wide, Closest, &PreparedRay::new(ray)?)
     }
 
     /// The closest hit on triangles of `object` only (none for an object id out of range).
@@ -212,13 +207,7 @@ impl Geometry {
         if object >= self.object_count {
             return None;
         }
-        self.run(
-            self.tree_of(Some(object)),
-            Closest {
-                object: Some(object),
-            },
-            &PreparedRay::new(ray)?,
-        )
+        self.run(self.tree_of(object), Closest, &PreparedRay::new(ray)?)
     }
 
     /// Whether any triangle is hit with `t_min < t < t_max` (shadow rays).
@@ -236,7 +225,7 @@ impl Geometry {
             return;
         }
         if let Some(ray) = PreparedRay::new(ray) {
-            self.run(self.tree_of(Some(object)), AllHits { object, out }, &ray);
+            self.run(self.tree_of(object), AllHits { out }, &ray);
             out.sort_unstable_by(|a, b| a.t.total_cmp(&b.t).then(a.prim.cmp(&b.prim)));
         }
     }

@@ -1,5 +1,6 @@
-//! The ray queries as traversal plus leaf visitor, generic over the [`Kernel`]: closest hit
-//! (optionally on one object), occlusion, and all hits on one object.
+//! The ray queries as traversal plus leaf visitor, generic over the [`Kernel`]: closest hit,
+//! occlusion, and all hits. They see every triangle of the tree they walk; object-restricted
+//! queries walk their object's tree ([`Geometry`](super::Geometry)).
 
 use std::mem::MaybeUninit;
 
@@ -22,22 +23,13 @@ pub(super) trait Query {
     ) -> Self::Output;
 }
 
-/// The lanes of `packet` holding a triangle (of `object`, when given).
+/// The lanes holding a triangle in one or two packets, lane `4k + i` for lane `i` of packet `k`.
 #[inline(always)]
-fn lanes(packet: &Packet, object: Option<u32>) -> u32 {
-    if object.is_none_or(|o| o == packet.object) {
-        packet.occupied
-    } else {
-        0
-    }
-}
-
-/// The lanes of one or two packets, lane `4k + i` for lane `i` of packet `k`.
-#[inline(always)]
-fn chunk_lanes(chunk: &[Packet], object: Option<u32>) -> u32 {
-    chunk.iter().enumerate().fold(0, |mask, (k, packet)| {
-        mask | lanes(packet, object) << (k * LANES)
-    })
+fn chunk_lanes(chunk: &[Packet]) -> u32 {
+    chunk
+        .iter()
+        .enumerate()
+        .fold(0, |mask, (k, packet)| mask | packet.occupied << (k * LANES))
 }
 
 /// The packet and lane of hit lane `bit` of a chunk.
@@ -56,17 +48,14 @@ fn for_each_lane(mut mask: u32, mut f: impl FnMut(usize)) {
     }
 }
 
-/// Closest hit in `(t_min, t_max)`, on `object` when given. Equal `t` goes to the lower triangle
-/// id, so the result does not depend on traversal order.
-pub(super) struct Closest {
-    pub object: Option<u32>,
-}
+/// Closest hit in `(t_min, t_max)`. Equal `t` goes to the lower triangle id, so the result does
+/// not depend on traversal order.
+pub(super) struct Closest;
 
 struct ClosestVisitor<'a, K: Kernel> {
     ray: &'a K::Ray,
     /// The ray's own (exclusive) `t_max`.
     ray_t_max: f32,
-    object: Option<u32>,
     /// Solution, triangle id, object id.
     best: Option<(Solution, u32, u32)>,
 }
@@ -75,15 +64,11 @@ impl<K: Kernel> Visitor for ClosestVisitor<'_, K> {
     #[inline(always)]
     unsafe fn leaf(&mut self, packets: &[Packet], t_max: &mut f32) -> bool {
         for chunk in packets.chunks(PACKETS_AT_ONCE) {
-            let wanted = chunk_lanes(chunk, self.object);
-            if wanted == 0 {
-                continue;
-            }
             // Accept t equal to the best so far (a tie may go to a lower id); the ray's own
             // t_max stays exclusive.
             let limit = self.best.map_or(self.ray_t_max, |b| b.0.t.next_up());
             // SAFETY: forwarded from the caller.
-            let hits = unsafe { K::packets(chunk, self.ray, wanted, limit) };
+            let hits = unsafe { K::packets(chunk, self.ray, chunk_lanes(chunk), limit) };
             let best = &mut self.best;
             for_each_lane(hits.mask, |bit| {
                 let (packet, lane) = lane_of(chunk, bit);
@@ -114,7 +99,6 @@ impl Query for Closest {
             let mut visitor = ClosestVisitor::<K> {
                 ray: &lanes_ray,
                 ray_t_max: ray.t_max,
-                object: self.object,
                 best: None,
             };
             let mut t_max = ray.t_max;
@@ -144,7 +128,7 @@ impl<K: Kernel> Visitor for OccludedVisitor<'_, K> {
     unsafe fn leaf(&mut self, packets: &[Packet], t_max: &mut f32) -> bool {
         for chunk in packets.chunks(PACKETS_AT_ONCE) {
             // SAFETY: forwarded from the caller.
-            let hits = unsafe { K::packets(chunk, self.ray, chunk_lanes(chunk, None), *t_max) };
+            let hits = unsafe { K::packets(chunk, self.ray, chunk_lanes(chunk), *t_max) };
             if hits.mask != 0 {
                 self.occluded = true;
                 return true;
@@ -178,15 +162,13 @@ impl Query for Occluded {
     }
 }
 
-/// Every hit on `object` in `(t_min, t_max)`, appended to `out` in traversal order.
+/// Every hit in `(t_min, t_max)`, appended to `out` in traversal order.
 pub(super) struct AllHits<'a> {
-    pub object: u32,
     pub out: &'a mut Vec<Hit>,
 }
 
 struct AllHitsVisitor<'a, 'b, K: Kernel> {
     ray: &'a K::Ray,
-    object: u32,
     out: &'b mut Vec<Hit>,
 }
 
@@ -194,19 +176,15 @@ impl<K: Kernel> Visitor for AllHitsVisitor<'_, '_, K> {
     #[inline(always)]
     unsafe fn leaf(&mut self, packets: &[Packet], t_max: &mut f32) -> bool {
         for chunk in packets.chunks(PACKETS_AT_ONCE) {
-            let wanted = chunk_lanes(chunk, Some(self.object));
-            if wanted == 0 {
-                continue;
-            }
             // SAFETY: forwarded from the caller.
-            let hits = unsafe { K::packets(chunk, self.ray, wanted, *t_max) };
+            let hits = unsafe { K::packets(chunk, self.ray, chunk_lanes(chunk), *t_max) };
             for_each_lane(hits.mask, |bit| {
                 let (packet, lane) = lane_of(chunk, bit);
                 let s = hits.solution(bit);
                 self.out.push(Hit {
                     t: s.t,
                     prim: packet.prims[lane],
-                    object: self.object,
+                    object: packet.object,
                     bary: s.bary(),
                 });
             });
@@ -230,7 +208,6 @@ impl Query for AllHits<'_> {
             let lanes_ray = K::ray(ray);
             let mut visitor = AllHitsVisitor::<K> {
                 ray: &lanes_ray,
-                object: self.object,
                 out: self.out,
             };
             let mut t_max = ray.t_max;

@@ -210,8 +210,8 @@ impl Builder<'_> {
                 stack.push(node.first_index as usize);
             }
         }
-        // Packets never mix objects, so an object-restricted query tests or skips whole
-        // packets: group by object (stable, so tree order is kept within an object).
+        // A packet holds one object's triangles (its `object` is every hit's): group by
+        // object (stable, so tree order is kept within an object).
         prims.sort_by_key(|&prim| self.objects[prim as usize]);
         let first = self.out.packets.len();
         for run in prims.chunk_by(|a, b| self.objects[*a as usize] == self.objects[*b as usize]) {

@@ -907,7 +907,10 @@ mod tests {
         let (inner, leaves) = reference
             .iter()
             .fold((0, 0), |(i, l), (a, b)| (i + a.len(), l + b.len()));
-        assert!(inner > 1000 && leaves > 1000, "{inner} inner, {leaves} leaves");
+        assert!(
+            inner > 1000 && leaves > 1000,
+            "{inner} inner, {leaves} leaves"
+        );
         for kernel in KernelKind::available() {
             let lists = match kernel {
                 KernelKind::Portable => continue,

@@ -37,7 +37,6 @@ use super::kernel::{Avx2, Sse2};
 use super::mesh::TriangleMesh;
 use super::query::{AllHits, Closest, Occluded, Query};
 use super::ray::{Hit, Ray};
-use super::traverse::Entry;
 use super::watertight::PreparedRay;
 use super::wide::WideBvh;
 
@@ -184,16 +183,16 @@ impl Geometry {
     /// Runs `query` on `bvh` with this geometry's kernel.
     #[inline(always)]
     fn run<Q: Query>(&self, bvh: &WideBvh, query: Q, ray: &PreparedRay) -> Q::Output {
-        bvh.with_entries(|entries| match self.kernel {
-            // SAFETY: `KernelKind::detect` found AVX2 on this machine.
+        WideBvh::with_slots(Q::slots(bvh), |slots| match self.kernel {
+            // SAFETY: `KernelKind::detect` found AVX2 and POPCNT on this machine.
             #[cfg(target_arch = "x86_64")]
-            KernelKind::Avx2 => unsafe { run_avx2(query, bvh, ray, entries) },
+            KernelKind::Avx2 => unsafe { run_avx2(query, bvh, ray, slots) },
             // SAFETY: SSE2 is part of the x86-64 baseline.
             #[cfg(target_arch = "x86_64")]
-            KernelKind::Sse2 => unsafe { query.run::<Sse2>(bvh, ray, entries) },
+            KernelKind::Sse2 => unsafe { query.run::<Sse2>(bvh, ray, slots) },
             // SAFETY: plain Rust.
             #[cfg(any(test, not(target_arch = "x86_64")))]
-            KernelKind::Portable => unsafe { query.run::<Portable>(bvh, ray, entries) },
+            KernelKind::Portable => unsafe { query.run::<Portable>(bvh, ray, slots) },
         })
     }
 
@@ -290,20 +289,21 @@ impl Geometry {
     }
 }
 
-/// [`Query::run`] compiled for AVX2.
+/// [`Query::run`] compiled for AVX2 (and POPCNT, which every AVX2 machine has: the child
+/// counts of [`Kernel::partition`](super::kernel::Kernel::partition)).
 ///
 /// # Safety
-/// AVX2 must be available.
+/// AVX2 and POPCNT must be available.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
+#[target_feature(enable = "avx2,popcnt")]
 unsafe fn run_avx2<Q: Query>(
     query: Q,
     bvh: &WideBvh,
     ray: &PreparedRay,
-    entries: &mut [MaybeUninit<Entry>],
+    slots: &mut [MaybeUninit<Q::Slot>],
 ) -> Q::Output {
     // SAFETY: forwarded from the caller.
-    unsafe { query.run::<Avx2>(bvh, ray, entries) }
+    unsafe { query.run::<Avx2>(bvh, ray, slots) }
 }
 
 #[cfg(test)]
@@ -311,7 +311,7 @@ mod tests {
     use super::*;
     use crate::geometry::shapes;
     use crate::geometry::testing::{brute_force, hit_bits, rays, scene, unit_vector};
-    use crate::geometry::traverse::INLINE_ENTRIES;
+    use crate::geometry::traverse::INLINE_SLOTS;
     use crate::geometry::watertight::intersect_triangle;
     use glam::{Affine3A, Vec3, Vec3A};
     use obvhs::ray::RayHit;
@@ -399,7 +399,7 @@ mod tests {
         // Nested triangles shrinking geometrically toward a point: the binary tree is a chain,
         // deeper than the inline traversal storage, so queries run on the heap stack.
         let mesh = TriangleMesh {
-            positions: (0..600)
+            positions: (0..1500)
                 .flat_map(|i| {
                     let s = 0.95f32.powi(i);
                     [
@@ -409,12 +409,13 @@ mod tests {
                     ]
                 })
                 .collect(),
-            indices: (0..600).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect(),
+            indices: (0..1500).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect(),
             normals: None,
         };
         let mut geometry = Geometry::new(&[mesh]);
         assert!(
-            geometry.wide.entries_needed() > INLINE_ENTRIES,
+            geometry.wide.nearest_slots() > INLINE_SLOTS
+                && geometry.wide.unordered_slots() > INLINE_SLOTS,
             "stack depth {}",
             geometry.wide.stack_depth
         );

@@ -1,5 +1,6 @@
-//! The two tests of the CPU traversal, per instruction set: eight child boxes of a
-//! [`WideNode`] against the ray, and the four triangles of a [`Packet`].
+//! The tests of the CPU traversal, per instruction set: eight child boxes of a [`WideNode`]
+//! against the ray, the triangles of two [`Packet`]s, and the split of a node's hit children
+//! into inner nodes and leaves.
 //!
 //! Every kernel computes the same values in the same order, lane by lane: [`Portable`] is the
 //! reference (plain Rust, the kernel on non-x86 targets), [`Sse2`] (the x86-64 baseline) and
@@ -19,8 +20,10 @@ use glam::Vec3A;
 
 #[cfg(any(test, not(target_arch = "x86_64")))]
 use super::watertight::solve;
+use std::mem::MaybeUninit;
+
 use super::watertight::{PreparedRay, Solution};
-use super::wide::{LANES, Packet, WideNode};
+use super::wide::{ChildRef, LANES, Packet, WideNode, is_leaf};
 
 /// `2γ₃` with `γₙ = nε / (1 − nε)`, `ε = 2⁻²⁴` (Ize 2013).
 const BOX_EXIT_MARGIN: f32 = 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
@@ -31,12 +34,11 @@ pub(super) fn widen(t: f32) -> f32 {
     t + t.abs() * BOX_EXIT_MARGIN
 }
 
-/// Packets a kernel tests at once (two: eight lanes with AVX2).
-pub(super) const PACKETS_AT_ONCE: usize = 2;
-const HIT_LANES: usize = PACKETS_AT_ONCE * LANES;
+/// Lanes of a triangle test: two packets (one 8-lane test with AVX2).
+const HIT_LANES: usize = 2 * LANES;
 
-/// The triangles of one or two packets that the ray hits with `t_min < t < limit`: bit
-/// `4k + i` of `mask` for lane `i` of packet `k`, and that lane's [`Solution`] fields.
+/// The triangles of two packets that the ray hits with `t_min < t < limit`: bit `4k + i` of
+/// `mask` for lane `i` of packet `k`, and that lane's [`Solution`] fields.
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct PacketHits {
     pub mask: u32,
@@ -57,6 +59,15 @@ impl PacketHits {
     }
 }
 
+/// The arguments of [`Kernel::pair`] for packet `a` and the packet `b` after it, if any.
+#[inline(always)]
+pub(super) fn pair_of<'p>(a: &'p Packet, b: Option<&'p Packet>) -> (&'p Packet, &'p Packet, u32) {
+    match b {
+        Some(b) => (a, b, a.occupied | b.occupied << LANES),
+        None => (a, a, a.occupied),
+    }
+}
+
 /// One instruction set's box and triangle tests.
 ///
 /// # Safety
@@ -69,9 +80,35 @@ pub(super) trait Kernel {
     /// Bit `i` set when child slot `i`'s box overlaps `[t_min, t_far]`; the entry distances go
     /// to `entry`. Empty slots may be set (the caller masks them).
     unsafe fn overlap(node: &WideNode, ray: &Self::Ray, t_far: f32, entry: &mut [f32; 8]) -> u32;
-    /// The lanes of `lanes` whose triangles the ray hits with `t_min < t < limit`, for one or
-    /// two (at most [`PACKETS_AT_ONCE`]) packets.
-    unsafe fn packets(packets: &[Packet], ray: &Self::Ray, lanes: u32, limit: f32) -> PacketHits;
+    /// The lanes of `lanes` whose triangles the ray hits with `t_min < t < limit`: lanes 0..4
+    /// of packet `a`, 4..8 of `b` (for one packet, pass it twice with no lanes above 4).
+    unsafe fn pair(a: &Packet, b: &Packet, ray: &Self::Ray, lanes: u32, limit: f32) -> PacketHits;
+
+    /// Writes the children of `node` in `mask`, in slot order, to the start of `inner` (inner
+    /// nodes) and of `leaves`; returns how many went to each. Each slice must hold 8 slots
+    /// (a kernel may write all 8).
+    #[inline(always)]
+    unsafe fn partition(
+        node: &WideNode,
+        mask: u32,
+        inner: &mut [MaybeUninit<ChildRef>],
+        leaves: &mut [MaybeUninit<ChildRef>],
+    ) -> (usize, usize) {
+        let (mut n, mut l) = (0, 0);
+        let mut remaining = mask;
+        while remaining != 0 {
+            let child = node.children[remaining.trailing_zeros() as usize];
+            remaining &= remaining - 1;
+            if is_leaf(child) {
+                leaves[l].write(child);
+                l += 1;
+            } else {
+                inner[n].write(child);
+                n += 1;
+            }
+        }
+        (n, l)
+    }
 }
 
 /// The kernels of this build.
@@ -89,7 +126,9 @@ impl KernelKind {
     /// The fastest kernel this machine runs.
     pub fn detect() -> KernelKind {
         #[cfg(target_arch = "x86_64")]
-        return if std::arch::is_x86_feature_detected!("avx2") {
+        return if std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("popcnt")
+        {
             KernelKind::Avx2
         } else {
             KernelKind::Sse2
@@ -178,9 +217,9 @@ impl Kernel for Portable {
         mask
     }
 
-    unsafe fn packets(packets: &[Packet], r: &PortableRay, lanes: u32, limit: f32) -> PacketHits {
+    unsafe fn pair(a: &Packet, b: &Packet, r: &PortableRay, lanes: u32, limit: f32) -> PacketHits {
         let mut hits = PacketHits::default();
-        for (k, packet) in packets.iter().enumerate() {
+        for (k, packet) in [a, b].into_iter().enumerate() {
             for lane in 0..LANES {
                 let bit = k * LANES + lane;
                 if lanes & (1 << bit) == 0 {
@@ -214,7 +253,9 @@ mod x86 {
 
     use super::{BOX_EXIT_MARGIN, HIT_LANES, Kernel, PacketHits, plane_rows};
     use crate::geometry::watertight::{PreparedRay, edge_functions};
-    use crate::geometry::wide::{LANES, Packet, WideNode};
+    use std::mem::MaybeUninit;
+
+    use crate::geometry::wide::{ChildRef, LANES, Packet, WideNode};
 
     /// Lane-wise `f32` operations on 4 (SSE) or 8 (AVX) lanes: the box and triangle tests are
     /// written once over this. Comparisons return all-ones lanes; `max`/`min` return the second
@@ -640,13 +681,14 @@ mod x86 {
         }
 
         #[inline(always)]
-        unsafe fn packets(packets: &[Packet], r: &X86Ray, lanes: u32, limit: f32) -> PacketHits {
+        unsafe fn pair(a: &Packet, b: &Packet, r: &X86Ray, lanes: u32, limit: f32) -> PacketHits {
             let mut hits = PacketHits::default();
-            for (k, packet) in packets.iter().enumerate() {
-                let base = k * LANES;
-                let lanes = (lanes >> base) & 0xf;
-                // SAFETY: SSE2 is baseline.
-                unsafe { triangles::<F4>(packet, r, lanes, limit, &mut hits, base) };
+            // SAFETY (whole block): SSE2 is baseline.
+            unsafe {
+                triangles::<F4>(a, r, lanes & 0xf, limit, &mut hits, 0);
+                if lanes >> LANES != 0 {
+                    triangles::<F4>(b, r, lanes >> LANES, limit, &mut hits, LANES);
+                }
             }
             hits
         }
@@ -674,18 +716,74 @@ mod x86 {
         }
 
         #[inline(always)]
-        unsafe fn packets(packets: &[Packet], r: &X86Ray, lanes: u32, limit: f32) -> PacketHits {
-            // SAFETY (whole block): the caller checked AVX2.
+        unsafe fn pair(a: &Packet, b: &Packet, r: &X86Ray, lanes: u32, limit: f32) -> PacketHits {
+            let mut hits = PacketHits::default();
+            // SAFETY: the caller checked AVX2.
+            unsafe { triangles::<F8>(&PacketPair(a, b), r, lanes, limit, &mut hits, 0) };
+            hits
+        }
+
+        /// Both lists at once by a lane permutation ([`COMPRESS`]), without a branch per child.
+        #[inline(always)]
+        unsafe fn partition(
+            node: &WideNode,
+            mask: u32,
+            inner: &mut [MaybeUninit<ChildRef>],
+            leaves: &mut [MaybeUninit<ChildRef>],
+        ) -> (usize, usize) {
+            assert!(inner.len() >= 8 && leaves.len() >= 8);
+            // SAFETY (whole block): the caller checked AVX2; each store writes 8 slots of a
+            // slice that holds them.
             unsafe {
-                let [low, high] = packets else {
-                    return Sse2::packets(packets, r, lanes, limit);
-                };
-                let mut hits = PacketHits::default();
-                triangles::<F8>(&PacketPair(low, high), r, lanes, limit, &mut hits, 0);
-                hits
+                let children = _mm256_loadu_si256(node.children.as_ptr().cast());
+                // The leaf bit is bit 31, the sign of each lane.
+                let leaf = _mm256_movemask_ps(_mm256_castsi256_ps(children)) as u32;
+                let (inner_mask, leaf_mask) = (mask & !leaf, mask & leaf);
+                let inner_lanes = compress(children, inner_mask);
+                let leaf_lanes = compress(children, leaf_mask);
+                _mm256_storeu_si256(inner.as_mut_ptr().cast(), inner_lanes);
+                _mm256_storeu_si256(leaves.as_mut_ptr().cast(), leaf_lanes);
+                (
+                    inner_mask.count_ones() as usize,
+                    leaf_mask.count_ones() as usize,
+                )
             }
         }
     }
+
+    /// The lanes of `mask` packed to the front (the rest undefined).
+    ///
+    /// # Safety
+    /// AVX2 must be available.
+    #[inline(always)]
+    unsafe fn compress(lanes: __m256i, mask: u32) -> __m256i {
+        unsafe {
+            let order = _mm256_set1_epi32(COMPRESS[mask as usize] as i32);
+            let nibbles = _mm256_setr_epi32(0, 4, 8, 12, 16, 20, 24, 28);
+            // `vpermd` reads the low three bits of each index.
+            _mm256_permutevar8x32_epi32(lanes, _mm256_srlv_epi32(order, nibbles))
+        }
+    }
+
+    /// For each 8-bit mask, its set slots in increasing order, one per nibble from the lowest:
+    /// the lane permutation that packs the masked lanes to the front.
+    static COMPRESS: [u32; 256] = {
+        let mut table = [0u32; 256];
+        let mut mask = 0;
+        while mask < 256 {
+            let (mut packed, mut slot, mut order) = (0, 0, 0u32);
+            while slot < 8 {
+                if mask & (1 << slot) != 0 {
+                    order |= (slot as u32) << (4 * packed);
+                    packed += 1;
+                }
+                slot += 1;
+            }
+            table[mask] = order;
+            mask += 1;
+        }
+        table
+    };
 }
 
 #[cfg(test)]
@@ -728,14 +826,12 @@ mod tests {
                 differing += usize::from(m1 != m2 || !same_entries);
                 boxes += m1.count_ones() as usize;
             }
-            for width in 1..=PACKETS_AT_ONCE {
-                for chunk in bvh.packets.chunks(width) {
-                    let lanes = chunk
-                        .iter()
-                        .enumerate()
-                        .fold(0, |m, (k, p)| m | p.occupied << (k * LANES));
-                    let h1 = unsafe { Portable::packets(chunk, &reference, lanes, t_far) };
-                    let h2 = unsafe { K::packets(chunk, &tested, lanes, t_far) };
+            // Pairs, and single packets as the traversal passes them (repeated, no high lanes).
+            for width in 1..=2 {
+                for chunk in bvh.packets.chunks_exact(width) {
+                    let (a, b, lanes) = pair_of(&chunk[0], chunk.get(1));
+                    let h1 = unsafe { Portable::pair(a, b, &reference, lanes, t_far) };
+                    let h2 = unsafe { K::pair(a, b, &tested, lanes, t_far) };
                     let same = h1.mask == h2.mask
                         && lanes_of(h1.mask)
                             .all(|l| solution_bits(&h1, l) == solution_bits(&h2, l));
@@ -782,6 +878,52 @@ mod tests {
         }
     }
 
+    /// `K::partition` of every node under every mask, as (inner, leaves) lists.
+    ///
+    /// # Safety
+    /// `K`'s instruction set must be available.
+    unsafe fn partitions<K: Kernel>(bvh: &WideBvh) -> Vec<(Vec<ChildRef>, Vec<ChildRef>)> {
+        let mut lists = Vec::new();
+        for node in &bvh.nodes {
+            for mask in 0..256 {
+                let mask = mask & node.occupied;
+                let mut inner = [MaybeUninit::uninit(); 8];
+                let mut leaves = [MaybeUninit::uninit(); 8];
+                let (n, l) = unsafe { K::partition(node, mask, &mut inner, &mut leaves) };
+                // SAFETY: `partition` wrote the first `n` and `l` slots.
+                let written = |s: &[MaybeUninit<ChildRef>], k: usize| {
+                    s[..k].iter().map(|c| unsafe { c.assume_init() }).collect()
+                };
+                lists.push((written(&inner, n), written(&leaves, l)));
+            }
+        }
+        lists
+    }
+
+    #[test]
+    fn partitions_match_portable_for_every_mask() {
+        let geometry = Geometry::new(&scene());
+        let reference = unsafe { partitions::<Portable>(geometry.wide()) };
+        let (inner, leaves) = reference
+            .iter()
+            .fold((0, 0), |(i, l), (a, b)| (i + a.len(), l + b.len()));
+        assert!(
+            inner > 1000 && leaves > 1000,
+            "{inner} inner, {leaves} leaves"
+        );
+        for kernel in KernelKind::available() {
+            let lists = match kernel {
+                KernelKind::Portable => continue,
+                // SAFETY (both): `available` lists only kernels this machine runs.
+                #[cfg(target_arch = "x86_64")]
+                KernelKind::Sse2 => unsafe { partitions::<Sse2>(geometry.wide()) },
+                #[cfg(target_arch = "x86_64")]
+                KernelKind::Avx2 => unsafe { partitions::<Avx2>(geometry.wide()) },
+            };
+            assert!(lists == reference, "{kernel:?}");
+        }
+    }
+
     #[test]
     fn portable_packets_match_the_scalar_triangle_test() {
         let geometry = Geometry::new(&scene());
@@ -792,9 +934,7 @@ mod tests {
             };
             let reference = unsafe { Portable::ray(&prepared) };
             for packet in &geometry.wide().packets {
-                let result = unsafe {
-                    Portable::packets(std::slice::from_ref(packet), &reference, 0xf, ray.t_max)
-                };
+                let result = unsafe { Portable::pair(packet, packet, &reference, 0xf, ray.t_max) };
                 for lane in lanes_of(packet.occupied) {
                     let tri = geometry.vertices(packet.prims[lane]);
                     let scalar = intersect_triangle(&tri, &prepared, ray.t_max);

@@ -30,6 +30,8 @@ pub(super) type ChildRef = u32;
 const LEAF_BIT: u32 = 1 << 31;
 const COUNT_SHIFT: u32 = 28;
 const INDEX_MASK: u32 = (1 << COUNT_SHIFT) - 1;
+/// Most packets a leaf reference holds (a leaf of several objects has a run per object).
+pub(super) const MAX_LEAF_PACKETS: usize = 1 << (31 - COUNT_SHIFT);
 
 pub(super) fn is_leaf(child: ChildRef) -> bool {
     child & LEAF_BIT != 0
@@ -46,7 +48,7 @@ pub(super) fn leaf_packets(child: ChildRef) -> (usize, usize) {
 fn leaf_ref(first: usize, count: usize) -> ChildRef {
     assert!(first <= INDEX_MASK as usize, "too many triangle packets");
     assert!(
-        (1..=1 << (31 - COUNT_SHIFT)).contains(&count),
+        (1..=MAX_LEAF_PACKETS).contains(&count),
         "{count} packets in a leaf"
     );
     LEAF_BIT | (((count - 1) as u32) << COUNT_SHIFT) | first as u32

@@ -299,71 +299,29 @@ mod x86 {
     #[derive(Clone, Copy)]
     struct F8(__m256);
 
+    /// `Simd` for a register type: two-operand operations by intrinsic, comparisons by
+    /// predicate of `$cmp`.
     macro_rules! simd_impl {
-        ($t:ident, $lanes:expr, $reg:ty, $set1:ident, $add:ident, $sub:ident, $mul:ident,
-         $div:ident, $max:ident, $min:ident, $and:ident, $or:ident, $andnot:ident,
-         $movemask:ident, $storeu:ident, $loadu:ident, $cmp:expr) => {
+        ($t:ident, $lanes:expr, $set1:ident, $movemask:ident, $storeu:ident, $loadu:ident,
+         $cmp:ident, ops: [$($op:ident = $intrinsic:ident),*],
+         comparisons: [$($test:ident = $predicate:ident),*]) => {
             impl Simd for $t {
                 #[inline(always)]
                 unsafe fn splat(x: f32) -> Self {
                     unsafe { $t($set1(x)) }
                 }
-                #[inline(always)]
-                unsafe fn add(self, b: Self) -> Self {
-                    unsafe { $t($add(self.0, b.0)) }
-                }
-                #[inline(always)]
-                unsafe fn sub(self, b: Self) -> Self {
-                    unsafe { $t($sub(self.0, b.0)) }
-                }
-                #[inline(always)]
-                unsafe fn mul(self, b: Self) -> Self {
-                    unsafe { $t($mul(self.0, b.0)) }
-                }
-                #[inline(always)]
-                unsafe fn div(self, b: Self) -> Self {
-                    unsafe { $t($div(self.0, b.0)) }
-                }
-                #[inline(always)]
-                unsafe fn max(self, b: Self) -> Self {
-                    unsafe { $t($max(self.0, b.0)) }
-                }
-                #[inline(always)]
-                unsafe fn min(self, b: Self) -> Self {
-                    unsafe { $t($min(self.0, b.0)) }
-                }
-                #[inline(always)]
-                unsafe fn lt(self, b: Self) -> Self {
-                    unsafe { $t($cmp(self.0, b.0, _CMP_LT_OQ)) }
-                }
-                #[inline(always)]
-                unsafe fn gt(self, b: Self) -> Self {
-                    unsafe { $t($cmp(self.0, b.0, _CMP_GT_OQ)) }
-                }
-                #[inline(always)]
-                unsafe fn le(self, b: Self) -> Self {
-                    unsafe { $t($cmp(self.0, b.0, _CMP_LE_OQ)) }
-                }
-                #[inline(always)]
-                unsafe fn eq(self, b: Self) -> Self {
-                    unsafe { $t($cmp(self.0, b.0, _CMP_EQ_OQ)) }
-                }
-                #[inline(always)]
-                unsafe fn ne(self, b: Self) -> Self {
-                    unsafe { $t($cmp(self.0, b.0, _CMP_NEQ_UQ)) }
-                }
-                #[inline(always)]
-                unsafe fn and(self, b: Self) -> Self {
-                    unsafe { $t($and(self.0, b.0)) }
-                }
-                #[inline(always)]
-                unsafe fn or(self, b: Self) -> Self {
-                    unsafe { $t($or(self.0, b.0)) }
-                }
-                #[inline(always)]
-                unsafe fn and_not(self, b: Self) -> Self {
-                    unsafe { $t($andnot(self.0, b.0)) }
-                }
+                $(
+                    #[inline(always)]
+                    unsafe fn $op(self, b: Self) -> Self {
+                        unsafe { $t($intrinsic(self.0, b.0)) }
+                    }
+                )*
+                $(
+                    #[inline(always)]
+                    unsafe fn $test(self, b: Self) -> Self {
+                        unsafe { $t($cmp(self.0, b.0, $predicate)) }
+                    }
+                )*
                 #[inline(always)]
                 unsafe fn mask(self) -> u32 {
                     unsafe { $movemask(self.0) as u32 }
@@ -409,44 +367,19 @@ mod x86 {
         }
     }
 
-    simd_impl!(
-        F4,
-        4,
-        __m128,
-        _mm_set1_ps,
-        _mm_add_ps,
-        _mm_sub_ps,
-        _mm_mul_ps,
-        _mm_div_ps,
-        _mm_max_ps,
-        _mm_min_ps,
-        _mm_and_ps,
-        _mm_or_ps,
-        _mm_andnot_ps,
-        _mm_movemask_ps,
-        _mm_storeu_ps,
-        _mm_loadu_ps,
-        cmp_sse
-    );
-    simd_impl!(
-        F8,
-        8,
-        __m256,
-        _mm256_set1_ps,
-        _mm256_add_ps,
-        _mm256_sub_ps,
-        _mm256_mul_ps,
-        _mm256_div_ps,
-        _mm256_max_ps,
-        _mm256_min_ps,
-        _mm256_and_ps,
-        _mm256_or_ps,
-        _mm256_andnot_ps,
-        _mm256_movemask_ps,
-        _mm256_storeu_ps,
-        _mm256_loadu_ps,
-        cmp_avx
-    );
+    simd_impl!(F4, 4, _mm_set1_ps, _mm_movemask_ps, _mm_storeu_ps, _mm_loadu_ps, cmp_sse,
+        ops: [add = _mm_add_ps, sub = _mm_sub_ps, mul = _mm_mul_ps, div = _mm_div_ps,
+              max = _mm_max_ps, min = _mm_min_ps, and = _mm_and_ps, or = _mm_or_ps,
+              and_not = _mm_andnot_ps],
+        comparisons: [lt = _CMP_LT_OQ, gt = _CMP_GT_OQ, le = _CMP_LE_OQ, eq = _CMP_EQ_OQ,
+                      ne = _CMP_NEQ_UQ]);
+    simd_impl!(F8, 8, _mm256_set1_ps, _mm256_movemask_ps, _mm256_storeu_ps, _mm256_loadu_ps,
+        cmp_avx,
+        ops: [add = _mm256_add_ps, sub = _mm256_sub_ps, mul = _mm256_mul_ps,
+              div = _mm256_div_ps, max = _mm256_max_ps, min = _mm256_min_ps,
+              and = _mm256_and_ps, or = _mm256_or_ps, and_not = _mm256_andnot_ps],
+        comparisons: [lt = _CMP_LT_OQ, gt = _CMP_GT_OQ, le = _CMP_LE_OQ, eq = _CMP_EQ_OQ,
+                      ne = _CMP_NEQ_UQ]);
 
     /// The ray as both x86 kernels use it.
     pub struct X86Ray {

@@ -7,8 +7,8 @@ use std::mem::MaybeUninit;
 
 use super::kernel::{Kernel, PacketHits, pair_of};
 use super::ray::Hit;
-use super::traverse::{Entry, PairVisitor, Visitor};
-use super::watertight::{PreparedRay, Solution};
+use super::traverse::{Entry, HitVisitor, Visitor};
+use super::watertight::PreparedRay;
 use super::wide::{ChildRef, LANES, Packet, WideBvh};
 
 /// A query the [`Geometry`](super::Geometry) runs with the kernel of the machine.
@@ -28,30 +28,25 @@ pub(super) trait Query {
     ) -> Self::Output;
 }
 
-/// The packet and lane of hit lane `bit` of the pair `(a, b)`.
+/// Each hit lane of `hits` of the pair `(a, b)`, in lane order, as a [`Hit`].
 #[inline(always)]
-fn lane_of<'p>(a: &'p Packet, b: &'p Packet, bit: usize) -> (&'p Packet, usize) {
-    if bit < LANES {
-        (a, bit)
-    } else {
-        (b, bit - LANES)
-    }
-}
-
-/// Each hit lane of `hits`, in lane order, with its packet and solution.
-#[inline(always)]
-fn for_each_hit(
-    a: &Packet,
-    b: &Packet,
-    hits: &PacketHits,
-    mut f: impl FnMut(&Packet, usize, Solution),
-) {
+fn for_each_hit(a: &Packet, b: &Packet, hits: &PacketHits, mut f: impl FnMut(Hit)) {
     let mut mask = hits.mask;
     while mask != 0 {
         let bit = mask.trailing_zeros() as usize;
         mask &= mask - 1;
-        let (packet, lane) = lane_of(a, b, bit);
-        f(packet, lane, hits.solution(bit));
+        let (packet, lane) = if bit < LANES {
+            (a, bit)
+        } else {
+            (b, bit - LANES)
+        };
+        let s = hits.solution(bit);
+        f(Hit {
+            t: s.t,
+            prim: packet.prims[lane],
+            object: packet.object,
+            bary: s.bary(),
+        });
     }
 }
 
@@ -63,8 +58,7 @@ struct ClosestVisitor<'a, K: Kernel> {
     ray: &'a K::Ray,
     /// The ray's own (exclusive) `t_max`.
     ray_t_max: f32,
-    /// Solution, triangle id, object id.
-    best: Option<(Solution, u32, u32)>,
+    best: Option<Hit>,
 }
 
 impl<K: Kernel> Visitor for ClosestVisitor<'_, K> {
@@ -74,15 +68,14 @@ impl<K: Kernel> Visitor for ClosestVisitor<'_, K> {
             let (a, b, lanes) = pair_of(&two[0], two.get(1));
             // Accept t equal to the best so far (a tie may go to a lower id); the ray's own
             // t_max stays exclusive.
-            let limit = self.best.map_or(self.ray_t_max, |b| b.0.t.next_up());
+            let limit = self.best.map_or(self.ray_t_max, |b| b.t.next_up());
             // SAFETY: forwarded from the caller.
             let hits = unsafe { K::pair(a, b, self.ray, lanes, limit) };
             let best = &mut self.best;
-            for_each_hit(a, b, &hits, |packet, lane, s| {
-                let prim = packet.prims[lane];
-                if best.is_none_or(|b| s.t < b.0.t || (s.t == b.0.t && prim < b.1)) {
-                    *best = Some((s, prim, packet.object));
-                    *t_max = s.t;
+            for_each_hit(a, b, &hits, |hit| {
+                if best.is_none_or(|b| hit.t < b.t || (hit.t == b.t && hit.prim < b.prim)) {
+                    *best = Some(hit);
+                    *t_max = hit.t;
                 }
             });
         }
@@ -114,12 +107,7 @@ impl Query for Closest {
             };
             let mut t_max = ray.t_max;
             bvh.traverse_nearest::<K>(&lanes_ray, entries, &mut t_max, &mut visitor);
-            visitor.best.map(|(s, prim, object)| Hit {
-                t: s.t,
-                prim,
-                object,
-                bary: s.bary(),
-            })
+            visitor.best
         }
     }
 }
@@ -127,22 +115,16 @@ impl Query for Closest {
 /// Whether any triangle is hit in `(t_min, t_max)`.
 pub(super) struct Occluded;
 
-struct OccludedVisitor<'a, K: Kernel> {
-    ray: &'a K::Ray,
-    t_max: f32,
-    occluded: bool,
-}
-
-impl<K: Kernel> PairVisitor for OccludedVisitor<'_, K> {
+impl HitVisitor for bool {
     /// A node's hit leaves are tested before any queued node: only a leaf can stop the query
     /// (measured +5–12% over queueing them).
     const LEAF_BATCH: usize = 1;
 
+    /// The occlusion query's visitor: set on the first hit, which ends the traversal.
     #[inline(always)]
-    unsafe fn pair(&mut self, a: &Packet, b: &Packet, lanes: u32) -> bool {
-        // SAFETY: forwarded from the caller.
-        self.occluded = unsafe { K::pair(a, b, self.ray, lanes, self.t_max) }.mask != 0;
-        self.occluded
+    fn hits(&mut self, _: &Packet, _: &Packet, _: &PacketHits) -> bool {
+        *self = true;
+        true
     }
 }
 
@@ -161,17 +143,12 @@ impl Query for Occluded {
         ray: &PreparedRay,
         queue: &mut [MaybeUninit<ChildRef>],
     ) -> bool {
-        // SAFETY (whole block): forwarded from the caller.
+        let mut occluded = false;
+        // SAFETY: forwarded from the caller.
         unsafe {
-            let lanes_ray = K::ray(ray);
-            let mut visitor = OccludedVisitor::<K> {
-                ray: &lanes_ray,
-                t_max: ray.t_max,
-                occluded: false,
-            };
-            bvh.traverse_unordered::<K, _>(&lanes_ray, queue, ray.t_max, &mut visitor);
-            visitor.occluded
+            bvh.traverse_unordered::<K, _>(&K::ray(ray), queue, ray.t_max, &mut occluded);
         }
+        occluded
     }
 }
 
@@ -180,29 +157,15 @@ pub(super) struct AllHits<'a> {
     pub out: &'a mut Vec<Hit>,
 }
 
-struct AllHitsVisitor<'a, 'b, K: Kernel> {
-    ray: &'a K::Ray,
-    t_max: f32,
-    out: &'b mut Vec<Hit>,
-}
-
-impl<K: Kernel> PairVisitor for AllHitsVisitor<'_, '_, K> {
+impl HitVisitor for Vec<Hit> {
     /// Every leaf is tested, so they wait for a batch whose packets pair up across leaves
     /// (8, 16 and 32 measured alike).
     const LEAF_BATCH: usize = 16;
 
+    /// The all-hits query's visitor: every hit appended.
     #[inline(always)]
-    unsafe fn pair(&mut self, a: &Packet, b: &Packet, lanes: u32) -> bool {
-        // SAFETY: forwarded from the caller.
-        let hits = unsafe { K::pair(a, b, self.ray, lanes, self.t_max) };
-        for_each_hit(a, b, &hits, |packet, lane, s| {
-            self.out.push(Hit {
-                t: s.t,
-                prim: packet.prims[lane],
-                object: packet.object,
-                bary: s.bary(),
-            });
-        });
+    fn hits(&mut self, a: &Packet, b: &Packet, hits: &PacketHits) -> bool {
+        for_each_hit(a, b, hits, |hit| self.push(hit));
         false
     }
 }
@@ -222,15 +185,7 @@ impl Query for AllHits<'_> {
         ray: &PreparedRay,
         queue: &mut [MaybeUninit<ChildRef>],
     ) {
-        // SAFETY (whole block): forwarded from the caller.
-        unsafe {
-            let lanes_ray = K::ray(ray);
-            let mut visitor = AllHitsVisitor::<K> {
-                ray: &lanes_ray,
-                t_max: ray.t_max,
-                out: self.out,
-            };
-            bvh.traverse_unordered::<K, _>(&lanes_ray, queue, ray.t_max, &mut visitor);
-        }
+        // SAFETY: forwarded from the caller.
+        unsafe { bvh.traverse_unordered::<K, _>(&K::ray(ray), queue, ray.t_max, self.out) };
     }
 }

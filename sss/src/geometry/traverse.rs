@@ -5,7 +5,7 @@
 //!   boxes entered beyond the shrinking `t_max` skipped: closest-hit queries ([`Visitor`]).
 //!   Every hit child's node or packets is prefetched as soon as its box test passes.
 //! - [`WideBvh::traverse_unordered`]: no order and no pruning, for queries that visit every
-//!   overlapped leaf (all hits) or stop at the first hit (occlusion) ([`PairVisitor`]). Inner
+//!   overlapped leaf (all hits) or stop at the first hit (occlusion) ([`HitVisitor`]). Inner
 //!   nodes wait in a first-in first-out queue, so the next node's address is known long before
 //!   its turn and consecutive box tests overlap in the pipeline; a node's hit children are
 //!   split into inner nodes and leaves by [`Kernel::partition`] (no branch per child); the
@@ -19,7 +19,7 @@
 
 use std::mem::MaybeUninit;
 
-use super::kernel::{Kernel, pair_of, widen};
+use super::kernel::{Kernel, PacketHits, pair_of, widen};
 use super::wide::{ChildRef, MAX_LEAF_PACKETS, Packet, WideBvh, WideNode, is_leaf, leaf_packets};
 
 /// A deferred child and its box entry distance.
@@ -39,7 +39,7 @@ const PACKET_LINES: usize = size_of::<Packet>() / 64;
 const BREADTH_WINDOW: usize = 64;
 /// Slots a [`Kernel::partition`] may write past the end of a list.
 const PARTITION_SLACK: usize = 8;
-/// Most leaves a [`PairVisitor`] may ask to collect before their packets are tested.
+/// Most leaves a [`HitVisitor`] may ask to collect before their packets are tested.
 const MAX_LEAF_BATCH: usize = 16;
 
 /// What a closest-hit query does at a leaf.
@@ -52,19 +52,16 @@ pub(super) trait Visitor {
     unsafe fn leaf(&mut self, packets: &[Packet], t_max: &mut f32);
 }
 
-/// What an unordered query does with the triangle packets of the leaves it reaches.
-pub(super) trait PairVisitor {
+/// What an unordered query does with the triangles its ray hits.
+pub(super) trait HitVisitor {
     /// Hit leaves collected before their packets are tested (at most [`MAX_LEAF_BATCH`]): 1 to
     /// test each node's hit leaves at once, for a query that stops at its first hit; more to
     /// pair more packets of different leaves in one test.
     const LEAF_BATCH: usize;
 
-    /// Tests packets `a` and `b`: lanes 0..4 of `lanes` are `a`'s, 4..8 `b`'s (none when `b`
-    /// repeats `a` for an odd packet out). Returns `true` to stop the traversal.
-    ///
-    /// # Safety
-    /// The visitor's kernel instruction set must be available.
-    unsafe fn pair(&mut self, a: &Packet, b: &Packet, lanes: u32) -> bool;
+    /// Takes the hits (a non-empty mask) of the pair test of packets `a` and `b`
+    /// ([`Kernel::pair`]). Returns `true` to stop the traversal.
+    fn hits(&mut self, a: &Packet, b: &Packet, hits: &PacketHits) -> bool;
 }
 
 impl WideBvh {
@@ -211,10 +208,10 @@ impl WideBvh {
         }
     }
 
-    /// Unordered traversal (all hits, occlusion): inner nodes queued first in first out while
-    /// at most `BREADTH_WINDOW` wait, else last in first out; hit leaves handed to
-    /// [`WideBvh::test_leaves`] every `V::LEAF_BATCH` and at the end. `queue` must hold
-    /// [`WideBvh::unordered_slots`].
+    /// Unordered traversal (all hits, occlusion) for triangles hit with `t_min < t < t_max`:
+    /// inner nodes queued first in first out while at most `BREADTH_WINDOW` wait, else last in
+    /// first out; hit leaves tested by [`WideBvh::test_leaves`] every `V::LEAF_BATCH` and at the
+    /// end. `queue` must hold [`WideBvh::unordered_slots`].
     ///
     /// The live queue stays below `unordered_slots − PARTITION_SLACK`: a first-in take happens
     /// with at most `BREADTH_WINDOW` waiting, and the depth-first run that follows adds at most
@@ -224,7 +221,7 @@ impl WideBvh {
     /// # Safety
     /// `K`'s instruction set must be available.
     #[inline(always)]
-    pub(super) unsafe fn traverse_unordered<K: Kernel, V: PairVisitor>(
+    pub(super) unsafe fn traverse_unordered<K: Kernel, V: HitVisitor>(
         &self,
         ray: &K::Ray,
         queue: &mut [MaybeUninit<ChildRef>],
@@ -239,7 +236,7 @@ impl WideBvh {
         if is_leaf(root) {
             leaves[0].write(root);
             // SAFETY: forwarded from the caller; slot 0 was written.
-            unsafe { self.test_leaves(&leaves[..1], visitor) };
+            unsafe { self.test_leaves::<K>(&leaves[..1], ray, t_max, visitor) };
             return;
         }
         let far = widen(t_max);
@@ -265,7 +262,7 @@ impl WideBvh {
                 tail += inner;
                 batch += hit_leaves;
                 if batch >= V::LEAF_BATCH {
-                    if self.test_leaves(&leaves[..batch], visitor) {
+                    if self.test_leaves::<K>(&leaves[..batch], ray, t_max, visitor) {
                         return;
                     }
                     batch = 0;
@@ -277,19 +274,22 @@ impl WideBvh {
             }
         }
         // SAFETY: forwarded from the caller.
-        unsafe { self.test_leaves(&leaves[..batch], visitor) };
+        unsafe { self.test_leaves::<K>(&leaves[..batch], ray, t_max, visitor) };
     }
 
-    /// Prefetches the packets of `leaves` (written slots), then hands them to `visitor` two at
-    /// a time (consecutive packets, across leaves). Returns `true` if the visitor stopped.
+    /// Prefetches the packets of `leaves` (written slots), then tests them two at a time
+    /// (consecutive packets, across leaves) and hands the hits to `visitor`. Returns `true` if
+    /// the visitor stopped.
     ///
     /// # Safety
-    /// The visitor's kernel instruction set must be available.
+    /// `K`'s instruction set must be available.
     #[inline(always)]
-    unsafe fn test_leaves(
+    unsafe fn test_leaves<K: Kernel>(
         &self,
         leaves: &[MaybeUninit<ChildRef>],
-        visitor: &mut impl PairVisitor,
+        ray: &K::Ray,
+        t_max: f32,
+        visitor: &mut impl HitVisitor,
     ) -> bool {
         // Packet indices of every leaf in a row: four written per leaf without a branch on its
         // count (a leaf of one object has at most four packets), `count` of them kept.
@@ -315,7 +315,8 @@ impl WideBvh {
                 two.get(1).map(|&p| &self.packets[p as usize]),
             );
             // SAFETY: forwarded from the caller.
-            if unsafe { visitor.pair(a, b, lanes) } {
+            let hits = unsafe { K::pair(a, b, ray, lanes, t_max) };
+            if hits.mask != 0 && visitor.hits(a, b, &hits) {
                 return true;
             }
         }

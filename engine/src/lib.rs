@@ -15,6 +15,7 @@ pub mod candidates;
 /// by `build.rs`).
 pub mod contract;
 mod cpu;
+pub mod denoise;
 pub mod diagnostics;
 pub mod hash;
 pub mod image;

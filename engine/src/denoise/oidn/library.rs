@@ -98,6 +98,20 @@ pub fn pyoidn_dir() -> Option<PathBuf> {
     (output.status.success() && !dir.is_empty()).then(|| PathBuf::from(dir))
 }
 
+/// `oidnSetSharedFilterImage(filter, name, devPtr, format, width, height, byteOffset,
+/// pixelByteStride, rowByteStride)`.
+type SetSharedFilterImage = unsafe extern "C" fn(
+    Filter,
+    *const c_char,
+    *mut c_void,
+    c_int,
+    usize,
+    usize,
+    usize,
+    usize,
+    usize,
+);
+
 /// The entry points used, as declared in `oidn.h` (2.x names: `oidnGetDeviceInt`,
 /// `oidnSetFilterBool`; 1.x had `oidnGetDevice1i`, `oidnSetFilter1b`).
 struct Api {
@@ -107,18 +121,7 @@ struct Api {
     get_device_int: unsafe extern "C" fn(Device, *const c_char) -> c_int,
     get_device_error: unsafe extern "C" fn(Device, *mut *const c_char) -> c_int,
     new_filter: unsafe extern "C" fn(Device, *const c_char) -> Filter,
-    #[allow(clippy::type_complexity)]
-    set_shared_filter_image: unsafe extern "C" fn(
-        Filter,
-        *const c_char,
-        *mut c_void,
-        c_int,
-        usize,
-        usize,
-        usize,
-        usize,
-        usize,
-    ),
+    set_shared_filter_image: SetSharedFilterImage,
     set_filter_bool: unsafe extern "C" fn(Filter, *const c_char, bool),
     commit_filter: unsafe extern "C" fn(Filter),
     execute_filter: unsafe extern "C" fn(Filter),

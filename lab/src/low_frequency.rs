@@ -47,7 +47,8 @@ pub fn low_frequency_error(
     let n = w * h;
     let sizes_agree =
         image.pixels.len() == n && reference.len() == n && reference_std_err.len() == n;
-    if !sizes_agree || !(sigma > 0.0 && sigma.is_finite()) {
+    let sigma_valid = sigma > 0.0 && sigma.is_finite();
+    if !sizes_agree || !sigma_valid {
         return None;
     }
     let error: Vec<DVec3> = image
@@ -179,7 +180,8 @@ mod tests {
         let r = truth();
         let a = 0.125;
         let i = frame(|x, y| {
-            r[y * W as usize + x] + DVec3::splat(a * if (x + y) % 2 == 0 { 1.0 } else { -1.0 })
+            r[y * W as usize + x]
+                + DVec3::splat(a * if (x + y).is_multiple_of(2) { 1.0 } else { -1.0 })
         });
         let zero = vec![DVec3::ZERO; r.len()];
         let l = low_frequency_error(&as_image(&i), &r, &zero, SIGMA_PIXELS).unwrap();

@@ -66,7 +66,7 @@ fn reference() -> Vec<DVec3> {
                 DVec3::new(3.0, 1.5, 0.6)
             } else if (60.0..80.0).contains(&x) && (20.0..44.0).contains(&y) {
                 DVec3::splat(0.02)
-            } else if y > 52.0 && (x as u32 / 2) % 2 == 0 {
+            } else if y > 52.0 && (x as u32 / 2).is_multiple_of(2) {
                 DVec3::new(0.9, 0.9, 1.2)
             } else {
                 DVec3::new(0.1 + x / 120.0, 0.3, 0.5 - x / 400.0)

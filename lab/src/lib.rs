@@ -1,10 +1,11 @@
 //! `lab`: the reshift lab (DESIGN §7), the library behind the `reshift` CLI. It names methods
 //! ([`methods`]), obtains references ([`reference_cache`]), measures methods against them per
-//! region ([`regions`], [`metrics`], [`method_result`]), runs comparisons ([`compare`]), the
-//! named experiments of seed 001 with their findings ([`experiments`], [`findings`]) and the
-//! replica bias protocol ([`bias`]), and writes tables, `results.json` and images ([`report`],
-//! [`images`]). It renders through the `engine` crate and knows nothing of how a backend runs a
-//! pass; long jobs report to a caller's [`progress::Progress`].
+//! region ([`regions`], [`metrics`], [`flip`], [`low_frequency`], [`method_result`]), runs
+//! comparisons ([`compare`]), the named experiments of seed 001 with their findings
+//! ([`experiments`], [`findings`]) and the replica bias protocol ([`bias`]), and writes tables,
+//! `results.json` and images ([`report`], [`images`]). It renders through the `engine` crate and
+//! knows nothing of how a backend runs a pass; long jobs report to a caller's
+//! [`progress::Progress`].
 
 pub mod bias;
 pub mod chained;
@@ -12,7 +13,9 @@ pub mod compare;
 pub mod error;
 pub mod experiments;
 pub mod findings;
+pub mod flip;
 pub mod images;
+pub mod low_frequency;
 pub mod method_result;
 pub mod methods;
 pub mod metrics;

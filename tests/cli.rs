@@ -618,8 +618,30 @@ fn compare_runs_on_every_builtin_scene_and_validates() {
                 .iter()
                 .map(|f| &f["frame"])
                 .collect();
-            assert_eq!(frames, [0, 1], "{name}");
+            // A denoised entry measures the last frame; a raw one every frame.
+            let expected: &[u32] = if method["denoiser"].is_null() {
+                &[0, 1]
+            } else {
+                &[1]
+            };
+            assert_eq!(frames, expected, "{name}");
         }
+        // `--denoise auto`: the built-in filter always, OIDN where installed (CI installs it).
+        let denoisers = written["denoisers"].as_array().unwrap();
+        assert!(
+            denoisers.iter().any(|d| d == "svgf"),
+            "{name}: {denoisers:?}"
+        );
+        assert_eq!(
+            written["methods"].as_array().unwrap().len(),
+            3 * (1 + denoisers.len()),
+            "{name}"
+        );
+        assert_eq!(
+            written["denoise_errors"].as_array().unwrap().len(),
+            0,
+            "{name}"
+        );
         if *name == "bumpy" {
             assert_schema_rejects_broken(schema, &written);
             let again: Value = serde_json::from_str(&ok(&reshift(&args))).unwrap();
@@ -632,6 +654,76 @@ fn compare_runs_on_every_builtin_scene_and_validates() {
             assert_eq!(mse(&again), mse(&written));
         }
     }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `compare --denoise`: an unknown denoiser is one line; OIDN that cannot be found (no
+/// `OIDN_DIR`, no system library, no `python3` to find `pyoidn`) is one line naming where it
+/// looked, exit status 1, and the raw results are still written.
+#[test]
+fn compare_denoise_refuses_bad_input_and_keeps_the_raw_results() {
+    let dir = scratch("denoise");
+    let (out, cache) = (dir.join("out"), dir.join("cache"));
+    let (out_s, cache_s) = (out.to_str().unwrap(), cache.to_str().unwrap());
+    let base = [
+        "compare",
+        "--methods",
+        "pt:2",
+        "--baseline",
+        "pt:2",
+        "--replicas",
+        "2",
+        "--frames",
+        "2",
+        "--resolution",
+        "16x12",
+        "--reference-spp",
+        "16",
+        "--reference-batch-spp",
+        "8",
+        "--out",
+        out_s,
+        "--cache",
+        cache_s,
+        "--denoise",
+    ];
+    fn with<'a>(base: &[&'a str], d: &'a str) -> Vec<&'a str> {
+        base.iter().copied().chain([d]).collect()
+    }
+    fails_with(&with(&base, "optix"), "unknown denoiser \"optix\"");
+    let o = Command::new(env!("CARGO_BIN_EXE_reshift"))
+        .args(with(&base, "oidn"))
+        .env("PATH", "")
+        .env("OIDN_DIR", dir.join("no-oidn"))
+        .env_remove("LD_LIBRARY_PATH")
+        .output()
+        .expect("run reshift");
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    let lines: Vec<&str> = err.trim_end().lines().collect();
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.starts_with("denoiser: oidn: ") && l.contains("OIDN_DIR")),
+        "{err}"
+    );
+    assert!(
+        lines
+            .last()
+            .unwrap()
+            .starts_with("reshift: --denoise oidn: "),
+        "{err}"
+    );
+    let written: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    assert_valid(&schemas()[0], &written, "oidn not found");
+    assert_eq!(
+        written["methods"].as_array().unwrap().len(),
+        1,
+        "the raw row"
+    );
+    assert_eq!(written["denoise_errors"].as_array().unwrap().len(), 1);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -12,6 +12,7 @@
 use std::path::{Path, PathBuf};
 
 use engine::Backend;
+use engine::denoise::{self, DenoiseError, Denoiser, Guide};
 use sss::limits::{self, IMAGE_BYTES_PER_PIXEL};
 use sss::scene::{GBuffer, Scene};
 
@@ -24,7 +25,7 @@ use crate::progress::Progress;
 use crate::reference_cache::{self, FrameReference, Obtained, REFERENCE_SEED, ReferenceSource};
 use crate::regions::Regions;
 use crate::report::results::{FrameReferenceEntry, MethodEntry, ReferenceEntry, Results, RunEntry};
-use crate::report::{html, output_dir, plots, tables, write_text};
+use crate::report::{figure, html, output_dir, plots, tables, write_text};
 
 /// The default method list: the path tracer, the four main presets [001 §5.1], and reshift's
 /// best measured configuration, reconnection with Rao-Blackwellised shading and 2 neighbours
@@ -65,6 +66,10 @@ pub struct Plan {
     /// The output folder.
     pub out: PathBuf,
     pub backend: Backend,
+    /// The denoisers every replica's last frame also passes through (none: raw frames only).
+    /// Each adds a row per method, measured like the raw one, whose seconds per frame include
+    /// the denoiser's ([`crate::compare`] never denoises the reference).
+    pub denoise: Vec<Denoiser>,
 }
 
 /// What a finished (or stopped) comparison produced.
@@ -73,6 +78,11 @@ pub struct Outcome {
     pub results: Results,
     /// One row group per method that rendered at least one replica.
     pub rows: Vec<MethodResult>,
+    /// Per denoiser of the plan, the rows of its denoised frames (the methods whose every
+    /// replica it denoised), in the order of `rows`.
+    pub denoised: Vec<(Denoiser, Vec<MethodResult>)>,
+    /// Why a denoiser left out rows, one line each (the raw rows are complete regardless).
+    pub denoise_errors: Vec<String>,
     /// The contents of `table.md`.
     pub markdown: String,
     pub out: PathBuf,
@@ -180,32 +190,100 @@ pub fn run(plan: &Plan, progress: &mut dyn Progress) -> Result<Outcome, Error> {
     frame_entries.rotate_left(1);
     let last = last.expect("the last frame always has a reference");
     let frames: Vec<u32> = references.iter().map(|(r, _)| r.frame).collect();
-    let runs = render_replicas(plan, &frames, progress)?;
+    let renders = render_replicas(plan, &frames, progress)?;
     let interrupted = progress.stop_requested();
 
     let mut rows = Vec::new();
-    for (spec, method, replicas) in runs.iter().filter(|r| !r.2.is_empty()) {
-        let row = MethodResult::from_replicas(spec, method.spp(), replicas, &references)
+    for r in renders.runs.iter().filter(|r| !r.replicas.is_empty()) {
+        let row = MethodResult::from_replicas(&r.spec, r.method.spp(), &r.replicas, &references)
             .ok_or_else(|| {
-                Error::Invalid(format!("{spec}: image size differs from the reference"))
+                Error::Invalid(format!("{}: image size differs from the reference", r.spec))
             })?;
         rows.push(row);
     }
-    let baseline = rows.iter().find(|r| r.method == plan.baseline);
-    let finals: Vec<(&str, &engine::Image)> = runs
+    let denoised: Vec<(Denoiser, Vec<MethodResult>)> = plan
+        .denoise
         .iter()
-        .filter_map(|(spec, _, replicas)| Some((spec.as_str(), replicas.first()?.frames.last()?)))
+        .map(|&d| {
+            let group = renders
+                .runs
+                .iter()
+                .filter_map(|r| {
+                    let (_, replicas) = r.denoised.iter().find(|(e, _)| *e == d)?;
+                    (!replicas.is_empty() && replicas.len() == r.replicas.len()).then(|| {
+                        MethodResult::denoised(&r.spec, r.method.spp(), d, replicas, &references)
+                    })?
+                })
+                .collect();
+            (d, group)
+        })
         .collect();
+    let baseline = rows.iter().find(|r| r.method == plan.baseline);
+    // Every row with its replica-0 last frame: the raw rows, then each denoiser's.
+    let groups: Vec<(Option<Denoiser>, &[MethodResult])> = std::iter::once((None, &rows[..]))
+        .chain(denoised.iter().map(|(d, g)| (Some(*d), &g[..])))
+        .collect();
+    let mut labelled = Vec::new();
+    for (denoiser, group) in &groups {
+        for row in group.iter() {
+            let run = renders.runs.iter().find(|r| r.spec == row.method);
+            let replicas = match denoiser {
+                None => run.map(|r| &r.replicas),
+                Some(d) => run.and_then(|r| r.denoised.iter().find(|(e, _)| e == d).map(|x| &x.1)),
+            };
+            if let Some(image) = replicas.and_then(|r| r.first()?.frames.last()) {
+                labelled.push((row, row.label(), image));
+            }
+        }
+    }
+    let finals: Vec<(&str, &engine::Image)> =
+        labelled.iter().map(|(_, l, i)| (l.as_str(), *i)).collect();
     let (images, scale) = write_comparison_images(&out, &finals, &last.reference)?;
     let (_, regions) = references.last().expect("the last frame");
-    let figures = plots::write_figures(&out, &rows, baseline, &finals, &last.reference, regions)?;
-    let markdown = format!(
-        "{}\n{}",
-        tables::markdown(&rows, baseline),
-        tables::verdict(&rows, baseline)
-    );
+    let bands: Vec<figure::Band> = groups
+        .iter()
+        .map(|(denoiser, group)| figure::Band {
+            denoiser: *denoiser,
+            rows: group,
+            baseline: group.iter().find(|r| r.method == plan.baseline),
+            finals: labelled
+                .iter()
+                .filter(|(r, _, _)| r.denoiser == *denoiser)
+                .map(|(r, _, i)| (r.method.as_str(), *i))
+                .collect(),
+        })
+        .collect();
+    let figures = plots::write_figures(&out, &rows, &bands, &last.reference, regions)?;
+    let mut markdown = String::new();
+    let mut csv = String::new();
+    for (denoiser, group) in &groups {
+        let base = group.iter().find(|r| r.method == plan.baseline);
+        if let Some(d) = denoiser {
+            markdown.push_str(&format!(
+                "\nDenoised with {d} (last frame of every replica; seconds per frame include the \
+                 denoiser's; ratios to {}):\n\n",
+                base.map_or("-".into(), |b| b.label())
+            ));
+        }
+        markdown.push_str(&format!(
+            "{}\n{}",
+            tables::markdown(group, base),
+            tables::verdict(group, base)
+        ));
+        let table = tables::csv(group, base);
+        let skip = if csv.is_empty() { 0 } else { 1 };
+        for line in table.lines().skip(skip) {
+            csv.push_str(line);
+            csv.push('\n');
+        }
+    }
+    let all_rows: Vec<MethodResult> = groups.iter().flat_map(|(_, g)| g.iter().cloned()).collect();
+    markdown.push_str(&format!("\n{}", tables::perceptual(&all_rows)));
+    for e in &renders.denoise_errors {
+        markdown.push_str(&format!("\nDenoiser: {e}\n"));
+    }
     write_text(&out.join("table.md"), &markdown)?;
-    write_text(&out.join("table.csv"), &tables::csv(&rows, baseline))?;
+    write_text(&out.join("table.csv"), &csv)?;
     write_text(
         &out.join("convergence.csv"),
         &tables::convergence_csv(&rows),
@@ -221,10 +299,16 @@ pub fn run(plan: &Plan, progress: &mut dyn Progress) -> Result<Outcome, Error> {
         baseline: baseline.map(|b| b.method.clone()),
         interrupted,
     };
-    let entries = rows
+    let entries = labelled
         .iter()
         .zip(images)
-        .map(|(r, files)| MethodEntry::new(r, baseline, files))
+        .map(|((r, _, _), files)| {
+            let base = groups
+                .iter()
+                .find(|(d, _)| *d == r.denoiser)
+                .and_then(|(_, g)| g.iter().find(|b| b.method == plan.baseline));
+            MethodEntry::new(r, base, files)
+        })
         .collect();
     let reference_entry = ReferenceEntry::new(&last.reference, &last.path, last.cached);
     let results = Results::new(
@@ -234,6 +318,8 @@ pub fn run(plan: &Plan, progress: &mut dyn Progress) -> Result<Outcome, Error> {
         regions,
         scale,
         figures,
+        denoised.iter().map(|(d, _)| d.name().to_string()).collect(),
+        renders.denoise_errors.clone(),
         entries,
     );
     write_text(&out.join("results.json"), &results.to_json_pretty())?;
@@ -241,25 +327,61 @@ pub fn run(plan: &Plan, progress: &mut dyn Progress) -> Result<Outcome, Error> {
     Ok(Outcome {
         results,
         rows,
+        denoised,
+        denoise_errors: renders.denoise_errors,
         markdown,
         out,
     })
 }
 
+/// One method's replicas as rendered.
+struct MethodRuns {
+    spec: String,
+    method: Method,
+    /// The measured frames of each replica.
+    replicas: Vec<Replica>,
+    /// Per denoiser that denoised every replica so far, the denoised last frames.
+    denoised: Vec<(Denoiser, Vec<Replica>)>,
+}
+
+/// What [`render_replicas`] rendered.
+struct Renders {
+    runs: Vec<MethodRuns>,
+    denoise_errors: Vec<String>,
+}
+
 /// The replicas of every method, in order, each with its images at `frames` (ascending, the
-/// last frame last); after a stop request the list ends with the method that was rendering,
-/// with the replicas it finished.
+/// last frame last) and its last frame through each denoiser of the plan; after a stop request
+/// the list ends with the method that was rendering, with the replicas it finished. A denoiser
+/// that fails on a replica leaves that method's denoised row out with one line in
+/// `denoise_errors`; one that is not installed is left out of every method with one line.
 fn render_replicas(
     plan: &Plan,
     frames: &[u32],
     progress: &mut dyn Progress,
-) -> Result<Vec<(String, Method, Vec<Replica>)>, Error> {
+) -> Result<Renders, Error> {
     let seconds_per_spp = match plan.equal_time {
         Some(_) if plan.methods.iter().any(|(s, _)| s == EQUAL_TIME_SPEC) => {
             calibrate_pt(&plan.backend, &plan.scene, plan.frames)?
         }
         _ => 0.0,
     };
+    let guides = if plan.denoise.is_empty() {
+        Vec::new()
+    } else {
+        Guide::trajectory(&plan.scene, plan.frames)
+    };
+    let whole_trajectory = plan.denoise.iter().any(|d| d.temporal());
+    let mut denoisers = plan.denoise.clone();
+    let mut denoise_errors = Vec::new();
+    // Untimed warm-up: loading a library, creating a device or compiling kernels is not the
+    // per-frame cost a renderer pays.
+    if let Some(guide) = guides.last() {
+        let black = engine::Image::black(guide.width, guide.height);
+        for &d in &plan.denoise {
+            let _ = denoise::denoise(d, &plan.backend, &guides, std::slice::from_ref(&black));
+        }
+    }
     progress.begin(
         "replicas",
         plan.methods.len() as u64 * plan.replicas as u64,
@@ -273,56 +395,114 @@ fn render_replicas(
             _ => method.clone(),
         };
         progress.item(&method.name());
-        let mut replicas = Vec::new();
+        let mut run = MethodRuns {
+            spec: spec.clone(),
+            method: method.clone(),
+            replicas: Vec::new(),
+            denoised: denoisers.iter().map(|&d| (d, Vec::new())).collect(),
+        };
         for seed in 0..plan.replicas as u64 {
             if progress.stop_requested() {
-                runs.push((spec.clone(), method, replicas));
+                runs.push(run);
                 break 'methods;
             }
-            replicas.push(render_replica(plan, &method, frames, seed)?);
+            let (replica, trajectory) =
+                render_replica(plan, &method, frames, seed, whole_trajectory)?;
+            let mut failed = Vec::new();
+            for (d, denoised) in &mut run.denoised {
+                match denoise_replica(*d, &plan.backend, &guides, &trajectory, &replica) {
+                    Ok(r) => denoised.push(r),
+                    Err(e) => failed.push((*d, e)),
+                }
+            }
+            for (d, e) in failed {
+                run.denoised.retain(|(x, _)| *x != d);
+                if matches!(e, DenoiseError::Unavailable(_)) {
+                    denoisers.retain(|x| *x != d);
+                    denoise_errors.push(format!("{d}: {e}; its rows are left out"));
+                } else {
+                    denoise_errors.push(format!(
+                        "{spec}, replica {seed}: {e}; its {d} row is left out"
+                    ));
+                }
+            }
+            run.replicas.push(replica);
             progress.step();
         }
-        runs.push((spec.clone(), method, replicas));
+        runs.push(run);
     }
     progress.end();
-    Ok(runs)
+    Ok(Renders {
+        runs,
+        denoise_errors,
+    })
 }
 
-/// Replica `seed` of `method` at `frames`: the whole trajectory when earlier frames are
-/// measured, else only the last frame (which a memoryless method renders alone).
+/// `replica`'s last frame through `denoiser`, from the frames of its `trajectory` (the last
+/// frames of the trajectory that `guides` guide); its seconds per frame add the denoiser's
+/// per frame (a temporal filter's time over every frame it filtered).
+fn denoise_replica(
+    denoiser: Denoiser,
+    backend: &Backend,
+    guides: &[Guide],
+    trajectory: &[engine::Image],
+    replica: &Replica,
+) -> Result<Replica, DenoiseError> {
+    let d = denoise::denoise(denoiser, backend, guides, trajectory)?;
+    let per_frame = if denoiser.temporal() {
+        d.seconds / trajectory.len() as f64
+    } else {
+        d.seconds
+    };
+    Ok(Replica {
+        frames: vec![d.image],
+        seconds_per_frame: replica.seconds_per_frame + per_frame,
+        denoiser_seconds_per_frame: per_frame,
+        ..replica.clone()
+    })
+}
+
+/// Replica `seed` of `method` at `frames`, and the frames a denoiser reads: the whole
+/// trajectory when earlier frames are measured or `whole_trajectory` is asked for (a temporal
+/// denoiser), else only the last frame (which a memoryless method renders alone).
 fn render_replica(
     plan: &Plan,
     method: &Method,
     frames: &[u32],
     seed: u64,
-) -> Result<Replica, Error> {
+    whole_trajectory: bool,
+) -> Result<(Replica, Vec<engine::Image>), Error> {
     let (backend, scene) = (&plan.backend, &plan.scene);
-    if frames.len() == 1 {
+    if frames.len() == 1 && !whole_trajectory {
         let r = method.render_on(backend, scene, plan.frames, seed)?;
-        return Ok(Replica {
-            frames: vec![r.image],
+        let replica = Replica {
+            frames: vec![r.image.clone()],
             seconds_per_frame: r.seconds_per_frame,
+            denoiser_seconds_per_frame: 0.0,
             frames_rendered: r.frames_rendered,
             nonfinite: r.nonfinite,
             spp: r.spp,
-        });
+        };
+        return Ok((replica, vec![r.image]));
     }
     let (trajectory, seconds_per_frame) =
         method.render_trajectory_on(backend, scene, plan.frames, seed)?;
     let images = (0..)
-        .zip(trajectory.frames)
-        .filter_map(|(f, image)| frames.contains(&f).then_some(image))
+        .zip(&trajectory.frames)
+        .filter_map(|(f, image)| frames.contains(&f).then(|| image.clone()))
         .collect();
-    Ok(Replica {
+    let replica = Replica {
         frames: images,
         seconds_per_frame,
+        denoiser_seconds_per_frame: 0.0,
         frames_rendered: trajectory.frames_rendered,
         nonfinite: trajectory.nonfinite,
         spp: trajectory
             .counts
             .as_ref()
             .map_or(method.spp() as f64, SampleCounts::mean),
-    })
+    };
+    Ok((replica, trajectory.frames))
 }
 
 /// Seconds per sample per pixel of the path tracer on this scene (median of 3 runs at 4 spp).
@@ -392,8 +572,39 @@ mod tests {
             frame_reference_spp: Some(8),
             out: dir.join("out"),
             backend: Backend::Cpu,
+            denoise: vec![Denoiser::Svgf],
         };
         let first = run(&plan, &mut Silent).unwrap();
+        // The denoised rows: one per method, measured at the last frame, their seconds the raw
+        // ones plus the denoiser's, their ratios to the baseline's denoised row.
+        let (d, denoised) = &first.denoised[0];
+        assert_eq!(*d, Denoiser::Svgf);
+        assert_eq!(denoised.len(), 2);
+        for (row, raw) in denoised.iter().zip(&first.rows) {
+            assert_eq!(row.label(), format!("{}+svgf", raw.method));
+            assert_eq!(row.convergence.len(), 1);
+            let extra = row.denoiser_seconds.as_ref().unwrap().value;
+            assert!(extra > 0.0);
+            assert!((row.seconds.value - raw.seconds.value - extra).abs() < 1e-9);
+            assert_ne!(row.metrics, raw.metrics);
+        }
+        assert!(
+            first.denoise_errors.is_empty(),
+            "{:?}",
+            first.denoise_errors
+        );
+        assert_eq!(first.results.methods.len(), 4);
+        assert_eq!(first.results.denoisers, ["svgf"]);
+        assert!(
+            first.markdown.contains("Denoised with svgf"),
+            "{}",
+            first.markdown
+        );
+        assert!(
+            first.markdown.contains("| pt:2+svgf |"),
+            "{}",
+            first.markdown
+        );
         assert_eq!(first.rows.len(), 2);
         assert_eq!(first.results.methods.len(), 2);
         assert!(!first.results.reference.cached && !first.results.interrupted);
@@ -407,6 +618,10 @@ mod tests {
             "convergence.png",
             "report.html",
             "restir-hybrid-abs-error.png",
+            "restir-hybrid-flip.png",
+            "restir-hybrid-low-frequency.png",
+            "restir-hybrid-svgf.png",
+            "restir-hybrid-svgf-flip.png",
         ] {
             assert!(first.out.join(file).is_file(), "{file}");
         }
@@ -429,9 +644,14 @@ mod tests {
         assert!(again.results.reference.cached);
         assert!(again.results.frame_references.iter().all(|f| f.cached));
         assert_eq!(again.rows[1].metrics, first.rows[1].metrics);
+        assert_eq!(
+            again.denoised[0].1[1].metrics,
+            first.denoised[0].1[1].metrics
+        );
         let last_only = Plan {
             frame_reference_spp: None,
             baseline: "none".into(),
+            denoise: Vec::new(),
             ..plan
         };
         let last = run(&last_only, &mut Silent).unwrap();

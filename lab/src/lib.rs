@@ -1,6 +1,7 @@
 //! `lab`: the reshift lab (DESIGN §7), the library behind the `reshift` CLI. It names methods
 //! ([`methods`]), obtains references ([`reference_cache`]), measures methods against them per
-//! region ([`regions`], [`metrics`], [`flip`], [`low_frequency`], [`method_result`]), runs
+//! region ([`regions`], [`metrics`], [`flip`], [`low_frequency`], [`perceptual`],
+//! [`method_result`]), runs
 //! comparisons ([`compare`]), the named experiments of seed 001 with their findings
 //! ([`experiments`], [`findings`]) and the replica bias protocol ([`bias`]), and writes tables,
 //! `results.json` and images ([`report`], [`images`]). It renders through the `engine` crate and
@@ -19,6 +20,7 @@ pub mod low_frequency;
 pub mod method_result;
 pub mod methods;
 pub mod metrics;
+pub mod perceptual;
 pub mod progress;
 pub mod reference_cache;
 pub mod regions;

@@ -4,8 +4,10 @@
 //! [`crate::uncertainty`]).
 
 use engine::Image;
+use engine::denoise::Denoiser;
 
 use crate::metrics::{Area, AreaMetrics, area_metrics, tonemapped_mse};
+use crate::perceptual::{PerceptualMetrics, perceptual_metrics};
 use crate::reference_cache::FrameReference;
 use crate::regions::Regions;
 use crate::uncertainty::{CONFIDENCE, Estimate, Interval, log_cost};
@@ -15,8 +17,10 @@ use crate::uncertainty::{CONFIDENCE, Estimate, Interval, log_cost};
 pub struct Replica {
     /// Linear RGB of each measured frame, in the comparison's order (the last frame last).
     pub frames: Vec<Image>,
-    /// Wall-clock seconds per rendered frame.
+    /// Wall-clock seconds per rendered frame (with a denoiser's: both).
     pub seconds_per_frame: f64,
+    /// The denoiser's share of `seconds_per_frame` (0 for a raw frame).
+    pub denoiser_seconds_per_frame: f64,
     pub frames_rendered: u32,
     pub nonfinite: u64,
     /// Mean samples per pixel of the last frame ([`Rendered::spp`](crate::methods::Rendered)).
@@ -59,6 +63,8 @@ impl Measured {
 pub struct MethodResult {
     /// The method as requested (`pt`, `restir:hybrid`).
     pub method: String,
+    /// The denoiser its last frames passed through (`None`: the raw frames).
+    pub denoiser: Option<Denoiser>,
     /// Samples per pixel per frame actually used (after equal-time calibration); for a method
     /// that chooses counts per pixel, the most a pixel may take.
     pub spp: u32,
@@ -66,13 +72,18 @@ pub struct MethodResult {
     /// ([`Rendered::spp`]): `spp` unless the method chooses counts per pixel (`adaptive`).
     pub mean_spp: f64,
     pub replicas: usize,
-    /// Wall-clock seconds per rendered frame over replicas (one timing per replica).
+    /// Wall-clock seconds per rendered frame over replicas (one timing per replica), the
+    /// denoiser's included.
     pub seconds: Estimate,
+    /// The denoiser's seconds per frame over replicas (`None` for raw frames).
+    pub denoiser_seconds: Option<Estimate>,
     pub frames_rendered: u32,
     /// The metrics at the last frame.
     pub metrics: Vec<AreaMetrics>,
     /// Seed 001's metric over whole last frames, over replicas ([`tonemapped_mse`]).
     pub tonemapped_mse: Estimate,
+    /// FLIP and the low-frequency error per area at the last frame.
+    pub perceptual: Vec<PerceptualMetrics>,
     pub nonfinite: u64,
     /// The metrics at every measured frame, ascending; the last is [`MethodResult::metrics`].
     pub convergence: Vec<FrameMetrics>,
@@ -102,24 +113,65 @@ impl MethodResult {
                 })
             })
             .collect::<Option<Vec<_>>>()?;
-        let (last_reference, _) = references.last()?;
+        let (last_reference, last_regions) = references.last()?;
         let tonemapped = replicas
             .iter()
             .map(|r| tonemapped_mse(r.frames.last()?, &last_reference.mean))
             .collect::<Option<Vec<f64>>>()?;
+        let finals: Vec<&Image> = replicas
+            .iter()
+            .map(|r| r.frames.last())
+            .collect::<Option<_>>()?;
+        let perceptual = perceptual_metrics(&finals, last_reference, last_regions)?;
         let seconds: Vec<f64> = replicas.iter().map(|r| r.seconds_per_frame).collect();
         Some(MethodResult {
             method: method.to_string(),
+            denoiser: None,
             spp,
             mean_spp: replicas.iter().map(|r| r.spp).sum::<f64>() / replicas.len() as f64,
             replicas: replicas.len(),
             seconds: Estimate::mean(&seconds),
+            denoiser_seconds: None,
             frames_rendered: replicas.iter().map(|r| r.frames_rendered).max()?,
             metrics: convergence.last()?.metrics.clone(),
             tonemapped_mse: Estimate::mean(&tonemapped),
+            perceptual,
             nonfinite: replicas.iter().map(|r| r.nonfinite).sum(),
             convergence,
         })
+    }
+
+    /// The row of `method` whose last frames passed through `denoiser`: `replicas` hold the
+    /// denoised last frame each, measured against the last of `references`.
+    pub fn denoised(
+        method: &str,
+        spp: u32,
+        denoiser: Denoiser,
+        replicas: &[Replica],
+        references: &[(FrameReference, Regions)],
+    ) -> Option<MethodResult> {
+        let last = references.len().checked_sub(1)?;
+        let mut row = MethodResult::from_replicas(method, spp, replicas, &references[last..])?;
+        let seconds: Vec<f64> = replicas
+            .iter()
+            .map(|r| r.denoiser_seconds_per_frame)
+            .collect();
+        row.denoiser = Some(denoiser);
+        row.denoiser_seconds = Some(Estimate::mean(&seconds));
+        Some(row)
+    }
+
+    /// The row's name: the method, with `+<denoiser>` for denoised frames.
+    pub fn label(&self) -> String {
+        match self.denoiser {
+            Some(d) => format!("{}+{d}", self.method),
+            None => self.method.clone(),
+        }
+    }
+
+    /// FLIP and the low-frequency error of `area` at the last frame, if it is not empty.
+    pub fn perceptual(&self, area: Area) -> Option<&PerceptualMetrics> {
+        self.perceptual.iter().find(|m| m.area == area)
     }
 
     /// The metrics of `area` at the last frame, if it is not empty.

@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use engine::Backend;
+use engine::denoise::Denoiser;
 use lab::compare::{Plan, parse_methods, run};
 use lab::progress::Silent;
 use lab::reference_cache::ReferenceSource;
@@ -127,15 +128,35 @@ fn the_report_renders_in_a_browser() {
         frame_reference_spp: Some(16),
         out: dir.join("out"),
         backend: Backend::Cpu,
+        // Every denoiser installed here (the built-in filter always): the denoised images are
+        // part of the page.
+        denoise: Denoiser::ALL
+            .into_iter()
+            .filter(|d| d.available().is_ok())
+            .collect(),
     };
     let outcome = run(&plan, &mut Silent).unwrap();
+    assert!(
+        outcome.denoise_errors.is_empty(),
+        "{:?}",
+        outcome.denoise_errors
+    );
     let page = outcome.out.join("report.html");
     let html = std::fs::read_to_string(&page).unwrap();
     assert!(
         !html.contains("src=\"http") && !html.contains("<script"),
         "self-contained, no script"
     );
-    assert_eq!(html.matches("data:image/png;base64,").count(), 2 + 3 * 2);
+    // The figure and the convergence plot, then per entry (2 methods, raw and through each
+    // denoiser) its frame and four maps.
+    let entries = 2 * (1 + plan.denoise.len());
+    assert_eq!(
+        html.matches("data:image/png;base64,").count(),
+        2 + 5 * entries
+    );
+    for d in &plan.denoise {
+        assert!(html.contains(&format!("restir:hybrid+{d}")), "{d} rows");
+    }
     let shot = screenshot(&browser, &page, &dir);
     assert_eq!(shot.dimensions(), WINDOW);
     not_blank(&shot).unwrap();

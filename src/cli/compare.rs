@@ -6,6 +6,7 @@
 use std::path::PathBuf;
 
 use clap::Args;
+use engine::denoise::Denoiser;
 use lab::compare::{
     self, DEFAULT_BASELINE, DEFAULT_METHODS, Plan, frame_reference_spp, parse_methods,
 };
@@ -65,6 +66,12 @@ pub struct CompareArgs {
     /// Samples per pixel of one reference batch.
     #[arg(long, default_value_t = 128)]
     pub reference_batch_spp: u32,
+    /// Denoisers every replica's last frame also passes through, measured like the raw frames
+    /// (the reference is never denoised): `none`, `oidn` (Intel Open Image Denoise, loaded at
+    /// run time), `svgf` (built in), `all`, a comma-separated list, or `auto`: `svgf`, and `oidn`
+    /// where it is installed.
+    #[arg(long, value_name = "DENOISERS", default_value = "auto")]
+    pub denoise: String,
     /// Print results.json to stdout instead of the table.
     #[arg(long)]
     pub json: bool,
@@ -72,10 +79,51 @@ pub struct CompareArgs {
     pub backend: BackendArgs,
 }
 
+/// The denoisers of `--denoise` and whether they were named (a named one that fails is an
+/// error; `auto` leaves out one that is not installed, with a note).
+pub fn parse_denoise(text: &str) -> CliResult<(Vec<Denoiser>, bool)> {
+    match text {
+        "none" => Ok((Vec::new(), true)),
+        "all" => Ok((Denoiser::ALL.to_vec(), true)),
+        "auto" => {
+            let mut found = Vec::new();
+            for d in Denoiser::ALL {
+                match d.available() {
+                    Ok(()) => found.push(d),
+                    Err(e) => eprintln!("note: --denoise auto leaves out {d}: {e}"),
+                }
+            }
+            Ok((found, false))
+        }
+        list => {
+            let mut named = Vec::new();
+            for name in list.split(',') {
+                let d = Denoiser::parse(name.trim()).ok_or_else(|| {
+                    CliError(format!(
+                        "--denoise {list}: unknown denoiser {name:?}; use none, oidn, svgf, all or auto"
+                    ))
+                })?;
+                if !named.contains(&d) {
+                    named.push(d);
+                }
+            }
+            Ok((named, true))
+        }
+    }
+}
+
 /// Runs `compare` and prints the table (or the JSON); a comparison stopped by Ctrl-C prints
 /// its partial results and fails.
 pub fn command(args: &CompareArgs) -> CliResult<()> {
-    let outcome = compare::run(&plan(args)?, &mut Bars::default())?;
+    let (denoise, named) = parse_denoise(&args.denoise)?;
+    let plan = Plan {
+        denoise,
+        ..plan(args)?
+    };
+    let outcome = compare::run(&plan, &mut Bars::default())?;
+    for e in &outcome.denoise_errors {
+        eprintln!("denoiser: {e}");
+    }
     if args.json {
         println!("{}", outcome.results.to_json_pretty());
     } else {
@@ -93,6 +141,14 @@ pub fn command(args: &CompareArgs) -> CliResult<()> {
     }
     if outcome.results.interrupted {
         return Err(CliError("interrupted: partial results written".into()));
+    }
+    if named && !outcome.denoise_errors.is_empty() {
+        return Err(CliError(format!(
+            "--denoise {}: {} denoised row group(s) left out (see above); the raw results are \
+             written",
+            args.denoise,
+            outcome.denoise_errors.len()
+        )));
     }
     Ok(())
 }
@@ -155,5 +211,6 @@ fn plan(args: &CompareArgs) -> CliResult<Plan> {
         frame_reference_spp: (frame_spp > 0).then_some(frame_spp),
         out,
         backend,
+        denoise: Vec::new(),
     })
 }

@@ -50,6 +50,15 @@ impl Denoiser {
         Denoiser::ALL.into_iter().find(|d| d.name() == name)
     }
 
+    /// `Ok` when the denoiser can run here: the built-in filter always; OIDN when its library
+    /// loads (else the one line of [`DenoiseError::Unavailable`]).
+    pub fn available(self) -> Result<(), DenoiseError> {
+        match self {
+            Denoiser::Oidn => oidn::available(),
+            Denoiser::Svgf => Ok(()),
+        }
+    }
+
     /// Whether the denoiser reads the whole trajectory (a temporal filter) or its last frame.
     pub fn temporal(self) -> bool {
         matches!(self, Denoiser::Svgf)
@@ -99,9 +108,11 @@ impl fmt::Display for DenoiseError {
 
 impl std::error::Error for DenoiseError {}
 
-/// Denoises the last of `frames` (frames `0..n` of a trajectory, as rendered) with `denoiser`,
-/// guided by `guides` (at least as many, from [`Guide::trajectory`]). A spatial denoiser reads
-/// only the last frame; a temporal one every frame, on `backend`.
+/// Denoises the last of `frames` with `denoiser`. `guides` are those of a trajectory
+/// ([`Guide::trajectory`]) and `frames` its last frames as rendered (at least one, at most as
+/// many as guides; frame `i` of `frames` is guided by `guides[guides.len() − frames.len() + i]`).
+/// A spatial denoiser reads only the last frame; a temporal one all of `frames` (pass the whole
+/// trajectory for its full history), on `backend`.
 pub fn denoise(
     denoiser: Denoiser,
     backend: &Backend,
@@ -118,28 +129,24 @@ pub fn denoise(
             guides.len()
         )));
     }
-    let guides = &guides[..frames.len()];
+    let guides = &guides[guides.len() - frames.len()..];
     let read = if denoiser.temporal() {
         frames
     } else {
         std::slice::from_ref(last)
     };
     let first = frames.len() - read.len();
-    for (i, (frame, guide)) in read.iter().zip(&guides[first..]).enumerate() {
+    for (frame, guide) in read.iter().zip(&guides[first..]) {
         if (frame.width, frame.height) != (guide.width, guide.height) {
             return Err(DenoiseError::Mismatch(format!(
                 "frame {} is {}×{} but its guide {}×{}",
-                first + i,
-                frame.width,
-                frame.height,
-                guide.width,
-                guide.height
+                guide.frame, frame.width, frame.height, guide.width, guide.height
             )));
         }
         let count = frame.non_finite_count();
         if count > 0 {
             return Err(DenoiseError::NonFinite {
-                frame: (first + i) as u32,
+                frame: guide.frame,
                 count,
             });
         }

@@ -6,6 +6,7 @@
 //! and measured results.
 
 mod ablation;
+mod denoised;
 mod figures;
 pub mod ground_truth;
 mod materials;
@@ -32,6 +33,7 @@ pub enum Experiment {
     GroundTruth,
     ModelGap,
     Ablation,
+    Denoised,
 }
 
 /// An experiment's default replicas, resolution and reference spp (the command line's).
@@ -43,7 +45,7 @@ pub struct Defaults {
 }
 
 impl Experiment {
-    pub const ALL: [Experiment; 10] = [
+    pub const ALL: [Experiment; 11] = [
         Experiment::ShiftComparison,
         Experiment::ManyLights,
         Experiment::Materials,
@@ -54,6 +56,7 @@ impl Experiment {
         Experiment::GroundTruth,
         Experiment::ModelGap,
         Experiment::Ablation,
+        Experiment::Denoised,
     ];
 
     /// The name on the command line and of the default output folder `out/experiment-<name>`.
@@ -69,6 +72,7 @@ impl Experiment {
             Experiment::GroundTruth => "ground-truth",
             Experiment::ModelGap => "model-gap",
             Experiment::Ablation => "ablation",
+            Experiment::Denoised => "denoised",
         }
     }
 
@@ -105,6 +109,9 @@ impl Experiment {
             Experiment::Ablation => {
                 "issue 10: one ReSTIR preset varied one knob at a time, efficiency over pt per region"
             }
+            Experiment::Denoised => {
+                "Fig. 6 and 7 with and without each denoiser (OIDN, SVGF) at equal time, at the resolution and twice it"
+            }
         }
     }
 
@@ -113,7 +120,8 @@ impl Experiment {
     /// (7 scenes × 3 boundaries, 8 estimators per sample; `reference_spp` is every estimator's
     /// total over the replicas) run small; `ablation` (14 rows per method in 6 comparisons, up to
     /// 384×288) at 128×96 with 4 replicas and 1024-spp references; the figures at 128×96, 16
-    /// replicas, 8192-spp references.
+    /// replicas, 8192-spp references; `denoised` (4 comparisons with every denoiser) at 256×192 and
+    /// 512×384, 8 replicas, 4096-spp references, as the main job.
     pub fn defaults(self) -> Defaults {
         match self {
             Experiment::GroundTruth => Defaults {
@@ -130,6 +138,11 @@ impl Experiment {
                 replicas: 4,
                 resolution: (128, 96),
                 reference_spp: 1024,
+            },
+            Experiment::Denoised => Defaults {
+                replicas: 8,
+                resolution: (256, 192),
+                reference_spp: 4096,
             },
             _ => Defaults {
                 replicas: 16,
@@ -169,6 +182,7 @@ impl Experiment {
             Experiment::GroundTruth => ground_truth::run(settings, progress),
             Experiment::ModelGap => model_gap::run(settings, progress),
             Experiment::Ablation => ablation::run(settings, progress),
+            Experiment::Denoised => denoised::run(settings, name, progress),
         }
     }
 }

@@ -131,5 +131,6 @@ pub fn equal_time_plan(
         )),
         out: out.to_path_buf(),
         backend: settings.backend.clone(),
+        denoise: Vec::new(),
     })
 }

@@ -1,12 +1,15 @@
-//! The comparison figure in the style of seed 001 Fig. 6: the reference on the left with the
-//! insets marked, then one row per inset (lit, penumbra, shadowed) and one column per image
+//! The comparison figure in the style of seed 001 Fig. 6 and 7: the reference on the left with
+//! the insets marked, then one row per inset (lit, penumbra, shadowed) and one column per image
 //! (the reference, then each method's final frame of replica 0), each crop labelled with its
-//! region's MSE and efficiency ratio over the baseline with their 95% intervals. The insets are
-//! chosen automatically ([`inset`]): the square window with the most pixels of the region.
+//! region's MSE and efficiency ratio over the baseline with their 95% intervals. With denoisers,
+//! each adds a band of the same rows below, its denoised frames in the methods' columns. The
+//! insets are chosen automatically ([`inset`]): the square window with the most pixels of the
+//! region.
 
 use std::path::Path;
 
 use engine::Image;
+use engine::denoise::Denoiser;
 use engine::image::tonemap;
 use plotters::prelude::*;
 use sss::integrator::Reference;
@@ -143,16 +146,28 @@ fn labels(
     out
 }
 
-/// Writes the figure (module documentation) to `path`. `finals` are `(spec, replica-0 final
-/// frame)` per method, `rows` their results by spec, `regions` those of the last frame.
+/// One band of rows of the figure: the raw frames (`denoiser` `None`) or one denoiser's.
+pub struct Band<'a> {
+    pub denoiser: Option<Denoiser>,
+    /// The band's results, by spec.
+    pub rows: &'a [MethodResult],
+    pub baseline: Option<&'a MethodResult>,
+    /// `(spec, replica-0 last frame)` per method.
+    pub finals: Vec<(&'a str, &'a Image)>,
+}
+
+/// Writes the figure (module documentation) to `path`: the first band's methods are the
+/// columns; `regions` are those of the last frame.
 pub fn write(
     path: &Path,
-    rows: &[MethodResult],
-    baseline: Option<&MethodResult>,
-    finals: &[(&str, &Image)],
+    bands: &[Band],
     reference: &Reference,
     regions: &Regions,
 ) -> Result<(), Error> {
+    let Some(first) = bands.first() else {
+        return Ok(());
+    };
+    let finals = &first.finals;
     let full = mean_image(reference);
     let (w, h) = (full.width, full.height);
     let side = (w.min(h) / 5).max(4);
@@ -171,7 +186,8 @@ pub fn write(
     }
     let zoom = (CROP / insets[0].2.width.max(insets[0].2.height)).max(1);
     let row_height = insets[0].2.height * zoom + LABELS;
-    let grid_height = HEADER + insets.len() as u32 * row_height;
+    let band_height = insets.len() as u32 * row_height + HEADER;
+    let grid_height = bands.len() as u32 * band_height;
     let left_scale = (grid_height / h).clamp(1, (640 / w).max(1));
     let left_width = w * left_scale + 20;
     let columns = 1 + finals.len() as u32;
@@ -209,46 +225,60 @@ pub fn write(
             root.draw(&Rectangle::new([(x, y), corner], colour.stroke_width(2)))
                 .map_err(|e| fail(&e))?;
         }
-        // One column per image, one row per inset.
-        let images: Vec<(&str, &Image)> = std::iter::once(("reference", &full))
-            .chain(finals.iter().copied())
+        // One column per method, one row per inset and band.
+        let columns: Vec<&str> = std::iter::once("reference")
+            .chain(finals.iter().map(|(name, _)| *name))
             .collect();
-        for (c, (name, image)) in images.iter().enumerate() {
-            let x = (left_width + c as u32 * COLUMN) as i32;
-            text(name, (x, 8), 15, &BLACK)?;
-            for (i, (area, colour, r)) in insets.iter().enumerate() {
-                let y = (HEADER + i as u32 * row_height) as i32;
-                let (cw, ch) = (r.width * zoom, r.height * zoom);
-                blit(
-                    upscale(&crop(image, *r), r.width, r.height, zoom),
-                    (x, y),
-                    (cw, ch),
-                )?;
-                root.draw(&Rectangle::new(
-                    [(x, y), (x + cw as i32 - 1, y + ch as i32 - 1)],
-                    colour.stroke_width(2),
-                ))
-                .map_err(|e| fail(&e))?;
-                let lines = if c == 0 {
-                    vec![
-                        area.name().to_string(),
-                        format!("{} spp", reference_spp(reference)),
-                    ]
-                } else {
-                    let row = rows.iter().find(|r| r.method == *name);
-                    labels(row, baseline, *area)
+        for (b, band) in bands.iter().enumerate() {
+            let top = b as u32 * band_height;
+            if let Some(d) = band.denoiser {
+                let x = left_width as i32;
+                text(&format!("denoised: {d}"), (x, top as i32 + 8), 15, &BLACK)?;
+            }
+            for (c, name) in columns.iter().enumerate() {
+                let x = (left_width + c as u32 * COLUMN) as i32;
+                let image = match c {
+                    0 => Some(&full),
+                    _ => band.finals.iter().find(|(n, _)| n == name).map(|(_, i)| *i),
                 };
-                for (l, line) in lines.iter().enumerate() {
-                    text(line, (x, y + ch as i32 + 4 + 17 * l as i32), 13, &BLACK)?;
+                if b == 0 {
+                    text(name, (x, 8), 15, &BLACK)?;
+                }
+                let Some(image) = image else { continue };
+                for (i, (area, colour, r)) in insets.iter().enumerate() {
+                    let y = (top + HEADER + i as u32 * row_height) as i32;
+                    let (cw, ch) = (r.width * zoom, r.height * zoom);
+                    blit(
+                        upscale(&crop(image, *r), r.width, r.height, zoom),
+                        (x, y),
+                        (cw, ch),
+                    )?;
+                    root.draw(&Rectangle::new(
+                        [(x, y), (x + cw as i32 - 1, y + ch as i32 - 1)],
+                        colour.stroke_width(2),
+                    ))
+                    .map_err(|e| fail(&e))?;
+                    let lines = if c == 0 {
+                        vec![
+                            area.name().to_string(),
+                            format!("{} spp", reference_spp(reference)),
+                        ]
+                    } else {
+                        let row = band.rows.iter().find(|r| r.method == *name);
+                        labels(row, band.baseline, *area)
+                    };
+                    for (l, line) in lines.iter().enumerate() {
+                        text(line, (x, y + ch as i32 + 4 + 17 * l as i32), 13, &BLACK)?;
+                    }
                 }
             }
         }
-        let base = baseline.map_or("-".into(), |b| b.method.clone());
+        let base = first.baseline.map_or("-".into(), |b| b.method.clone());
         let caption = format!(
             "Last frame, replica 0. Labels: MSE over the whole region (reference variance \
-             subtracted) and efficiency 1/(MSE·s) relative to {base}, with 95% intervals over \
-             {} replicas.",
-            rows.first().map_or(0, |r| r.replicas)
+             subtracted) and efficiency 1/(MSE·s) relative to {base} (denoised: to {base} through \
+             the same denoiser), with 95% intervals over {} replicas.",
+            first.rows.first().map_or(0, |r| r.replicas)
         );
         text(&caption, (0, size.1 as i32 - 28), 14, &BLACK)
     })

@@ -8,7 +8,7 @@ use std::path::Path;
 
 use crate::error::Error;
 use crate::method_result::Measured;
-use crate::report::results::{AreaEntry, Results};
+use crate::report::results::{AreaEntry, MethodEntry, Results};
 use crate::uncertainty::Interval;
 
 use super::tables::{sig, verdict_word, with_ci};
@@ -59,6 +59,21 @@ fn image(out: &Path, file: &str, alt: &str) -> Result<String, Error> {
     ))
 }
 
+/// The entry's row name: the method, with `+<denoiser>` for denoised frames.
+fn label(m: &MethodEntry) -> String {
+    match &m.denoiser {
+        Some(d) => format!("{}+{d}", m.method),
+        None => m.method.clone(),
+    }
+}
+
+/// The groups of entries: the raw frames (`None`), then each denoiser's.
+fn groups(r: &Results) -> Vec<Option<&str>> {
+    std::iter::once(None)
+        .chain(r.denoisers.iter().map(|d| Some(d.as_str())))
+        .collect()
+}
+
 fn measured(value: Option<f64>, ci: Option<Interval>) -> Option<Measured> {
     value.map(|value| Measured { value, ci })
 }
@@ -107,7 +122,12 @@ pub fn report(results: &Results, out: &Path) -> Result<String, Error> {
             ""
         },
     );
-    verdicts(&mut page, r);
+    for group in groups(r) {
+        verdicts(&mut page, r, group);
+    }
+    for e in &r.denoise_errors {
+        let _ = writeln!(page, "<p><b>Denoiser:</b> {}</p>", escape(e));
+    }
     let _ = writeln!(
         page,
         "<h2>Figure</h2>{}",
@@ -118,15 +138,22 @@ pub fn report(results: &Results, out: &Path) -> Result<String, Error> {
         "<h2>Convergence over frames</h2>{}",
         image(out, &r.figures.convergence, "convergence")?
     );
-    page.push_str("<h2>Error maps (last frame, replica 0)</h2>\n<table class=\"maps\">");
+    page.push_str(
+        "<h2>Images and error maps (last frame, replica 0)</h2>\n<table class=\"maps\">\
+         <tr><th>method</th><th>frame</th><th>absolute error</th><th>relative error</th>\
+         <th>FLIP</th><th>low-frequency error</th></tr>",
+    );
     for m in &r.methods {
+        let name = label(m);
         let _ = writeln!(
             page,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-            escape(&m.method),
-            image(out, &m.images.final_png, &m.method)?,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            escape(&name),
+            image(out, &m.images.final_png, &name)?,
             image(out, &m.images.abs_error_png, "absolute error")?,
-            image(out, &m.images.rel_error_png, "relative error")?
+            image(out, &m.images.rel_error_png, "relative error")?,
+            image(out, &m.images.flip_png, "FLIP")?,
+            image(out, &m.images.low_frequency_png, "low-frequency error")?
         );
     }
     page.push_str("</table>\n");
@@ -139,23 +166,38 @@ pub fn report(results: &Results, out: &Path) -> Result<String, Error> {
     Ok(page)
 }
 
-/// The efficiency ratio over the baseline per method and area, coloured by its verdict.
-fn verdicts(page: &mut String, r: &Results) {
+/// The efficiency ratio over the baseline per method and area, coloured by its verdict, for
+/// the raw frames (`denoiser` `None`) or one denoiser's.
+fn verdicts(page: &mut String, r: &Results, denoiser: Option<&str>) {
     let Some(baseline) = &r.baseline else {
-        page.push_str("<p>No baseline among the methods: no efficiency ratios.</p>\n");
+        if denoiser.is_none() {
+            page.push_str("<p>No baseline among the methods: no efficiency ratios.</p>\n");
+        }
         return;
     };
+    let in_group = |m: &&MethodEntry| m.denoiser.as_deref() == denoiser;
     let areas: Vec<&str> = r
         .methods
         .iter()
+        .filter(in_group)
         .find(|m| &m.method == baseline)
         .map(|m| m.areas.iter().map(|a| a.area.as_str()).collect())
         .unwrap_or_default();
+    let (title, through) = match denoiser {
+        None => (String::new(), String::new()),
+        Some(d) => (
+            format!(", denoised with {}", escape(d)),
+            format!(
+                " Both through {}; seconds include the denoiser's.",
+                escape(d)
+            ),
+        ),
+    };
     let _ = write!(
         page,
-        "<h2>Efficiency over {b}</h2><p>Ratio of 1/(MSE·s) per frame to {b}'s, with its \
-         {c}% interval; green: better (interval above 1), red: worse, yellow: inconclusive.</p>\
-         <table><tr><th>method</th>",
+        "<h2>Efficiency over {b}{title}</h2><p>Ratio of 1/(MSE·s) per frame to {b}'s, with its \
+         {c}% interval; green: better (interval above 1), red: worse, yellow: \
+         inconclusive.{through}</p><table><tr><th>method</th>",
         b = escape(baseline),
         c = 100.0 * r.confidence
     );
@@ -163,8 +205,13 @@ fn verdicts(page: &mut String, r: &Results) {
         let _ = write!(page, "<th>{a}</th>");
     }
     page.push_str("</tr>\n");
-    for m in r.methods.iter().filter(|m| &m.method != baseline) {
-        let _ = write!(page, "<tr><td>{}</td>", escape(&m.method));
+    for m in r
+        .methods
+        .iter()
+        .filter(in_group)
+        .filter(|m| &m.method != baseline)
+    {
+        let _ = write!(page, "<tr><td>{}</td>", escape(&label(m)));
         for a in &areas {
             let cell = m
                 .areas
@@ -194,7 +241,8 @@ fn full_table(page: &mut String, r: &Results) {
         page,
         "<h2>All numbers (frame {})</h2><table><tr><th>method</th><th>spp</th><th>area</th>\
          <th>px</th><th>MSE</th><th>relMSE</th><th>bias ± 99%</th><th>ms/frame</th>\
-         <th>efficiency</th><th>eff. ratio</th><th>MSE ratio</th></tr>\n",
+         <th>efficiency</th><th>eff. ratio</th><th>MSE ratio</th><th>FLIP</th>\
+         <th>low-freq. MSE</th></tr>\n",
         r.frame
     );
     for m in &r.methods {
@@ -220,8 +268,9 @@ fn full_table(page: &mut String, r: &Results) {
             let _ = writeln!(
                 page,
                 "<tr><td>{}</td><td>{}</td><td>{area}</td><td>{pixels}</td><td>{}</td><td>{}</td>\
-                 <td>{bias}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-                escape(&m.method),
+                 <td>{bias}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>\
+                 </tr>",
+                escape(&label(m)),
                 m.spp,
                 with_ci(measured(Some(a.mse), a.mse_ci)),
                 with_ci(measured(Some(a.rel_mse), a.rel_mse_ci)),
@@ -229,6 +278,8 @@ fn full_table(page: &mut String, r: &Results) {
                 with_ci(measured(a.efficiency, a.efficiency_ci)),
                 with_ci(measured(a.efficiency_ratio, a.efficiency_ratio_ci)),
                 with_ci(measured(a.mse_ratio, a.mse_ratio_ci)),
+                with_ci(measured(a.flip, a.flip_ci)),
+                with_ci(measured(a.low_frequency_mse, a.low_frequency_mse_ci)),
             );
         }
     }

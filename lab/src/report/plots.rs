@@ -7,7 +7,6 @@
 use std::path::Path;
 use std::sync::Once;
 
-use engine::Image;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::FontStyle;
@@ -80,8 +79,7 @@ pub fn png(
 pub fn write_figures(
     out: &Path,
     rows: &[MethodResult],
-    baseline: Option<&MethodResult>,
-    finals: &[(&str, &Image)],
+    bands: &[figure::Band],
     reference: &Reference,
     regions: &Regions,
 ) -> Result<FigureFiles, Error> {
@@ -91,14 +89,7 @@ pub fn write_figures(
         report: "report.html".into(),
     };
     convergence(&out.join(&files.convergence), rows)?;
-    figure::write(
-        &out.join(&files.figure),
-        rows,
-        baseline,
-        finals,
-        reference,
-        regions,
-    )?;
+    figure::write(&out.join(&files.figure), bands, reference, regions)?;
     Ok(files)
 }
 

@@ -1,4 +1,4 @@
-//! `results.json` of a comparison (schema `reshift-compare/2`, docs/results-schema.md) as typed
+//! `results.json` of a comparison (schema `reshift-compare/3`, docs/results-schema.md) as typed
 //! structs. Optional and non-finite numbers are written as `null`, never NaN; keys are written
 //! in sorted order ([`Results::to_json`]).
 
@@ -15,7 +15,7 @@ use crate::regions::{Region, Regions};
 use crate::uncertainty::{CONFIDENCE, INTERVAL_METHOD, Interval};
 
 /// The schema name written into [`Results::schema`].
-pub const SCHEMA: &str = "reshift-compare/2";
+pub const SCHEMA: &str = "reshift-compare/3";
 
 /// The whole document.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -49,6 +49,12 @@ pub struct Results {
     pub regions: BTreeMap<String, usize>,
     pub error_map_scale: ErrorMapScale,
     pub figures: FigureFiles,
+    /// The denoisers of the comparison (`oidn`, `svgf`); each adds a denoised entry per method
+    /// to `methods` (`denoiser` set), whose ratios are to the baseline's denoised entry.
+    pub denoisers: Vec<String>,
+    /// Why a denoiser left out entries, one line each.
+    pub denoise_errors: Vec<String>,
+    /// The raw entries, then each denoiser's.
     pub methods: Vec<MethodEntry>,
 }
 
@@ -99,6 +105,7 @@ pub struct FrameReferenceEntry {
 pub struct ErrorMapScale {
     pub absolute: f64,
     pub relative: f64,
+    pub low_frequency: f64,
 }
 
 /// One method's images, relative to the output folder.
@@ -108,6 +115,10 @@ pub struct ImageFiles {
     pub final_png: String,
     pub abs_error_png: String,
     pub rel_error_png: String,
+    /// FLIP per pixel (FLIP's magma map, 0 to 1).
+    pub flip_png: String,
+    /// The low-frequency error per pixel.
+    pub low_frequency_png: String,
 }
 
 /// The comparison's figures, relative to the output folder.
@@ -124,6 +135,11 @@ pub struct FigureFiles {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct MethodEntry {
     pub method: String,
+    /// The denoiser the last frames passed through (`null`: raw frames).
+    pub denoiser: Option<String>,
+    /// The denoiser's seconds per frame (included in `seconds_per_frame`).
+    pub denoiser_seconds_per_frame: Option<f64>,
+    pub denoiser_seconds_per_frame_ci: Option<Interval>,
     pub spp: u32,
     pub mean_spp: f64,
     pub replicas: usize,
@@ -164,6 +180,12 @@ pub struct AreaEntry {
     pub efficiency_ratio_ci: Option<Interval>,
     pub mse_ratio: Option<f64>,
     pub mse_ratio_ci: Option<Interval>,
+    /// Mean LDR-FLIP over the area ([`crate::perceptual`]).
+    pub flip: Option<f64>,
+    pub flip_ci: Option<Interval>,
+    /// The low-frequency error ([`crate::perceptual`]).
+    pub low_frequency_mse: Option<f64>,
+    pub low_frequency_mse_ci: Option<Interval>,
 }
 
 /// The errors of one frame.
@@ -194,6 +216,8 @@ impl Results {
         regions: &Regions,
         error_map_scale: ErrorMapScale,
         figures: FigureFiles,
+        denoisers: Vec<String>,
+        denoise_errors: Vec<String>,
         methods: Vec<MethodEntry>,
     ) -> Results {
         Results {
@@ -217,6 +241,8 @@ impl Results {
             regions: region_counts(regions),
             error_map_scale,
             figures,
+            denoisers,
+            denoise_errors,
             methods,
         }
     }
@@ -286,8 +312,13 @@ impl MethodEntry {
     ) -> MethodEntry {
         let seconds = Measured::of(&r.seconds);
         let tonemapped = Measured::of(&r.tonemapped_mse);
+        let (denoiser_seconds, denoiser_seconds_ci) =
+            split(r.denoiser_seconds.as_ref().map(Measured::of));
         MethodEntry {
             method: r.method.clone(),
+            denoiser: r.denoiser.map(|d| d.name().to_string()),
+            denoiser_seconds_per_frame: denoiser_seconds,
+            denoiser_seconds_per_frame_ci: denoiser_seconds_ci,
             spp: r.spp,
             mean_spp: r.mean_spp,
             replicas: r.replicas,
@@ -317,6 +348,10 @@ impl AreaEntry {
         let (efficiency_ratio, efficiency_ratio_ci) =
             split(baseline.and_then(|b| r.efficiency_ratio(b, m.area)));
         let (mse_ratio, mse_ratio_ci) = split(baseline.and_then(|b| r.mse_ratio(b, m.area)));
+        let perceptual = r.perceptual(m.area);
+        let (flip, flip_ci) = split(perceptual.map(|p| Measured::of(&p.flip)));
+        let (low_frequency_mse, low_frequency_mse_ci) =
+            split(perceptual.map(|p| Measured::of(&p.low_frequency)));
         AreaEntry {
             area: m.area.name().to_string(),
             pixels: m.pixels,
@@ -336,6 +371,10 @@ impl AreaEntry {
             efficiency_ratio_ci,
             mse_ratio,
             mse_ratio_ci,
+            flip,
+            flip_ci,
+            low_frequency_mse,
+            low_frequency_mse_ci,
         }
     }
 }
@@ -401,6 +440,10 @@ mod tests {
             efficiency_ratio_ci: None,
             mse_ratio: None,
             mse_ratio_ci: None,
+            flip: None,
+            flip_ci: None,
+            low_frequency_mse: None,
+            low_frequency_mse_ci: None,
         };
         let json = serde_json::to_value(&area).unwrap();
         assert!(json["mse"].is_null() && json["bias"].is_null());

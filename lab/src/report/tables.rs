@@ -73,7 +73,7 @@ pub fn milliseconds(r: &MethodResult) -> Measured {
 /// `1/(MSE·s)` and its ratio to `baseline`, each with its 95% interval; the whole-frame
 /// (`image`) row also carries seed 001's tonemapped 8-bit MSE.
 pub fn markdown(results: &[MethodResult], baseline: Option<&MethodResult>) -> String {
-    let base = baseline.map_or("baseline".into(), |b| b.method.clone());
+    let base = baseline.map_or("baseline".into(), |b| b.label());
     let mut out = format!(
         "| method | spp | area | px | MSE [95% CI] | relMSE [95% CI] | bias ± 99% CI | rel. bias | ms/frame [95% CI] | efficiency [95% CI] | eff. / {base} [95% CI] | TM-8bit MSE [95% CI] |\n\
          |---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
@@ -94,7 +94,7 @@ pub fn markdown(results: &[MethodResult], baseline: Option<&MethodResult>) -> St
             let _ = writeln!(
                 out,
                 "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-                r.method,
+                r.label(),
                 spp_cell(r),
                 m.area.name(),
                 m.pixels,
@@ -126,7 +126,7 @@ pub fn verdict(results: &[MethodResult], baseline: Option<&MethodResult>) -> Str
     let mut out = format!(
         "Efficiency over {} (ratio of 1/(MSE·s) per frame, 95% CI over replicas; > 1: more \
          efficient; the verdict is the interval's):\n\n| method | {} |\n|---|{}\n",
-        b.method,
+        b.label(),
         names.join(" | "),
         "---:|".repeat(areas.len())
     );
@@ -138,7 +138,32 @@ pub fn verdict(results: &[MethodResult], baseline: Option<&MethodResult>) -> Str
                 None => "-".into(),
             })
             .collect();
-        let _ = writeln!(out, "| {} | {} |", r.method, cells.join(" | "));
+        let _ = writeln!(out, "| {} | {} |", r.label(), cells.join(" | "));
+    }
+    out
+}
+
+/// FLIP and the low-frequency error per method and area at the last frame, each with its 95%
+/// interval over replicas, as Markdown ([`crate::perceptual`]); rows of every group given.
+pub fn perceptual(results: &[MethodResult]) -> String {
+    let mut out = format!(
+        "FLIP (LDR, after the tonemap; 0 = identical) and the low-frequency error (MSE after a \
+         Gaussian blur of σ = {} px, the reference's blurred noise subtracted), last frame, 95% CI \
+         over replicas:\n\n| method | area | FLIP [95% CI] | low-freq. MSE [95% CI] |\n\
+         |---|---|---:|---:|\n",
+        crate::low_frequency::SIGMA_PIXELS
+    );
+    for r in results {
+        for m in &r.perceptual {
+            let _ = writeln!(
+                out,
+                "| {} | {} | {} | {} |",
+                r.label(),
+                m.area.name(),
+                with_ci(Some(Measured::of(&m.flip))),
+                with_ci(Some(Measured::of(&m.low_frequency))),
+            );
+        }
     }
     out
 }
@@ -175,7 +200,7 @@ pub fn csv(results: &[MethodResult], baseline: Option<&MethodResult>) -> String 
             let _ = writeln!(
                 out,
                 "{},{},{},{},{},{},{},{},{},{:e},{},{},{},{:e},{},{},{}",
-                r.method,
+                r.label(),
                 r.spp,
                 r.mean_spp,
                 r.replicas,
@@ -246,10 +271,12 @@ mod tests {
         let metrics = vec![m(Area::Image), m(Area::Region(Region::Shadowed))];
         MethodResult {
             method: method.into(),
+            denoiser: None,
             spp: 1,
             mean_spp: 1.0,
             replicas: 2,
             seconds: Estimate::mean(&[0.45, 0.55]),
+            denoiser_seconds: None,
             frames_rendered: 16,
             convergence: vec![FrameMetrics {
                 frame: 15,
@@ -257,6 +284,7 @@ mod tests {
             }],
             metrics,
             tonemapped_mse: Estimate::mean(&[0.25, 0.25]),
+            perceptual: Vec::new(),
             nonfinite: 0,
         }
     }

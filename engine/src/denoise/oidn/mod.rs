@@ -31,6 +31,11 @@ pub fn denoise(guide: &Guide, frame: &Image) -> Result<Image, DenoiseError> {
     denoise_with(library::shared()?, guide, frame)
 }
 
+/// `Ok` when OIDN loads here; else the one line of [`DenoiseError::Unavailable`].
+pub fn available() -> Result<(), DenoiseError> {
+    library::shared().map(|_| ())
+}
+
 fn denoise_with(oidn: &Oidn, guide: &Guide, frame: &Image) -> Result<Image, DenoiseError> {
     let mut inputs = vec![(c"color", &frame.pixels[..])];
     inputs.extend(aux_images(guide));

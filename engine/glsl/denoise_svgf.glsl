@@ -28,8 +28,6 @@ layout(std430, binding = 4) readonly buffer FilterIn { vec4 filter_in[]; };
 layout(std430, binding = 5) writeonly buffer FilterOut { vec4 filter_out[]; };
 layout(std430, binding = 6) buffer Cut { uint cut; };
 
-const uint NONE = 0xFFFFFFFFu;
-
 // sss::scene::luminance.
 float svgf_luminance(vec3 c) {
     return glam_dot(c, vec3(0.2126, 0.7152, 0.0722));
@@ -51,7 +49,7 @@ bool svgf_offset(uint p, int dx, int dy, out uint q) {
 SvgfHistory svgf_temporal(uint p, vec3 c) {
     precise float l = svgf_luminance(c);
     SvgfPixel pixel = pixels[p];
-    bool has = pixel.object != NONE && pixel.previous < params.width * params.height;
+    bool has = pixel.object != NO_PIXEL && pixel.previous < params.width * params.height;
     SvgfHistory h;
     if (has) {
         h = history_in[pixel.previous];
@@ -62,10 +60,10 @@ SvgfHistory svgf_temporal(uint p, vec3 c) {
         out_h.colour = float[3](c.x, c.y, c.z);
         precise float l2 = l * l;
         out_h.moments = float[2](l, l2);
-        out_h.frames = pixel.object != NONE ? 1u : 0u;
+        out_h.frames = pixel.object != NO_PIXEL ? 1u : 0u;
         return out_h;
     }
-    uint frames = h.frames == NONE ? NONE : h.frames + 1u;
+    uint frames = h.frames == NO_PIXEL ? NO_PIXEL : h.frames + 1u;
     precise float alpha = max(1.0 / float(frames), params.alpha_colour);
     precise float beta = 1.0 - alpha;
     vec3 previous = vec3(h.colour[0], h.colour[1], h.colour[2]);
@@ -111,7 +109,7 @@ float svgf_depth_term(uint p, uint q, float dx, float dy) {
 
 // stages::variance (reads the current frame's history from binding 2).
 float svgf_variance(uint p) {
-    if (pixels[p].object == NONE) {
+    if (pixels[p].object == NO_PIXEL) {
         return 0.0;
     }
     SvgfHistory h = history_in[p];
@@ -168,7 +166,7 @@ float svgf_prefiltered_variance(uint p) {
 // stages::atrous.
 vec4 svgf_atrous(uint p) {
     const float H[5] = float[5](1.0 / 16.0, 0.25, 0.375, 0.25, 1.0 / 16.0);
-    if (pixels[p].object == NONE) {
+    if (pixels[p].object == NO_PIXEL) {
         return vec4(filter_in[p].xyz, 0.0);
     }
     precise float l = svgf_luminance(filter_in[p].xyz);

@@ -276,6 +276,9 @@ twin::contract! {
         pub cut: u32,
     }
 
+    /// "No pixel" in a denoiser guide's object and previous pixel (`engine::denoise::guide::NONE`).
+    pub const NO_PIXEL: u32 = u32::MAX;
+
     /// `denoise_svgf`'s stages, one dispatch each (`engine::denoise::svgf`): temporal
     /// accumulation, the variance estimate, one edge-avoiding à-trous iteration.
     #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -313,7 +316,7 @@ twin::contract! {
 
     /// A pixel's guide on the device (`engine::denoise::svgf`): the shading normal, view
     /// depth and its screen-space gradient (computed on the host), object and previous pixel
-    /// (`u32::MAX`: none).
+    /// (`NO_PIXEL`: none).
     #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
     pub struct SvgfPixel {
         pub normal: [f32; 3],

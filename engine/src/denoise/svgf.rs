@@ -6,7 +6,7 @@
 //! 1. albedo demodulation: each channel divided by the guide's first-hit albedo where it is
 //!    positive ([`demodulate`]), remodulated at the end ([`remodulate`]) [SVGF §4];
 //! 2. temporal accumulation of the colour and the first two luminance moments through
-//!    [`Guide::previous`], the history reset where it is [`guide::NONE`] [SVGF §4.1];
+//!    [`Guide::previous`], the history reset where it is [`NONE`](super::guide::NONE) [SVGF §4.1];
 //! 3. the variance `m₂ − m₁²`, estimated spatially over 7×7 while the history is short
 //!    [SVGF §4.2];
 //! 4. five edge-avoiding à-trous iterations (steps 1, 2, 4, 8, 16) whose first output is the
@@ -34,7 +34,7 @@ use stages::{Filtered, Size};
 #[derive(Clone, Debug, PartialEq)]
 pub struct Params {
     /// Colour blend factor α of the temporal moving average, floored by `1/(n + 1)` on a
-    /// history of `n` frames: 0.2 [SVGF §4.1, Eq. 1].
+    /// history of `n` frames: 0.2 [SVGF §4.1].
     pub alpha_colour: f32,
     /// Blend factor of the luminance moments: 0.2 [SVGF §4.2].
     pub alpha_moments: f32,
@@ -51,11 +51,14 @@ pub struct Params {
     pub sigma_normal: u32,
     /// σ_l of the luminance weight: 4 [SVGF Eq. 5, §4.4].
     pub sigma_luminance: f32,
-    /// ε of the depth weight's denominator, in scene length units; the paper names it only
-    /// "a small value" [SVGF Eq. 3]; 1e-2 as in Falcor's implementation.
+    /// ε of the depth weight's denominator, in scene length units [SVGF Eq. 3]. The paper
+    /// gives no value ("a small value to avoid division by zero"); 1e-2 is chosen here: where
+    /// the depth gradient vanishes (a surface facing the camera) depth differences well under
+    /// it still pass.
     pub epsilon_depth: f32,
     /// ε of the luminance weight's denominator, in the demodulated colour's units [SVGF Eq. 5];
-    /// 1e-2 as for depth.
+    /// no value in the paper either; 1e-2, so that a converged region (variance ≈ 0) keeps
+    /// luminance steps above about 1e-2.
     pub epsilon_luminance: f32,
 }
 

@@ -39,7 +39,7 @@ impl Size {
 /// Temporal accumulation of pixel `p` with demodulated colour `c` [SVGF §4.1]: an exponential
 /// moving average through the reprojected pixel of `history` (the previous frame's), colour with
 /// `α = max(1/(n + 1), α_c)` for a history of `n` frames, the luminance moments with `α_m`
-/// [SVGF Eq. 1]; a pixel without history (no previous pixel, [`NONE`] included, or one that had
+/// [SVGF §4.1]; a pixel without history (no previous pixel, [`NONE`] included, or one that had
 /// none) starts over.
 pub fn temporal(
     pixel: &SvgfPixel,
@@ -164,8 +164,8 @@ pub fn prefiltered_variance(size: Size, p: usize, input: &[Filtered]) -> f32 {
 
 /// One edge-avoiding à-trous iteration at pixel `p` with holes of `step` pixels [SVGF §4.3]: the
 /// 5×5 B3-spline kernel `h` times the edge-stopping weight `w = w_z·w_n·w_l` of same-object
-/// pixels inside the image (`w = 1` at the centre) [SVGF Eq. 2], the colour filtered with
-/// `h·w`, the variance with `(h·w)²` [SVGF Eq. 6]. A pixel without a hit passes through.
+/// pixels inside the image (`w = 1` at the centre) [SVGF Eq. 1], the colour filtered with
+/// `h·w`, the variance with `(h·w)²` [SVGF §4.3]. A pixel without a hit passes through.
 pub fn atrous(
     size: Size,
     p: usize,

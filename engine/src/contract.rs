@@ -275,4 +275,64 @@ twin::contract! {
         /// Samples whose loops the device cut short.
         pub cut: u32,
     }
+
+    /// "No pixel" in a denoiser guide's object and previous pixel (`engine::denoise::guide::NONE`).
+    pub const NO_PIXEL: u32 = u32::MAX;
+
+    /// `denoise_svgf`'s stages, one dispatch each (`engine::denoise::svgf`): temporal
+    /// accumulation, the variance estimate, one edge-avoiding à-trous iteration.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub enum SvgfStage in SVGF_STAGE {
+        /// Colour and luminance moments through the reprojected history [SVGF §4.1].
+        Temporal,
+        /// Temporal variance, or the spatial 7×7 estimate on a short history [SVGF §4.2].
+        Variance,
+        /// One à-trous iteration at `step` [SVGF §4.3].
+        Atrous,
+    }
+
+    /// Push constants of `denoise_svgf`: the stage, the image size, the à-trous step and
+    /// `engine::denoise::svgf::Params` (`feedback` = 1: this iteration's colour is the next
+    /// frame's history).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct SvgfParams in push_constant params {
+        /// An `SvgfStage` code.
+        pub stage: u32,
+        pub width: u32,
+        pub height: u32,
+        pub step: u32,
+        pub feedback: u32,
+        pub alpha_colour: f32,
+        pub alpha_moments: f32,
+        pub variance_history: u32,
+        pub variance_radius: u32,
+        pub sigma_depth: f32,
+        pub sigma_normal: u32,
+        pub sigma_luminance: f32,
+        pub epsilon_depth: f32,
+        pub epsilon_luminance: f32,
+        pub pad: [u32; 2],
+    }
+
+    /// A pixel's guide on the device (`engine::denoise::svgf`): the shading normal, view
+    /// depth and its screen-space gradient (computed on the host), object and previous pixel
+    /// (`NO_PIXEL`: none).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct SvgfPixel {
+        pub normal: [f32; 3],
+        pub depth: f32,
+        pub gradient: [f32; 2],
+        pub object: u32,
+        pub previous: u32,
+    }
+
+    /// A pixel's temporal history (`engine::denoise::svgf`): the demodulated colour, the first
+    /// and second luminance moments, and the frames accumulated (0: none; `length` is a GLSL
+    /// method name).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+    pub struct SvgfHistory {
+        pub colour: [f32; 3],
+        pub moments: [f32; 2],
+        pub frames: u32,
+    }
 }

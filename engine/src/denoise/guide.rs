@@ -9,7 +9,7 @@ use sss::material::Material;
 use sss::scene::{GBuffer, Scene};
 
 /// Marks "no pixel" in [`Guide::object`] and [`Guide::previous`].
-pub const NONE: u32 = u32::MAX;
+pub const NONE: u32 = crate::contract::NO_PIXEL;
 
 /// One frame's guide, row-major from the top row like the frames it guides.
 #[derive(Clone, Debug, PartialEq)]

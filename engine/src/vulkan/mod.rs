@@ -24,6 +24,7 @@ mod renderer;
 mod scene;
 mod shaders;
 mod single_scatter;
+mod svgf;
 pub mod testing;
 mod timing;
 
@@ -51,6 +52,7 @@ pub use single_scatter::{
     GpuSingleScatterProfile, SINGLE_SCATTER, SingleScatterImage, SingleScatterPixelState,
     render_single_scatter, scene_single_scatter_media,
 };
+pub use svgf::{SVGF, svgf_filter};
 
 pub use crate::contract::{
     FrameParams, GpuCamera, GpuLight, GpuMaterial, GpuPixel, GpuTriangle, MethodParams, PassParams,

@@ -2,7 +2,7 @@
 //! compiled kernels and the uploaded [`GpuScene`] across runs (creating a pipeline on lavapipe
 //! compiles LLVM code, so it is done once per shader) and runs the methods on them: a preset's
 //! frames ([`FrameRun`]) and the memoryless methods (path tracer, random walk, single scattering,
-//! image space, adaptive).
+//! image space, adaptive) and the spatiotemporal denoiser.
 
 use std::collections::HashMap;
 use std::collections::hash_map::Entry;
@@ -22,8 +22,11 @@ use super::random_walk::{RANDOM_WALK, render_random_walk, scene_media};
 use super::scene::{GBUFFER, GpuScene};
 use super::shaders::Shader;
 use super::single_scatter::{SINGLE_SCATTER, render_single_scatter, scene_single_scatter_media};
+use super::svgf::{SVGF, svgf_filter};
 use super::{FrameInput, Kernel, PT, groups_for, render_pt};
 use crate::contract::{FrameParams, GpuPixel, PassParams};
+use crate::denoise::Guide;
+use crate::denoise::svgf::Params as SvgfSettings;
 use crate::hash::Fnv1a;
 use crate::image::Image;
 use crate::plan::Plan;
@@ -243,6 +246,24 @@ impl Renderer {
             last = Some(out);
         }
         Ok(last)
+    }
+
+    /// The spatiotemporal variance-guided filter's twin over `frames` with their `guides`
+    /// (validated by `crate::denoise::denoise`): the filtered last frame.
+    pub fn svgf(
+        &mut self,
+        guides: &[Guide],
+        frames: &[Image],
+        params: &SvgfSettings,
+    ) -> Result<Image, VulkanError> {
+        self.prepare(&[SVGF])?;
+        svgf_filter(
+            &mut self.context,
+            &self.kernels[SVGF.name],
+            guides,
+            frames,
+            params,
+        )
     }
 
     /// Renders `config.frames` frames of `scene` with `preset` (validated by the caller) on

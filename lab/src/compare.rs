@@ -67,8 +67,8 @@ pub struct Plan {
     pub out: PathBuf,
     pub backend: Backend,
     /// The denoisers every replica's last frame also passes through (none: raw frames only).
-    /// Each adds a row per method, measured like the raw one, whose seconds per frame include
-    /// the denoiser's ([`crate::compare`] never denoises the reference).
+    /// Each adds a row per method, measured like the raw one, with the denoiser's seconds per
+    /// frame, which its efficiency counts at equal time (the reference is never denoised).
     pub denoise: Vec<Denoiser>,
 }
 
@@ -259,9 +259,14 @@ pub fn run(plan: &Plan, progress: &mut dyn Progress) -> Result<Outcome, Error> {
     for (denoiser, group) in &groups {
         let base = group.iter().find(|r| r.method == plan.baseline);
         if let Some(d) = denoiser {
+            let counted = if plan.equal_time.is_some() {
+                "counted in ms/frame and efficiency (equal time)"
+            } else {
+                "not counted in ms/frame and efficiency (equal spp)"
+            };
             markdown.push_str(&format!(
-                "\nDenoised with {d} (last frame of every replica; seconds per frame include the \
-                 denoiser's; ratios to {}):\n\n",
+                "\nDenoised with {d} (last frame of every replica; ratios to {}; the denoiser's \
+                 time {counted}):\n\n",
                 base.map_or("-".into(), |b| b.label())
             ));
         }
@@ -270,6 +275,9 @@ pub fn run(plan: &Plan, progress: &mut dyn Progress) -> Result<Outcome, Error> {
             tables::markdown(group, base),
             tables::verdict(group, base)
         ));
+        if denoiser.is_some() {
+            markdown.push_str(&format!("\n{}", tables::denoiser_time(group)));
+        }
         let table = tables::csv(group, base);
         let skip = if csv.is_empty() { 0 } else { 1 };
         for line in table.lines().skip(skip) {
@@ -410,7 +418,8 @@ fn render_replicas(
                 render_replica(plan, &method, frames, seed, whole_trajectory)?;
             let mut failed = Vec::new();
             for (d, denoised) in &mut run.denoised {
-                match denoise_replica(*d, &plan.backend, &guides, &trajectory, &replica) {
+                let counted = plan.equal_time.is_some();
+                match denoise_replica(*d, &plan.backend, &guides, &trajectory, &replica, counted) {
                     Ok(r) => denoised.push(r),
                     Err(e) => failed.push((*d, e)),
                 }
@@ -439,14 +448,16 @@ fn render_replicas(
 }
 
 /// `replica`'s last frame through `denoiser`, from the frames of its `trajectory` (the last
-/// frames of the trajectory that `guides` guide); its seconds per frame add the denoiser's
-/// per frame (a temporal filter's time over every frame it filtered).
+/// frames of the trajectory that `guides` guide), with the denoiser's seconds per frame (a
+/// temporal filter's time over every frame it filtered, per frame); `counted`: its seconds per
+/// frame add them (equal time: a frame costs its rendering and its denoising).
 fn denoise_replica(
     denoiser: Denoiser,
     backend: &Backend,
     guides: &[Guide],
     trajectory: &[engine::Image],
     replica: &Replica,
+    counted: bool,
 ) -> Result<Replica, DenoiseError> {
     let d = denoise::denoise(denoiser, backend, guides, trajectory)?;
     let per_frame = if denoiser.temporal() {
@@ -456,7 +467,7 @@ fn denoise_replica(
     };
     Ok(Replica {
         frames: vec![d.image],
-        seconds_per_frame: replica.seconds_per_frame + per_frame,
+        seconds_per_frame: replica.seconds_per_frame + if counted { per_frame } else { 0.0 },
         denoiser_seconds_per_frame: per_frame,
         ..replica.clone()
     })
@@ -549,6 +560,32 @@ mod tests {
         assert_eq!(equal_time_method(&hybrid, 0.1, 0.02), hybrid);
     }
 
+    /// A replica whose last frame holds a NaN is not denoised: one line naming the frame and
+    /// the count, and its seconds are left alone.
+    #[test]
+    fn a_nan_frame_is_refused_by_every_denoiser() {
+        let scene = with_resolution(Scene::builtin("bumpy").unwrap(), Some((8, 6)));
+        let guides = Guide::trajectory(&scene, 2);
+        let mut frames = vec![engine::Image::black(8, 6); 2];
+        frames[1].pixels[5].y = f32::NAN;
+        let replica = Replica {
+            frames: vec![frames[1].clone()],
+            seconds_per_frame: 0.5,
+            denoiser_seconds_per_frame: 0.0,
+            frames_rendered: 2,
+            nonfinite: 1,
+            spp: 1.0,
+        };
+        for d in Denoiser::ALL {
+            let e =
+                denoise_replica(d, &Backend::Cpu, &guides, &frames, &replica, true).unwrap_err();
+            assert_eq!(
+                e.to_string(),
+                "frame 1: 1 pixel(s) with a NaN or infinite value, not denoised"
+            );
+        }
+    }
+
     /// A whole comparison through the library: every file is written, the document agrees with
     /// the rows, every frame is measured, a second run reuses the cached references and
     /// reproduces the errors, and measuring the last frame alone gives the same last-frame
@@ -576,7 +613,8 @@ mod tests {
         };
         let first = run(&plan, &mut Silent).unwrap();
         // The denoised rows: one per method, measured at the last frame, their seconds the raw
-        // ones plus the denoiser's, their ratios to the baseline's denoised row.
+        // ones (equal spp: the denoiser's are reported, not counted), their ratios to the
+        // baseline's denoised row.
         let (d, denoised) = &first.denoised[0];
         assert_eq!(*d, Denoiser::Svgf);
         assert_eq!(denoised.len(), 2);
@@ -585,7 +623,7 @@ mod tests {
             assert_eq!(row.convergence.len(), 1);
             let extra = row.denoiser_seconds.as_ref().unwrap().value;
             assert!(extra > 0.0);
-            assert!((row.seconds.value - raw.seconds.value - extra).abs() < 1e-9);
+            assert_eq!(row.seconds, raw.seconds);
             assert_ne!(row.metrics, raw.metrics);
         }
         assert!(
@@ -606,7 +644,6 @@ mod tests {
             first.markdown
         );
         assert_eq!(first.rows.len(), 2);
-        assert_eq!(first.results.methods.len(), 2);
         assert!(!first.results.reference.cached && !first.results.interrupted);
         for file in [
             "table.md",

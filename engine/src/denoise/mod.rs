@@ -99,7 +99,7 @@ impl fmt::Display for DenoiseError {
             Self::Failed { denoiser, reason } => write!(f, "denoiser {denoiser}: {reason}"),
             Self::NonFinite { frame, count } => write!(
                 f,
-                "frame {frame} has {count} pixels with a NaN or infinite value: not denoised"
+                "frame {frame}: {count} pixel(s) with a NaN or infinite value, not denoised"
             ),
             Self::Mismatch(why) => write!(f, "denoiser input: {why}"),
         }

@@ -3,7 +3,7 @@
 //! the four presets and path tracing at their measured cost (equal time), every replica's last
 //! frame also through each denoiser installed ([`engine::denoise`]). Its findings ask whether
 //! ReSTIR SSS lowers the error at equal time per region, raw and denoised, decided by the
-//! intervals of MSE·s ratios (seconds include the denoiser's).
+//! intervals of MSE·s ratios (at equal time the seconds include the denoiser's).
 
 use engine::denoise::Denoiser;
 use serde_json::json;

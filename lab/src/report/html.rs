@@ -188,7 +188,7 @@ fn verdicts(page: &mut String, r: &Results, denoiser: Option<&str>) {
         Some(d) => (
             format!(", denoised with {}", escape(d)),
             format!(
-                " Both through {}; seconds include the denoiser's.",
+                " Both through {}; its time is counted at equal time only.",
                 escape(d)
             ),
         ),

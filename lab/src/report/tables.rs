@@ -143,6 +143,26 @@ pub fn verdict(results: &[MethodResult], baseline: Option<&MethodResult>) -> Str
     out
 }
 
+/// The denoiser's milliseconds per frame of each denoised row with its 95% interval, as
+/// Markdown.
+pub fn denoiser_time(results: &[MethodResult]) -> String {
+    let mut out = String::from("| method | denoiser ms/frame [95% CI] |\n|---|---:|\n");
+    for r in results {
+        if let Some(s) = &r.denoiser_seconds {
+            let m = Measured::of(s);
+            let ms = Measured {
+                value: 1e3 * m.value,
+                ci: m.ci.map(|i| Interval {
+                    lo: 1e3 * i.lo,
+                    hi: 1e3 * i.hi,
+                }),
+            };
+            let _ = writeln!(out, "| {} | {} |", r.label(), with_ci(Some(ms)));
+        }
+    }
+    out
+}
+
 /// FLIP and the low-frequency error per method and area at the last frame, each with its 95%
 /// interval over replicas, as Markdown ([`crate::perceptual`]); rows of every group given.
 pub fn perceptual(results: &[MethodResult]) -> String {

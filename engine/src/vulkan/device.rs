@@ -11,6 +11,7 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use ash::vk;
 
 use super::error::{VulkanError, api};
+use super::validation::{self, Checks, Message, Validation};
 
 /// The environment variable that restricts the device choice to names containing its value.
 pub const DEVICE_ENV: &str = "RESHIFT_VULKAN_DEVICE";
@@ -86,6 +87,8 @@ pub(crate) struct Shared {
     /// The compute queue and the command pool: Vulkan requires external synchronisation of
     /// both, so they are used only while this lock is held.
     pub(crate) submit: Mutex<Submit>,
+    /// The validation layer's messenger and messages, when validation was requested.
+    validation: Option<Validation>,
     /// Keeps libvulkan loaded until the instance is destroyed (fields drop after `drop`).
     _entry: ash::Entry,
 }
@@ -132,40 +135,48 @@ impl Shared {
                 device
                     .end_command_buffer(cb)
                     .map_err(api("vkEndCommandBuffer"))?;
-                submit_and_wait(device, submit.queue, cb)
+                self.submit_and_wait(submit.queue, cb)
             })();
             device.free_command_buffers(submit.command_pool, &[cb]);
             result
         }
     }
-}
 
-/// Submits `cb` to `queue` and waits for it with a fence of its own.
-///
-/// # Safety
-/// `cb` is a recorded command buffer of `device` and the caller holds the queue lock.
-pub(crate) unsafe fn submit_and_wait(
-    device: &ash::Device,
-    queue: vk::Queue,
-    cb: vk::CommandBuffer,
-) -> Result<(), VulkanError> {
-    // SAFETY: the fence is destroyed after the wait (or the failed submit).
-    unsafe {
-        let fence = device
-            .create_fence(&vk::FenceCreateInfo::default(), None)
-            .map_err(api("vkCreateFence"))?;
-        let command_buffers = [cb];
-        let submit = vk::SubmitInfo::default().command_buffers(&command_buffers);
-        let result = device
-            .queue_submit(queue, &[submit], fence)
-            .map_err(api("vkQueueSubmit"))
-            .and_then(|()| {
-                device
-                    .wait_for_fences(&[fence], true, u64::MAX)
-                    .map_err(api("vkWaitForFences"))
-            });
-        device.destroy_fence(fence, None);
-        result
+    /// Submits `cb` to `queue`, waits for it with a fence of its own, and reports the first
+    /// validation error of its recording or execution, if validation is on.
+    ///
+    /// # Safety
+    /// `cb` is a recorded command buffer of the device and the caller holds the queue lock.
+    pub(crate) unsafe fn submit_and_wait(
+        &self,
+        queue: vk::Queue,
+        cb: vk::CommandBuffer,
+    ) -> Result<(), VulkanError> {
+        let device = &self.device;
+        // SAFETY: the fence is destroyed after the wait (or the failed submit).
+        unsafe {
+            let fence = device
+                .create_fence(&vk::FenceCreateInfo::default(), None)
+                .map_err(api("vkCreateFence"))?;
+            let command_buffers = [cb];
+            let submit = vk::SubmitInfo::default().command_buffers(&command_buffers);
+            let result = device
+                .queue_submit(queue, &[submit], fence)
+                .map_err(api("vkQueueSubmit"))
+                .and_then(|()| {
+                    device
+                        .wait_for_fences(&[fence], true, u64::MAX)
+                        .map_err(api("vkWaitForFences"))
+                });
+            device.destroy_fence(fence, None);
+            result?;
+        }
+        self.check_validation()
+    }
+
+    /// `Err` naming the first validation error since the last check (none without validation).
+    pub(crate) fn check_validation(&self) -> Result<(), VulkanError> {
+        self.validation.as_ref().map_or(Ok(()), Validation::check)
     }
 }
 
@@ -177,6 +188,9 @@ impl Drop for Shared {
             let _ = self.device.device_wait_idle();
             self.device.destroy_command_pool(pool, None);
             self.device.destroy_device(None);
+            if let Some(validation) = &self.validation {
+                validation.destroy();
+            }
             self.instance.destroy_instance(None);
         }
     }
@@ -192,31 +206,64 @@ pub struct Context {
 }
 
 impl Context {
-    /// Loads Vulkan and opens the preferred device, honouring [`DEVICE_ENV`].
+    /// Loads Vulkan and opens the preferred device, honouring [`DEVICE_ENV`] and
+    /// [`validation::VALIDATION_ENV`].
     pub fn new() -> Result<Context, VulkanError> {
         let wanted = std::env::var(DEVICE_ENV).ok();
         Context::with_device(wanted.as_deref())
     }
 
-    /// Loads Vulkan and opens the best usable device whose name contains `wanted`.
+    /// Loads Vulkan and opens the best usable device whose name contains `wanted`, with the
+    /// validation [`validation::VALIDATION_ENV`] asks for.
     pub fn with_device(wanted: Option<&str>) -> Result<Context, VulkanError> {
+        Context::with_validation(wanted, Checks::from_env()?)
+    }
+
+    /// As [`Context::with_device`], with the validation layer running `checks`.
+    pub fn with_validation(wanted: Option<&str>, checks: Checks) -> Result<Context, VulkanError> {
         // SAFETY: loading libvulkan runs its initialisers; it is the system's Vulkan loader.
         let entry =
             unsafe { ash::Entry::load() }.map_err(|e| VulkanError::NoLoader(e.to_string()))?;
         let app = vk::ApplicationInfo::default()
             .application_name(c"reshift")
             .api_version(vk::API_VERSION_1_2);
-        let create = vk::InstanceCreateInfo::default().application_info(&app);
+        let (layers, extensions) = validation::requirements(&entry, checks)?;
+        let mut features = validation::features(checks);
+        let create = vk::InstanceCreateInfo::default()
+            .application_info(&app)
+            .enabled_layer_names(&layers)
+            .enabled_extension_names(&extensions);
+        let create = if checks == Checks::Off {
+            create
+        } else {
+            create.push_next(&mut features)
+        };
         // SAFETY: valid create info; the instance is destroyed by `Shared` or below.
         let instance =
             unsafe { entry.create_instance(&create, None) }.map_err(VulkanError::NoDriver)?;
+        let validation = match checks {
+            Checks::Off => None,
+            _ => match Validation::new(&entry, &instance) {
+                Ok(validation) => Some(validation),
+                Err(e) => {
+                    // SAFETY: nothing else was created from the instance.
+                    unsafe { instance.destroy_instance(None) };
+                    return Err(e);
+                }
+            },
+        };
         match open_device(&instance, wanted) {
             Ok((physical, device, info)) => {
-                Context::assemble(entry, instance, physical, device, info)
+                Context::assemble(entry, instance, validation, physical, device, info)
             }
             Err(e) => {
-                // SAFETY: nothing else was created from the instance.
-                unsafe { instance.destroy_instance(None) };
+                // SAFETY: nothing but the messenger was created from the instance.
+                unsafe {
+                    if let Some(validation) = &validation {
+                        validation.destroy();
+                    }
+                    instance.destroy_instance(None);
+                }
                 Err(e)
             }
         }
@@ -225,6 +272,7 @@ impl Context {
     fn assemble(
         entry: ash::Entry,
         instance: ash::Instance,
+        validation: Option<Validation>,
         physical: vk::PhysicalDevice,
         device: ash::Device,
         info: DeviceInfo,
@@ -251,6 +299,9 @@ impl Context {
                 // SAFETY: nothing else was created from the device.
                 unsafe {
                     device.destroy_device(None);
+                    if let Some(validation) = &validation {
+                        validation.destroy();
+                    }
                     instance.destroy_instance(None);
                 }
                 return Err(api("vkCreateCommandPool")(result));
@@ -267,6 +318,7 @@ impl Context {
                     queue,
                     command_pool,
                 }),
+                validation,
                 _entry: entry,
             }),
             max_storage_range: properties.limits.max_storage_buffer_range,
@@ -278,6 +330,14 @@ impl Context {
     /// The chosen device.
     pub fn device(&self) -> &DeviceInfo {
         &self.info
+    }
+
+    /// Every warning and error the validation layer reported so far (none without validation).
+    pub fn validation_messages(&self) -> Vec<Message> {
+        self.shared
+            .validation
+            .as_ref()
+            .map_or_else(Vec::new, Validation::messages)
     }
 
     /// Whether GPU times of dispatches are measured (timestamp queries on the compute queue).

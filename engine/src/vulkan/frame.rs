@@ -46,7 +46,7 @@ pub(super) struct FrameRun<'a> {
     kernels: &'a HashMap<&'static str, Kernel>,
     plan: &'a Plan,
     /// [`Plan::waits`]: where a step waits for the steps before it (a barrier).
-    waits: Vec<bool>,
+    pub(super) waits: Vec<bool>,
     config: &'a RunConfig,
     width: u32,
     height: u32,
@@ -187,11 +187,9 @@ impl<'a> FrameRun<'a> {
                 let submit = self.context.shared.lock();
                 // SAFETY: the command buffer was recorded by `record`; the lock is held.
                 unsafe {
-                    super::device::submit_and_wait(
-                        &self.context.shared.device,
-                        submit.queue,
-                        recorded.cb,
-                    )
+                    self.context
+                        .shared
+                        .submit_and_wait(submit.queue, recorded.cb)
                 }?;
             }
             match &recorded.timestamps {

@@ -26,6 +26,7 @@ mod shaders;
 mod single_scatter;
 pub mod testing;
 mod timing;
+mod validation;
 
 use bytemuck::{Pod, Zeroable};
 
@@ -57,6 +58,7 @@ pub use crate::contract::{
     PtParams,
 };
 pub use shaders::Shader;
+pub use validation::{Checks, Message, Severity, VALIDATION_ENV};
 
 /// The environment variable that turns "Vulkan unavailable, skipped" into a failure in tests.
 pub const REQUIRE_ENV: &str = "RESHIFT_REQUIRE_VULKAN";

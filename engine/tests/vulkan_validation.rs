@@ -73,3 +73,31 @@ fn every_method_preset_and_pass_passes_sync_validation() {
     }
 }
 
+/// Under best-practice validation, a `restir:sequential` run draws no warning about memory
+/// allocations (many small `vkAllocateMemory` calls, too many allocations, small dedicated
+/// ones): buffers are sub-allocated from large blocks.
+#[test]
+fn restir_sequential_has_no_allocation_warnings() {
+    let Some(mut renderer) = validated_or_skip("best_practices", Checks::BestPractices) else {
+        return;
+    };
+    let preset = Preset::named("sequential").expect("registered preset");
+    let config = RunConfig {
+        seed: SEED,
+        frames: FRAMES,
+        collect_diagnostics: false,
+    };
+    ok(
+        "restir:sequential",
+        renderer.run(&scene(), &preset, &config),
+    );
+    let messages = renderer.context().validation_messages();
+    for m in &messages {
+        eprintln!("best_practices: {:?} {}: {}", m.severity, m.id, m.text);
+    }
+    let allocation: Vec<_> = messages
+        .iter()
+        .filter(|m| m.id.contains("AllocateMemory") || m.id.contains("BindMemory"))
+        .collect();
+    assert!(allocation.is_empty(), "{allocation:#?}");
+}

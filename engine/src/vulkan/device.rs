@@ -9,6 +9,7 @@
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, Allocator, AllocatorCreateDesc};
 
 use super::error::{VulkanError, api};
 use super::validation::{self, Checks, Message, Validation};
@@ -87,6 +88,8 @@ pub(crate) struct Shared {
     /// The compute queue and the command pool: Vulkan requires external synchronisation of
     /// both, so they are used only while this lock is held.
     pub(crate) submit: Mutex<Submit>,
+    /// The device-memory allocator (taken in `drop`, before the device is destroyed).
+    allocator: Mutex<Option<Allocator>>,
     /// The validation layer's messenger and messages, when validation was requested.
     validation: Option<Validation>,
     /// Keeps libvulkan loaded until the instance is destroyed (fields drop after `drop`).
@@ -174,6 +177,26 @@ impl Shared {
         self.check_validation()
     }
 
+    /// A range of device memory for `desc` from the allocator's blocks.
+    pub(crate) fn allocate(&self, desc: &AllocationCreateDesc) -> Result<Allocation, VulkanError> {
+        let mut allocator = self.allocator.lock().unwrap_or_else(|e| e.into_inner());
+        let allocator = allocator
+            .as_mut()
+            .expect("the allocator lives until `drop`");
+        allocator
+            .allocate(desc)
+            .map_err(|e| VulkanError::Allocation(e.to_string()))
+    }
+
+    /// Returns `allocation` to the allocator (its buffer is destroyed and unused by the GPU).
+    pub(crate) fn free(&self, allocation: Allocation) {
+        let mut allocator = self.allocator.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(allocator) = allocator.as_mut() {
+            // Freeing fails only for an allocation of another allocator; there is one.
+            let _ = allocator.free(allocation);
+        }
+    }
+
     /// `Err` naming the first validation error since the last check (none without validation).
     pub(crate) fn check_validation(&self) -> Result<(), VulkanError> {
         self.validation.as_ref().map_or(Ok(()), Validation::check)
@@ -183,6 +206,13 @@ impl Shared {
 impl Drop for Shared {
     fn drop(&mut self) {
         let pool = self.lock().command_pool;
+        // Frees the memory blocks while the device lives.
+        drop(
+            self.allocator
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .take(),
+        );
         // SAFETY: every object created from the device holds an `Arc<Shared>`, so none is alive.
         unsafe {
             let _ = self.device.device_wait_idle();
@@ -307,6 +337,29 @@ impl Context {
                 return Err(api("vkCreateCommandPool")(result));
             }
         };
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device: physical,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        });
+        let allocator = match allocator {
+            Ok(allocator) => allocator,
+            Err(e) => {
+                // SAFETY: nothing but the command pool was created from the device.
+                unsafe {
+                    device.destroy_command_pool(command_pool, None);
+                    device.destroy_device(None);
+                    if let Some(validation) = &validation {
+                        validation.destroy();
+                    }
+                    instance.destroy_instance(None);
+                }
+                return Err(VulkanError::Allocation(e.to_string()));
+            }
+        };
         let timestamps = families[family as usize].timestamp_valid_bits > 0
             && properties.limits.timestamp_period > 0.0;
         Ok(Context {
@@ -318,6 +371,7 @@ impl Context {
                     queue,
                     command_pool,
                 }),
+                allocator: Mutex::new(Some(allocator)),
                 validation,
                 _entry: entry,
             }),

@@ -53,6 +53,8 @@ pub enum VulkanError {
     /// The validation layer reported an error (an invalid use or a synchronization hazard):
     /// its id and message.
     Validation(String),
+    /// The device-memory allocator (`gpu-allocator`) failed.
+    Allocation(String),
     /// An environment setting of the backend has a value it does not know.
     BadSetting(String),
 }
@@ -126,6 +128,7 @@ impl fmt::Display for VulkanError {
                  VK_LAYER_KHRONOS_validation is not installed (apt-get install vulkan-validationlayers)"
             ),
             Self::Validation(message) => write!(f, "Vulkan validation error: {message}"),
+            Self::Allocation(why) => write!(f, "allocating Vulkan device memory failed: {why}"),
             Self::BadSetting(why) => write!(f, "{why}"),
         }
     }

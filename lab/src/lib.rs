@@ -12,6 +12,7 @@ pub mod compare;
 pub mod error;
 pub mod experiments;
 pub mod findings;
+pub mod gpu_report;
 pub mod images;
 pub mod method_result;
 pub mod methods;

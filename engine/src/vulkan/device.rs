@@ -56,6 +56,30 @@ impl DeviceInfo {
     }
 }
 
+/// The chosen device's identity, driver and the limits that bound the backend (what
+/// `reshift gpu-report` prints).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DeviceDetails {
+    /// The Vulkan version the device supports, `major.minor.patch`.
+    pub api_version: String,
+    /// The driver's name and information string (Vulkan 1.2 driver properties), when known.
+    pub driver: Option<String>,
+    /// The vendor-specific driver version, raw.
+    pub driver_version: u32,
+    pub vendor_id: u32,
+    pub device_id: u32,
+    pub max_storage_buffer_range: u32,
+    pub max_compute_work_group_invocations: u32,
+    pub max_compute_shared_memory_size: u32,
+    pub max_push_constants_size: u32,
+    /// Nanoseconds per timestamp tick.
+    pub timestamp_period: f32,
+    /// Valid bits of the compute queue's timestamps (0: none).
+    pub timestamp_valid_bits: u32,
+    /// The sum of the device-local memory heaps, bytes.
+    pub device_local_bytes: u64,
+}
+
 /// The index of the device to use: usable devices whose name contains `wanted`
 /// (case-insensitive; `None` or empty = any), best [`DeviceKind`] first, then lowest index.
 pub fn choose_device(devices: &[DeviceInfo], wanted: Option<&str>) -> Result<usize, VulkanError> {
@@ -233,6 +257,7 @@ pub struct Context {
     /// Nanoseconds per timestamp tick, when the queue writes timestamps.
     pub(crate) timestamp_period: Option<f64>,
     info: DeviceInfo,
+    details: DeviceDetails,
 }
 
 impl Context {
@@ -360,6 +385,13 @@ impl Context {
                 return Err(VulkanError::Allocation(e.to_string()));
             }
         };
+        let details = details(
+            &instance,
+            physical,
+            &properties,
+            &memory,
+            &families[family as usize],
+        );
         let timestamps = families[family as usize].timestamp_valid_bits > 0
             && properties.limits.timestamp_period > 0.0;
         Ok(Context {
@@ -378,12 +410,18 @@ impl Context {
             max_storage_range: properties.limits.max_storage_buffer_range,
             timestamp_period: timestamps.then_some(properties.limits.timestamp_period as f64),
             info,
+            details,
         })
     }
 
     /// The chosen device.
     pub fn device(&self) -> &DeviceInfo {
         &self.info
+    }
+
+    /// The chosen device's driver and limits.
+    pub fn details(&self) -> &DeviceDetails {
+        &self.details
     }
 
     /// Every warning and error the validation layer reported so far (none without validation).
@@ -431,6 +469,55 @@ fn open_device(
     let device = unsafe { instance.create_device(physicals[index], &create, None) }
         .map_err(api("vkCreateDevice"))?;
     Ok((physicals[index], device, info))
+}
+
+fn details(
+    instance: &ash::Instance,
+    physical: vk::PhysicalDevice,
+    properties: &vk::PhysicalDeviceProperties,
+    memory: &vk::PhysicalDeviceMemoryProperties,
+    family: &vk::QueueFamilyProperties,
+) -> DeviceDetails {
+    let v = properties.api_version;
+    let driver = (v >= vk::API_VERSION_1_2).then(|| {
+        let mut driver = vk::PhysicalDeviceDriverProperties::default();
+        let mut all = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+        // SAFETY: `physical` belongs to `instance`, which supports Vulkan 1.2 (as the device).
+        unsafe { instance.get_physical_device_properties2(physical, &mut all) };
+        let text = |s: Result<&std::ffi::CStr, _>| {
+            s.map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        };
+        format!(
+            "{} ({})",
+            text(driver.driver_name_as_c_str()),
+            text(driver.driver_info_as_c_str())
+        )
+    });
+    let limits = &properties.limits;
+    DeviceDetails {
+        api_version: format!(
+            "{}.{}.{}",
+            vk::api_version_major(v),
+            vk::api_version_minor(v),
+            vk::api_version_patch(v)
+        ),
+        driver,
+        driver_version: properties.driver_version,
+        vendor_id: properties.vendor_id,
+        device_id: properties.device_id,
+        max_storage_buffer_range: limits.max_storage_buffer_range,
+        max_compute_work_group_invocations: limits.max_compute_work_group_invocations,
+        max_compute_shared_memory_size: limits.max_compute_shared_memory_size,
+        max_push_constants_size: limits.max_push_constants_size,
+        timestamp_period: limits.timestamp_period,
+        timestamp_valid_bits: family.timestamp_valid_bits,
+        device_local_bytes: memory.memory_heaps[..memory.memory_heap_count as usize]
+            .iter()
+            .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+            .map(|h| h.size)
+            .sum(),
+    }
 }
 
 fn describe(instance: &ash::Instance, physical: vk::PhysicalDevice) -> DeviceInfo {

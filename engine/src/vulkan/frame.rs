@@ -166,7 +166,7 @@ impl<'a> FrameRun<'a> {
         let mut counters = config
             .collect_diagnostics
             .then(|| Counters::new(self.width, self.height, reuse_labels.collect()));
-        let mut seconds = vec![0.0f64; plan.steps.len()];
+        let mut seconds = vec![Vec::with_capacity(config.frames as usize); plan.steps.len()];
         let mut timed = true;
         let mut frames = Vec::with_capacity(config.frames as usize);
         let mut nan_count = 0;
@@ -195,7 +195,7 @@ impl<'a> FrameRun<'a> {
             match &recorded.timestamps {
                 Some(t) => {
                     for (s, t) in seconds.iter_mut().zip(t.seconds()?) {
-                        *s += t;
+                        s.push(t);
                     }
                 }
                 None => timed = false,
@@ -229,10 +229,7 @@ impl<'a> FrameRun<'a> {
             plan.steps
                 .iter()
                 .zip(seconds)
-                .map(|(step, seconds)| PassTiming {
-                    label: step.label.clone(),
-                    seconds,
-                })
+                .map(|(step, seconds)| PassTiming::new(step.label.clone(), seconds))
                 .collect()
         } else {
             Vec::new()

@@ -34,7 +34,7 @@ pub use adaptive::{ADAPTIVE, AdaptiveImage, GpuHistory, render_adaptive_frame};
 pub use bvh::{BVH_MAX_HITS, BvhRayInput, BvhRayOutput, GpuBvh};
 pub use compute::{Dispatch, Kernel, groups_for};
 pub use decode::decode_error;
-pub use device::{Context, DEVICE_ENV, DeviceInfo, DeviceKind, choose_device};
+pub use device::{Context, DEVICE_ENV, DeviceDetails, DeviceInfo, DeviceKind, choose_device};
 pub use error::VulkanError;
 pub use frame::{CANDIDATES, SPATIAL, TEMPORAL};
 pub use image_space::{

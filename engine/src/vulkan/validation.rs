@@ -6,7 +6,7 @@
 //! reported (an invalid use or a synchronization hazard) into a [`VulkanError::Validation`],
 //! and the submission paths call it after each wait.
 
-use std::ffi::{CStr, c_void};
+use std::ffi::{CStr, c_char, c_void};
 use std::sync::{Mutex, MutexGuard};
 
 use ash::vk;
@@ -93,7 +93,7 @@ pub(crate) struct Validation {
 pub(crate) fn requirements(
     entry: &ash::Entry,
     checks: Checks,
-) -> Result<(Vec<*const i8>, Vec<*const i8>), VulkanError> {
+) -> Result<(Vec<*const c_char>, Vec<*const c_char>), VulkanError> {
     if checks == Checks::Off {
         return Ok((Vec::new(), Vec::new()));
     }

@@ -1,5 +1,5 @@
 //! The `reshift` command line (DESIGN §7): render, reference/merge, compare, bias, experiment,
-//! scenes, methods, and the toy GRIS bias table. Errors print one line `reshift: …` and exit 1.
+//! gpu-report, scenes, methods, and the toy GRIS bias table. Errors print one line `reshift: …` and exit 1.
 
 mod cli;
 mod toy;
@@ -40,6 +40,9 @@ enum Command {
     Merge(cli::reference::MergeArgs),
     /// Named reproductions of seed 001's figures.
     Experiment(cli::experiment::ExperimentArgs),
+    /// On the Vulkan device: device and limits, GPU parity, time of every pass at each size,
+    /// equal-time comparison; one markdown file for docs/performance.md.
+    GpuReport(cli::gpu_report::GpuReportArgs),
     /// The toy GRIS chains: bias of every shift × MIS scheme against closed-form integrals.
     Toy,
 }
@@ -62,6 +65,7 @@ fn main() -> ExitCode {
         Command::Reference(args) => cli::reference::command(args),
         Command::Merge(args) => cli::reference::merge(args),
         Command::Experiment(args) => cli::experiment::command(args),
+        Command::GpuReport(args) => cli::gpu_report::command(args),
         Command::Toy => toy::run().map_err(CliError::from),
     };
     match result {

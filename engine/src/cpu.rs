@@ -72,7 +72,7 @@ pub(crate) fn run(
     let camera = &scene.camera;
     let (width, height) = (camera.width(), camera.height());
     let n = width as usize * height as usize;
-    let mut seconds = vec![0.0f64; plan.steps.len()];
+    let mut seconds = vec![Vec::with_capacity(config.frames as usize); plan.steps.len()];
     let reuse_labels = plan
         .passes()
         .filter(|(_, step)| step.spec.is_some_and(|s| s.shift().is_some()))
@@ -107,7 +107,7 @@ pub(crate) fn run(
                 frames.push(image);
                 nan_count += nans;
             }
-            *seconds += start.elapsed().as_secs_f64();
+            seconds.push(start.elapsed().as_secs_f64());
         }
         frame_state.rotation = frame_state.rotation.next(&plan);
         frame_state.previous_gbuffer = frame_state.gbuffer.take();
@@ -116,10 +116,7 @@ pub(crate) fn run(
         .steps
         .iter()
         .zip(seconds)
-        .map(|(step, seconds)| PassTiming {
-            label: step.label.clone(),
-            seconds,
-        })
+        .map(|(step, seconds)| PassTiming::new(step.label.clone(), seconds))
         .collect();
     let last = frame_state.rotation.buffer(Slot::Previous);
     let mut diagnostics = frame_state.counters.as_ref().map(Counters::finish);

@@ -67,12 +67,27 @@ impl Default for RunConfig {
     }
 }
 
-/// Wall-clock time of one pass, summed over the frames of a run.
+/// Time of one pass (wall-clock on the CPU, GPU timestamps on Vulkan), per frame and summed
+/// over the frames of a run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PassTiming {
     /// `gbuffer`, a [`PassSpec::label`], `shade`, or `pt` for the baseline.
     pub label: String,
+    /// The sum of `per_frame`.
     pub seconds: f64,
+    /// Seconds of each frame, in order.
+    pub per_frame: Vec<f64>,
+}
+
+impl PassTiming {
+    /// The timing of `label` from the seconds of each frame.
+    pub fn new(label: String, per_frame: Vec<f64>) -> PassTiming {
+        PassTiming {
+            label,
+            seconds: per_frame.iter().sum(),
+            per_frame,
+        }
+    }
 }
 
 /// The result of a run.
@@ -190,15 +205,15 @@ pub fn run(scene: &Scene, preset: &Preset, config: &RunConfig) -> Result<Run, Pi
 /// pixel for the same frames, so methods are interchangeable. Diagnostics are not collected.
 pub fn run_pt(scene: &Scene, spp: u32, config: &RunConfig) -> Run {
     let settings = PtSettings::default();
-    let (mut gbuffer_seconds, mut pt_seconds, mut nan_count) = (0.0, 0.0, 0);
+    let (mut gbuffer_seconds, mut pt_seconds, mut nan_count) = (Vec::new(), Vec::new(), 0);
     let frames = (0..config.frames)
         .map(|frame| {
             let start = Instant::now();
             let gbuffer = GBuffer::render(scene, frame);
-            gbuffer_seconds += start.elapsed().as_secs_f64();
+            gbuffer_seconds.push(start.elapsed().as_secs_f64());
             let start = Instant::now();
             let image = pt::render(scene, &gbuffer, &settings, config.seed, 0, spp);
-            pt_seconds += start.elapsed().as_secs_f64();
+            pt_seconds.push(start.elapsed().as_secs_f64());
             nan_count += image.nonfinite;
             Image {
                 width: image.width,
@@ -210,14 +225,8 @@ pub fn run_pt(scene: &Scene, spp: u32, config: &RunConfig) -> Run {
     Run {
         frames,
         timings: vec![
-            PassTiming {
-                label: "gbuffer".into(),
-                seconds: gbuffer_seconds,
-            },
-            PassTiming {
-                label: "pt".into(),
-                seconds: pt_seconds,
-            },
+            PassTiming::new("gbuffer".into(), gbuffer_seconds),
+            PassTiming::new("pt".into(), pt_seconds),
         ],
         diagnostics: None,
         nan_count,

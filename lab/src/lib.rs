@@ -15,6 +15,7 @@ pub mod error;
 pub mod experiments;
 pub mod findings;
 pub mod flip;
+pub mod gpu_report;
 pub mod images;
 pub mod low_frequency;
 pub mod method_result;

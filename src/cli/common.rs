@@ -109,12 +109,17 @@ pub fn command_line() -> &'static Path {
     Path::new(COMMAND_LINE)
 }
 
-/// Parses `WxH` within `sss::limits` (sides, pixels).
+/// Parses `--resolution WxH` within `sss::limits` (sides, pixels).
 pub fn parse_resolution(text: &str) -> CliResult<(u32, u32)> {
+    parse_size("--resolution", text)
+}
+
+/// Parses the `WxH` of `flag` within `sss::limits` (sides, pixels).
+pub fn parse_size(flag: &str, text: &str) -> CliResult<(u32, u32)> {
     let bad = |reason: &str| {
         CliError::from(InputError::new(
             COMMAND_LINE,
-            "--resolution",
+            flag,
             format!("{text:?}"),
             reason,
         ))
@@ -130,7 +135,7 @@ pub fn parse_resolution(text: &str) -> CliResult<(u32, u32)> {
     };
     match (parse(w), parse(h)) {
         (Some(w), Some(h)) => {
-            limits::resolution(command_line(), "--resolution", w, h)?;
+            limits::resolution(command_line(), flag, w, h)?;
             Ok((w, h))
         }
         _ => Err(bad(&format!(

@@ -5,6 +5,7 @@ mod bias_output;
 pub mod common;
 pub mod compare;
 pub mod experiment;
+pub mod gpu_report;
 pub mod reference;
 pub mod render;
 

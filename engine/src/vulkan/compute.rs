@@ -95,6 +95,7 @@ impl Kernel {
                 .create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
                 .map_err(|(_, result)| api("vkCreateComputePipelines")(result))?[0];
         }
+        shared.check_validation()?;
         Ok(kernel)
     }
 }
@@ -358,6 +359,7 @@ impl Context {
                 }
                 _ => None,
             };
+            self.shared.check_validation()?;
             Ok(Dispatch { gpu_seconds })
         }
     }

@@ -9,8 +9,10 @@
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, Allocator, AllocatorCreateDesc};
 
 use super::error::{VulkanError, api};
+use super::validation::{self, Checks, Message, Validation};
 
 /// The environment variable that restricts the device choice to names containing its value.
 pub const DEVICE_ENV: &str = "RESHIFT_VULKAN_DEVICE";
@@ -54,6 +56,30 @@ impl DeviceInfo {
     }
 }
 
+/// The chosen device's identity, driver and the limits that bound the backend (what
+/// `reshift gpu-report` prints).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DeviceDetails {
+    /// The Vulkan version the device supports, `major.minor.patch`.
+    pub api_version: String,
+    /// The driver's name and information string (Vulkan 1.2 driver properties), when known.
+    pub driver: Option<String>,
+    /// The vendor-specific driver version, raw.
+    pub driver_version: u32,
+    pub vendor_id: u32,
+    pub device_id: u32,
+    pub max_storage_buffer_range: u32,
+    pub max_compute_work_group_invocations: u32,
+    pub max_compute_shared_memory_size: u32,
+    pub max_push_constants_size: u32,
+    /// Nanoseconds per timestamp tick.
+    pub timestamp_period: f32,
+    /// Valid bits of the compute queue's timestamps (0: none).
+    pub timestamp_valid_bits: u32,
+    /// The sum of the device-local memory heaps, bytes.
+    pub device_local_bytes: u64,
+}
+
 /// The index of the device to use: usable devices whose name contains `wanted`
 /// (case-insensitive; `None` or empty = any), best [`DeviceKind`] first, then lowest index.
 pub fn choose_device(devices: &[DeviceInfo], wanted: Option<&str>) -> Result<usize, VulkanError> {
@@ -86,6 +112,10 @@ pub(crate) struct Shared {
     /// The compute queue and the command pool: Vulkan requires external synchronisation of
     /// both, so they are used only while this lock is held.
     pub(crate) submit: Mutex<Submit>,
+    /// The device-memory allocator (taken in `drop`, before the device is destroyed).
+    allocator: Mutex<Option<Allocator>>,
+    /// The validation layer's messenger and messages, when validation was requested.
+    validation: Option<Validation>,
     /// Keeps libvulkan loaded until the instance is destroyed (fields drop after `drop`).
     _entry: ash::Entry,
 }
@@ -132,51 +162,89 @@ impl Shared {
                 device
                     .end_command_buffer(cb)
                     .map_err(api("vkEndCommandBuffer"))?;
-                submit_and_wait(device, submit.queue, cb)
+                self.submit_and_wait(submit.queue, cb)
             })();
             device.free_command_buffers(submit.command_pool, &[cb]);
             result
         }
     }
-}
 
-/// Submits `cb` to `queue` and waits for it with a fence of its own.
-///
-/// # Safety
-/// `cb` is a recorded command buffer of `device` and the caller holds the queue lock.
-pub(crate) unsafe fn submit_and_wait(
-    device: &ash::Device,
-    queue: vk::Queue,
-    cb: vk::CommandBuffer,
-) -> Result<(), VulkanError> {
-    // SAFETY: the fence is destroyed after the wait (or the failed submit).
-    unsafe {
-        let fence = device
-            .create_fence(&vk::FenceCreateInfo::default(), None)
-            .map_err(api("vkCreateFence"))?;
-        let command_buffers = [cb];
-        let submit = vk::SubmitInfo::default().command_buffers(&command_buffers);
-        let result = device
-            .queue_submit(queue, &[submit], fence)
-            .map_err(api("vkQueueSubmit"))
-            .and_then(|()| {
-                device
-                    .wait_for_fences(&[fence], true, u64::MAX)
-                    .map_err(api("vkWaitForFences"))
-            });
-        device.destroy_fence(fence, None);
-        result
+    /// Submits `cb` to `queue`, waits for it with a fence of its own, and reports the first
+    /// validation error of its recording or execution, if validation is on.
+    ///
+    /// # Safety
+    /// `cb` is a recorded command buffer of the device and the caller holds the queue lock.
+    pub(crate) unsafe fn submit_and_wait(
+        &self,
+        queue: vk::Queue,
+        cb: vk::CommandBuffer,
+    ) -> Result<(), VulkanError> {
+        let device = &self.device;
+        // SAFETY: the fence is destroyed after the wait (or the failed submit).
+        unsafe {
+            let fence = device
+                .create_fence(&vk::FenceCreateInfo::default(), None)
+                .map_err(api("vkCreateFence"))?;
+            let command_buffers = [cb];
+            let submit = vk::SubmitInfo::default().command_buffers(&command_buffers);
+            let result = device
+                .queue_submit(queue, &[submit], fence)
+                .map_err(api("vkQueueSubmit"))
+                .and_then(|()| {
+                    device
+                        .wait_for_fences(&[fence], true, u64::MAX)
+                        .map_err(api("vkWaitForFences"))
+                });
+            device.destroy_fence(fence, None);
+            result?;
+        }
+        self.check_validation()
+    }
+
+    /// A range of device memory for `desc` from the allocator's blocks.
+    pub(crate) fn allocate(&self, desc: &AllocationCreateDesc) -> Result<Allocation, VulkanError> {
+        let mut allocator = self.allocator.lock().unwrap_or_else(|e| e.into_inner());
+        let allocator = allocator
+            .as_mut()
+            .expect("the allocator lives until `drop`");
+        allocator
+            .allocate(desc)
+            .map_err(|e| VulkanError::Allocation(e.to_string()))
+    }
+
+    /// Returns `allocation` to the allocator (its buffer is destroyed and unused by the GPU).
+    pub(crate) fn free(&self, allocation: Allocation) {
+        let mut allocator = self.allocator.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(allocator) = allocator.as_mut() {
+            // Freeing fails only for an allocation of another allocator; there is one.
+            let _ = allocator.free(allocation);
+        }
+    }
+
+    /// `Err` naming the first validation error since the last check (none without validation).
+    pub(crate) fn check_validation(&self) -> Result<(), VulkanError> {
+        self.validation.as_ref().map_or(Ok(()), Validation::check)
     }
 }
 
 impl Drop for Shared {
     fn drop(&mut self) {
         let pool = self.lock().command_pool;
+        // Frees the memory blocks while the device lives.
+        drop(
+            self.allocator
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .take(),
+        );
         // SAFETY: every object created from the device holds an `Arc<Shared>`, so none is alive.
         unsafe {
             let _ = self.device.device_wait_idle();
             self.device.destroy_command_pool(pool, None);
             self.device.destroy_device(None);
+            if let Some(validation) = &self.validation {
+                validation.destroy();
+            }
             self.instance.destroy_instance(None);
         }
     }
@@ -189,34 +257,68 @@ pub struct Context {
     /// Nanoseconds per timestamp tick, when the queue writes timestamps.
     pub(crate) timestamp_period: Option<f64>,
     info: DeviceInfo,
+    details: DeviceDetails,
 }
 
 impl Context {
-    /// Loads Vulkan and opens the preferred device, honouring [`DEVICE_ENV`].
+    /// Loads Vulkan and opens the preferred device, honouring [`DEVICE_ENV`] and
+    /// [`validation::VALIDATION_ENV`].
     pub fn new() -> Result<Context, VulkanError> {
         let wanted = std::env::var(DEVICE_ENV).ok();
         Context::with_device(wanted.as_deref())
     }
 
-    /// Loads Vulkan and opens the best usable device whose name contains `wanted`.
+    /// Loads Vulkan and opens the best usable device whose name contains `wanted`, with the
+    /// validation [`validation::VALIDATION_ENV`] asks for.
     pub fn with_device(wanted: Option<&str>) -> Result<Context, VulkanError> {
+        Context::with_validation(wanted, Checks::from_env()?)
+    }
+
+    /// As [`Context::with_device`], with the validation layer running `checks`.
+    pub fn with_validation(wanted: Option<&str>, checks: Checks) -> Result<Context, VulkanError> {
         // SAFETY: loading libvulkan runs its initialisers; it is the system's Vulkan loader.
         let entry =
             unsafe { ash::Entry::load() }.map_err(|e| VulkanError::NoLoader(e.to_string()))?;
         let app = vk::ApplicationInfo::default()
             .application_name(c"reshift")
             .api_version(vk::API_VERSION_1_2);
-        let create = vk::InstanceCreateInfo::default().application_info(&app);
+        let (layers, extensions) = validation::requirements(&entry, checks)?;
+        let mut features = validation::features(checks);
+        let create = vk::InstanceCreateInfo::default()
+            .application_info(&app)
+            .enabled_layer_names(&layers)
+            .enabled_extension_names(&extensions);
+        let create = if checks == Checks::Off {
+            create
+        } else {
+            create.push_next(&mut features)
+        };
         // SAFETY: valid create info; the instance is destroyed by `Shared` or below.
         let instance =
             unsafe { entry.create_instance(&create, None) }.map_err(VulkanError::NoDriver)?;
+        let validation = match checks {
+            Checks::Off => None,
+            _ => match Validation::new(&entry, &instance) {
+                Ok(validation) => Some(validation),
+                Err(e) => {
+                    // SAFETY: nothing else was created from the instance.
+                    unsafe { instance.destroy_instance(None) };
+                    return Err(e);
+                }
+            },
+        };
         match open_device(&instance, wanted) {
             Ok((physical, device, info)) => {
-                Context::assemble(entry, instance, physical, device, info)
+                Context::assemble(entry, instance, validation, physical, device, info)
             }
             Err(e) => {
-                // SAFETY: nothing else was created from the instance.
-                unsafe { instance.destroy_instance(None) };
+                // SAFETY: nothing but the messenger was created from the instance.
+                unsafe {
+                    if let Some(validation) = &validation {
+                        validation.destroy();
+                    }
+                    instance.destroy_instance(None);
+                }
                 Err(e)
             }
         }
@@ -225,6 +327,7 @@ impl Context {
     fn assemble(
         entry: ash::Entry,
         instance: ash::Instance,
+        validation: Option<Validation>,
         physical: vk::PhysicalDevice,
         device: ash::Device,
         info: DeviceInfo,
@@ -251,11 +354,44 @@ impl Context {
                 // SAFETY: nothing else was created from the device.
                 unsafe {
                     device.destroy_device(None);
+                    if let Some(validation) = &validation {
+                        validation.destroy();
+                    }
                     instance.destroy_instance(None);
                 }
                 return Err(api("vkCreateCommandPool")(result));
             }
         };
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device: physical,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        });
+        let allocator = match allocator {
+            Ok(allocator) => allocator,
+            Err(e) => {
+                // SAFETY: nothing but the command pool was created from the device.
+                unsafe {
+                    device.destroy_command_pool(command_pool, None);
+                    device.destroy_device(None);
+                    if let Some(validation) = &validation {
+                        validation.destroy();
+                    }
+                    instance.destroy_instance(None);
+                }
+                return Err(VulkanError::Allocation(e.to_string()));
+            }
+        };
+        let details = details(
+            &instance,
+            physical,
+            &properties,
+            &memory,
+            &families[family as usize],
+        );
         let timestamps = families[family as usize].timestamp_valid_bits > 0
             && properties.limits.timestamp_period > 0.0;
         Ok(Context {
@@ -267,17 +403,33 @@ impl Context {
                     queue,
                     command_pool,
                 }),
+                allocator: Mutex::new(Some(allocator)),
+                validation,
                 _entry: entry,
             }),
             max_storage_range: properties.limits.max_storage_buffer_range,
             timestamp_period: timestamps.then_some(properties.limits.timestamp_period as f64),
             info,
+            details,
         })
     }
 
     /// The chosen device.
     pub fn device(&self) -> &DeviceInfo {
         &self.info
+    }
+
+    /// The chosen device's driver and limits.
+    pub fn details(&self) -> &DeviceDetails {
+        &self.details
+    }
+
+    /// Every warning and error the validation layer reported so far (none without validation).
+    pub fn validation_messages(&self) -> Vec<Message> {
+        self.shared
+            .validation
+            .as_ref()
+            .map_or_else(Vec::new, Validation::messages)
     }
 
     /// Whether GPU times of dispatches are measured (timestamp queries on the compute queue).
@@ -317,6 +469,55 @@ fn open_device(
     let device = unsafe { instance.create_device(physicals[index], &create, None) }
         .map_err(api("vkCreateDevice"))?;
     Ok((physicals[index], device, info))
+}
+
+fn details(
+    instance: &ash::Instance,
+    physical: vk::PhysicalDevice,
+    properties: &vk::PhysicalDeviceProperties,
+    memory: &vk::PhysicalDeviceMemoryProperties,
+    family: &vk::QueueFamilyProperties,
+) -> DeviceDetails {
+    let v = properties.api_version;
+    let driver = (v >= vk::API_VERSION_1_2).then(|| {
+        let mut driver = vk::PhysicalDeviceDriverProperties::default();
+        let mut all = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+        // SAFETY: `physical` belongs to `instance`, which supports Vulkan 1.2 (as the device).
+        unsafe { instance.get_physical_device_properties2(physical, &mut all) };
+        let text = |s: Result<&std::ffi::CStr, _>| {
+            s.map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        };
+        format!(
+            "{} ({})",
+            text(driver.driver_name_as_c_str()),
+            text(driver.driver_info_as_c_str())
+        )
+    });
+    let limits = &properties.limits;
+    DeviceDetails {
+        api_version: format!(
+            "{}.{}.{}",
+            vk::api_version_major(v),
+            vk::api_version_minor(v),
+            vk::api_version_patch(v)
+        ),
+        driver,
+        driver_version: properties.driver_version,
+        vendor_id: properties.vendor_id,
+        device_id: properties.device_id,
+        max_storage_buffer_range: limits.max_storage_buffer_range,
+        max_compute_work_group_invocations: limits.max_compute_work_group_invocations,
+        max_compute_shared_memory_size: limits.max_compute_shared_memory_size,
+        max_push_constants_size: limits.max_push_constants_size,
+        timestamp_period: limits.timestamp_period,
+        timestamp_valid_bits: family.timestamp_valid_bits,
+        device_local_bytes: memory.memory_heaps[..memory.memory_heap_count as usize]
+            .iter()
+            .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+            .map(|h| h.size)
+            .sum(),
+    }
 }
 
 fn describe(instance: &ash::Instance, physical: vk::PhysicalDevice) -> DeviceInfo {

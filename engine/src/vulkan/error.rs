@@ -48,6 +48,15 @@ pub enum VulkanError {
     },
     /// No `engine/glsl/<name>.glsl` was compiled into the crate.
     UnknownShader(String),
+    /// Validation was requested but `VK_LAYER_KHRONOS_validation` is not installed.
+    NoValidationLayer,
+    /// The validation layer reported an error (an invalid use or a synchronization hazard):
+    /// its id and message.
+    Validation(String),
+    /// The device-memory allocator (`gpu-allocator`) failed.
+    Allocation(String),
+    /// An environment setting of the backend has a value it does not know.
+    BadSetting(String),
 }
 
 impl fmt::Display for VulkanError {
@@ -113,6 +122,14 @@ impl fmt::Display for VulkanError {
                 f,
                 "no compiled shader named {name:?} (engine/glsl/{name}.glsl is missing)"
             ),
+            Self::NoValidationLayer => write!(
+                f,
+                "Vulkan validation was requested (RESHIFT_VULKAN_VALIDATION) but the layer \
+                 VK_LAYER_KHRONOS_validation is not installed (apt-get install vulkan-validationlayers)"
+            ),
+            Self::Validation(message) => write!(f, "Vulkan validation error: {message}"),
+            Self::Allocation(why) => write!(f, "allocating Vulkan device memory failed: {why}"),
+            Self::BadSetting(why) => write!(f, "{why}"),
         }
     }
 }

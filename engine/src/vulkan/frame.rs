@@ -46,7 +46,7 @@ pub(super) struct FrameRun<'a> {
     kernels: &'a HashMap<&'static str, Kernel>,
     plan: &'a Plan,
     /// [`Plan::waits`]: where a step waits for the steps before it (a barrier).
-    waits: Vec<bool>,
+    pub(super) waits: Vec<bool>,
     config: &'a RunConfig,
     width: u32,
     height: u32,
@@ -166,7 +166,7 @@ impl<'a> FrameRun<'a> {
         let mut counters = config
             .collect_diagnostics
             .then(|| Counters::new(self.width, self.height, reuse_labels.collect()));
-        let mut seconds = vec![0.0f64; plan.steps.len()];
+        let mut seconds = vec![Vec::with_capacity(config.frames as usize); plan.steps.len()];
         let mut timed = true;
         let mut frames = Vec::with_capacity(config.frames as usize);
         let mut nan_count = 0;
@@ -187,17 +187,15 @@ impl<'a> FrameRun<'a> {
                 let submit = self.context.shared.lock();
                 // SAFETY: the command buffer was recorded by `record`; the lock is held.
                 unsafe {
-                    super::device::submit_and_wait(
-                        &self.context.shared.device,
-                        submit.queue,
-                        recorded.cb,
-                    )
+                    self.context
+                        .shared
+                        .submit_and_wait(submit.queue, recorded.cb)
                 }?;
             }
             match &recorded.timestamps {
                 Some(t) => {
                     for (s, t) in seconds.iter_mut().zip(t.seconds()?) {
-                        *s += t;
+                        s.push(t);
                     }
                 }
                 None => timed = false,
@@ -231,10 +229,7 @@ impl<'a> FrameRun<'a> {
             plan.steps
                 .iter()
                 .zip(seconds)
-                .map(|(step, seconds)| PassTiming {
-                    label: step.label.clone(),
-                    seconds,
-                })
+                .map(|(step, seconds)| PassTiming::new(step.label.clone(), seconds))
                 .collect()
         } else {
             Vec::new()

@@ -1,5 +1,7 @@
 //! Storage buffers: device-local memory, filled and read back through host-visible staging
-//! buffers.
+//! buffers. Memory comes from `gpu-allocator`, which sub-allocates buffers from large blocks
+//! (256 MiB device-local, 64 MiB host-visible by default) instead of one `vkAllocateMemory`
+//! per buffer; [`memory_type`] still decides which memory type a buffer lives in.
 //!
 //! A memory type that is device-local *and* host-visible + host-coherent (a CPU device such as
 //! lavapipe, or a unified-memory GPU) is mapped directly and needs no staging; a discrete GPU's
@@ -10,16 +12,19 @@ use std::sync::Arc;
 
 use ash::vk;
 use bytemuck::Pod;
+use gpu_allocator::MemoryLocation;
+use gpu_allocator::vulkan::{self as allocator, AllocationCreateDesc, AllocationScheme};
 
 use super::device::{Context, Shared};
 use super::error::{VulkanError, api};
 
-/// One `vk::Buffer` with its own memory, optionally mapped.
+/// One `vk::Buffer` bound to a range of a block of the allocator, optionally mapped.
 pub(crate) struct Allocation {
     shared: Arc<Shared>,
     pub(crate) buffer: vk::Buffer,
-    memory: vk::DeviceMemory,
-    /// The mapping of the whole allocation, when the memory is host-visible and coherent.
+    /// The buffer's range of device memory (`None` until bound; returned in `Drop`).
+    memory: Option<allocator::Allocation>,
+    /// The mapping of the buffer's range, when the memory is host-visible and coherent.
     mapped: Option<*mut u8>,
     /// Bytes allocated (≥ 4).
     size: u64,
@@ -78,39 +83,45 @@ impl Allocation {
         let mut allocation = Allocation {
             shared: shared.clone(),
             buffer: vk::Buffer::null(),
-            memory: vk::DeviceMemory::null(),
+            memory: None,
             mapped: None,
             size,
         };
-        // SAFETY: valid create infos on a live device.
-        unsafe {
-            allocation.buffer = device
-                .create_buffer(&info, None)
-                .map_err(api("vkCreateBuffer"))?;
-            let requirements = device.get_buffer_memory_requirements(allocation.buffer);
-            let index = memory_type(&shared.memory, requirements.memory_type_bits, placement)
-                .ok_or(VulkanError::NoMemoryType)?;
-            let flags = shared.memory.memory_types[index as usize].property_flags;
-            allocation.memory = device
-                .allocate_memory(
-                    &vk::MemoryAllocateInfo::default()
-                        .allocation_size(requirements.size)
-                        .memory_type_index(index),
-                    None,
-                )
-                .map_err(api("vkAllocateMemory"))?;
-            device
-                .bind_buffer_memory(allocation.buffer, allocation.memory, 0)
-                .map_err(api("vkBindBufferMemory"))?;
-            if flags.contains(
-                vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT,
-            ) {
-                let mapped = device
-                    .map_memory(allocation.memory, 0, size, vk::MemoryMapFlags::empty())
-                    .map_err(api("vkMapMemory"))?;
-                allocation.mapped = Some(mapped.cast());
-            }
+        // SAFETY: valid create info on a live device.
+        allocation.buffer =
+            unsafe { device.create_buffer(&info, None) }.map_err(api("vkCreateBuffer"))?;
+        // SAFETY: a live buffer.
+        let mut requirements = unsafe { device.get_buffer_memory_requirements(allocation.buffer) };
+        let index = memory_type(&shared.memory, requirements.memory_type_bits, placement)
+            .ok_or(VulkanError::NoMemoryType)?;
+        let flags = shared.memory.memory_types[index as usize].property_flags;
+        let host = vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
+        // The allocator sees only the chosen type; its location must accept that type's flags.
+        requirements.memory_type_bits = 1 << index;
+        // `GpuOnly` requires device-local memory, `GpuToCpu` host-visible and coherent memory,
+        // which every other type `memory_type` picks has.
+        let device_local = flags.contains(vk::MemoryPropertyFlags::DEVICE_LOCAL);
+        let location = if placement == Placement::Device && device_local {
+            MemoryLocation::GpuOnly
+        } else {
+            MemoryLocation::GpuToCpu
+        };
+        let memory = allocation.shared.allocate(&AllocationCreateDesc {
+            name: "reshift buffer",
+            requirements,
+            location,
+            linear: true,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        })?;
+        // SAFETY: the range was allocated for this buffer's requirements and is freed after
+        // the buffer is destroyed.
+        unsafe { device.bind_buffer_memory(allocation.buffer, memory.memory(), memory.offset()) }
+            .map_err(api("vkBindBufferMemory"))?;
+        if flags.contains(host) {
+            // Host-visible blocks stay mapped for their lifetime; this is the buffer's range.
+            allocation.mapped = memory.mapped_ptr().map(|p| p.as_ptr().cast());
         }
+        allocation.memory = Some(memory);
         Ok(allocation)
     }
 
@@ -133,12 +144,9 @@ impl Drop for Allocation {
     fn drop(&mut self) {
         // SAFETY: submissions are waited on before returning, so the GPU no longer uses the
         // buffer; null handles are ignored.
-        unsafe {
-            if self.mapped.is_some() {
-                self.shared.device.unmap_memory(self.memory);
-            }
-            self.shared.device.destroy_buffer(self.buffer, None);
-            self.shared.device.free_memory(self.memory, None);
+        unsafe { self.shared.device.destroy_buffer(self.buffer, None) };
+        if let Some(memory) = self.memory.take() {
+            self.shared.free(memory);
         }
     }
 }
@@ -343,10 +351,8 @@ mod tests {
     /// a discrete GPU even on a device whose memory is all host-visible (lavapipe).
     fn staged(context: &Context, bytes: usize) -> Buffer {
         let mut buffer = Buffer::uninitialised(context, bytes).unwrap();
-        if buffer.allocation.mapped.take().is_some() {
-            // SAFETY: the memory was mapped by `Allocation::new` and is no longer referenced.
-            unsafe { context.shared.device.unmap_memory(buffer.allocation.memory) };
-        }
+        // The block stays mapped for its other buffers; this buffer just stops using it.
+        buffer.allocation.mapped = None;
         buffer
     }
 

@@ -27,6 +27,7 @@ mod single_scatter;
 mod svgf;
 pub mod testing;
 mod timing;
+mod validation;
 
 use bytemuck::{Pod, Zeroable};
 
@@ -34,7 +35,7 @@ pub use adaptive::{ADAPTIVE, AdaptiveImage, GpuHistory, render_adaptive_frame};
 pub use bvh::{BVH_MAX_HITS, BvhRayInput, BvhRayOutput, GpuBvh};
 pub use compute::{Dispatch, Kernel, groups_for};
 pub use decode::decode_error;
-pub use device::{Context, DEVICE_ENV, DeviceInfo, DeviceKind, choose_device};
+pub use device::{Context, DEVICE_ENV, DeviceDetails, DeviceInfo, DeviceKind, choose_device};
 pub use error::VulkanError;
 pub use frame::{CANDIDATES, SPATIAL, TEMPORAL};
 pub use image_space::{
@@ -59,6 +60,7 @@ pub use crate::contract::{
     PtParams,
 };
 pub use shaders::Shader;
+pub use validation::{Checks, Message, Severity, VALIDATION_ENV};
 
 /// The environment variable that turns "Vulkan unavailable, skipped" into a failure in tests.
 pub const REQUIRE_ENV: &str = "RESHIFT_REQUIRE_VULKAN";

@@ -326,3 +326,59 @@ fn fingerprint(scene: &Scene) -> u64 {
     }
     hash.finish()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vulkan::testing::validated_or_skip;
+    use crate::vulkan::validation::Checks;
+
+    /// The negative control of synchronization validation: a frame recorded without the
+    /// barrier before one of its passes (one that clears nothing, whose fills would order the
+    /// access anyway) is a hazard the layer reports and the run returns; the same frame with
+    /// every barrier runs clean.
+    #[test]
+    fn a_missing_barrier_is_caught() {
+        let Some(mut renderer) = validated_or_skip("a_missing_barrier_is_caught", Checks::Sync)
+        else {
+            return;
+        };
+        let mut scene = Scene::builtin("bumpy").expect("built-in scene");
+        scene.camera = scene.camera.with_resolution(8, 8);
+        let preset = Preset::named("reconnection").expect("registered preset");
+        let plan = Plan::lower(&preset);
+        let config = RunConfig {
+            seed: 1,
+            frames: 1,
+            collect_diagnostics: false,
+        };
+        let shaders: Vec<Shader> = plan.steps.iter().map(|s| Shader::of(s.kernel)).collect();
+        renderer.prepare(&shaders).unwrap();
+        renderer.upload(&scene).unwrap();
+        let gpu = renderer.gpu_scene().unwrap();
+        let run = |omit: bool| {
+            let mut frame = FrameRun::new(
+                &renderer.context,
+                gpu,
+                &renderer.kernels,
+                &scene,
+                &plan,
+                &config,
+            )?;
+            if omit {
+                let step = (0..plan.steps.len())
+                    .position(|i| frame.waits[i] && plan.steps[i].clears.is_empty())
+                    .expect("a plan step behind a barrier of its own");
+                frame.waits[step] = false;
+            }
+            frame.run(&scene)
+        };
+        run(false).expect("every barrier: no validation error");
+        match run(true) {
+            Err(PipelineError::Vulkan(VulkanError::Validation(message))) => {
+                assert!(message.contains("SYNC-HAZARD"), "{message}")
+            }
+            other => panic!("a missing barrier was not caught: {:?}", other.map(|_| ())),
+        }
+    }
+}

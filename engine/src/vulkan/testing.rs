@@ -9,8 +9,8 @@ use glam::Vec3;
 use sss::scene::{GBuffer, Scene};
 
 use super::{
-    Buffer, Context, FrameInput, FrameParams, GpuPixel, GpuScene, Kernel, REQUIRE_ENV, Shader,
-    VulkanError,
+    Buffer, Checks, Context, FrameInput, FrameParams, GpuPixel, GpuScene, Kernel, REQUIRE_ENV,
+    Renderer, Shader, VulkanError,
 };
 use crate::{Backend, Run};
 
@@ -38,6 +38,18 @@ pub fn kernel_or_skip(test: &str, shader: Shader) -> Option<(Context, Kernel)> {
     let (context, kernel) = or_skip(test, opened.map_err(|e| e.to_string()))?;
     eprintln!("{test}: on {:?}", context.device());
     Some((context, kernel))
+}
+
+/// A renderer of its own whose context runs the validation layer's `checks`, or `None` when
+/// Vulkan or the layer (`vulkan-validationlayers`) is unavailable.
+pub fn validated_or_skip(test: &str, checks: Checks) -> Option<Renderer> {
+    let opened = Context::with_validation(None, checks).map_err(|e| e.to_string());
+    let context = or_skip(test, opened)?;
+    eprintln!(
+        "{test}: on {:?} with validation {checks:?}",
+        context.device()
+    );
+    Some(Renderer::new(context))
 }
 
 /// The Vulkan backend shared by every test of one test binary (pipelines are created once per

@@ -547,6 +547,39 @@ fn assert_schema_rejects_broken(schema: &Value, good: &Value) {
     assert_eq!(out.len(), 4, "{out:#?}");
 }
 
+/// `compare` of `methods` on `scene` at 16×12: 2 frames, 2 replicas, a 2 × 8 spp reference per
+/// frame, `pt:2` the baseline, into `out` with references cached in `cache`.
+fn small_compare(scene: &str, methods: &str, out: &Path, cache: &Path) -> Vec<String> {
+    [
+        "compare",
+        "--scene",
+        scene,
+        "--methods",
+        methods,
+        "--baseline",
+        "pt:2",
+        "--replicas",
+        "2",
+        "--frames",
+        "2",
+        "--resolution",
+        "16x12",
+        "--reference-spp",
+        "16",
+        "--reference-batch-spp",
+        "8",
+        "--out",
+    ]
+    .into_iter()
+    .map(String::from)
+    .chain([
+        out.display().to_string(),
+        "--cache".into(),
+        cache.display().to_string(),
+    ])
+    .collect()
+}
+
 /// `compare` on every built-in scene at 16×12 (2 frames, 2 replicas, `pt` and two presets, a
 /// 2 × 8 spp reference per frame, `pt:2` the baseline): exits 0, writes every output (figures
 /// and report.html included), measures both frames, and its results.json validates against the
@@ -558,30 +591,8 @@ fn compare_runs_on_every_builtin_scene_and_validates() {
     let cache = dir.join("cache");
     for (name, _) in Scene::BUILTIN {
         let out = dir.join(name);
-        let args = [
-            "compare",
-            "--scene",
-            name,
-            "--methods",
-            "pt:2,restir:hybrid,restir:sequential",
-            "--baseline",
-            "pt:2",
-            "--replicas",
-            "2",
-            "--frames",
-            "2",
-            "--resolution",
-            "16x12",
-            "--reference-spp",
-            "16",
-            "--reference-batch-spp",
-            "8",
-            "--out",
-            out.to_str().unwrap(),
-            "--cache",
-            cache.to_str().unwrap(),
-            "--json",
-        ];
+        let args = small_compare(name, "pt:2,restir:hybrid,restir:sequential", &out, &cache);
+        let args: Vec<&str> = args.iter().map(String::as_str).chain(["--json"]).collect();
         let printed: Value = serde_json::from_str(&ok(&reshift(&args))).expect(name);
         let written: Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap())
@@ -664,35 +675,20 @@ fn compare_runs_on_every_builtin_scene_and_validates() {
 fn compare_denoise_refuses_bad_input_and_keeps_the_raw_results() {
     let dir = scratch("denoise");
     let (out, cache) = (dir.join("out"), dir.join("cache"));
-    let (out_s, cache_s) = (out.to_str().unwrap(), cache.to_str().unwrap());
-    let base = [
-        "compare",
-        "--methods",
-        "pt:2",
-        "--baseline",
-        "pt:2",
-        "--replicas",
-        "2",
-        "--frames",
-        "2",
-        "--resolution",
-        "16x12",
-        "--reference-spp",
-        "16",
-        "--reference-batch-spp",
-        "8",
-        "--out",
-        out_s,
-        "--cache",
-        cache_s,
-        "--denoise",
-    ];
-    fn with<'a>(base: &[&'a str], d: &'a str) -> Vec<&'a str> {
-        base.iter().copied().chain([d]).collect()
-    }
-    fails_with(&with(&base, "optix"), "unknown denoiser \"optix\"");
+    let base = small_compare("bumpy", "pt:2", &out, &cache);
+    let with = |d: &'static str| -> Vec<String> {
+        base.iter()
+            .cloned()
+            .chain(["--denoise".into(), d.into()])
+            .collect()
+    };
+    let optix = with("optix");
+    fails_with(
+        &optix.iter().map(String::as_str).collect::<Vec<_>>(),
+        "unknown denoiser \"optix\"",
+    );
     let o = Command::new(env!("CARGO_BIN_EXE_reshift"))
-        .args(with(&base, "oidn"))
+        .args(with("oidn"))
         .env("PATH", "")
         .env("OIDN_DIR", dir.join("no-oidn"))
         .env_remove("LD_LIBRARY_PATH")

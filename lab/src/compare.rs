@@ -205,14 +205,27 @@ pub fn run(plan: &Plan, progress: &mut dyn Progress) -> Result<Outcome, Error> {
         .denoise
         .iter()
         .map(|&d| {
-            let group = renders
+            let complete: Vec<(&MethodRuns, &Vec<Replica>)> = renders
                 .runs
                 .iter()
                 .filter_map(|r| {
                     let (_, replicas) = r.denoised.iter().find(|(e, _)| *e == d)?;
-                    (!replicas.is_empty() && replicas.len() == r.replicas.len()).then(|| {
-                        MethodResult::denoised(&r.spec, r.method.spp(), d, replicas, &references)
-                    })?
+                    let whole = !replicas.is_empty() && replicas.len() == r.replicas.len();
+                    whole.then_some((r, replicas))
+                })
+                .collect();
+            let counted = plan.equal_time.map(|_| {
+                let times: Vec<f64> = complete
+                    .iter()
+                    .flat_map(|(_, replicas)| replicas.iter().map(|r| r.denoiser_seconds_per_frame))
+                    .collect();
+                times.iter().sum::<f64>() / times.len().max(1) as f64
+            });
+            let group = complete
+                .iter()
+                .filter_map(|(r, replicas)| {
+                    let spp = r.method.spp();
+                    MethodResult::denoised(&r.spec, spp, d, replicas, &references, counted)
                 })
                 .collect();
             (d, group)
@@ -260,7 +273,7 @@ pub fn run(plan: &Plan, progress: &mut dyn Progress) -> Result<Outcome, Error> {
         let base = group.iter().find(|r| r.method == plan.baseline);
         if let Some(d) = denoiser {
             let counted = if plan.equal_time.is_some() {
-                "counted in ms/frame and efficiency (equal time)"
+                "counted in ms/frame and efficiency (equal time), as its mean over these rows"
             } else {
                 "not counted in ms/frame and efficiency (equal spp)"
             };
@@ -418,8 +431,7 @@ fn render_replicas(
                 render_replica(plan, &method, frames, seed, whole_trajectory)?;
             let mut failed = Vec::new();
             for (d, denoised) in &mut run.denoised {
-                let counted = plan.equal_time.is_some();
-                match denoise_replica(*d, &plan.backend, &guides, &trajectory, &replica, counted) {
+                match denoise_replica(*d, &plan.backend, &guides, &trajectory, &replica) {
                     Ok(r) => denoised.push(r),
                     Err(e) => failed.push((*d, e)),
                 }
@@ -449,15 +461,13 @@ fn render_replicas(
 
 /// `replica`'s last frame through `denoiser`, from the frames of its `trajectory` (the last
 /// frames of the trajectory that `guides` guide), with the denoiser's seconds per frame (a
-/// temporal filter's time over every frame it filtered, per frame); `counted`: its seconds per
-/// frame add them (equal time: a frame costs its rendering and its denoising).
+/// temporal filter's time over every frame it filtered, per frame).
 fn denoise_replica(
     denoiser: Denoiser,
     backend: &Backend,
     guides: &[Guide],
     trajectory: &[engine::Image],
     replica: &Replica,
-    counted: bool,
 ) -> Result<Replica, DenoiseError> {
     let d = denoise::denoise(denoiser, backend, guides, trajectory)?;
     let per_frame = if denoiser.temporal() {
@@ -467,7 +477,6 @@ fn denoise_replica(
     };
     Ok(Replica {
         frames: vec![d.image],
-        seconds_per_frame: replica.seconds_per_frame + if counted { per_frame } else { 0.0 },
         denoiser_seconds_per_frame: per_frame,
         ..replica.clone()
     })
@@ -577,8 +586,7 @@ mod tests {
             spp: 1.0,
         };
         for d in Denoiser::ALL {
-            let e =
-                denoise_replica(d, &Backend::Cpu, &guides, &frames, &replica, true).unwrap_err();
+            let e = denoise_replica(d, &Backend::Cpu, &guides, &frames, &replica).unwrap_err();
             assert_eq!(
                 e.to_string(),
                 "frame 1: 1 pixel(s) with a NaN or infinite value, not denoised"
@@ -697,9 +705,32 @@ mod tests {
             assert_eq!(a.metrics, b.metrics, "{}", a.method);
             assert_eq!(a.convergence.len(), 1);
         }
+        // Equal time counts the denoiser: every denoised row's seconds are its rendering's plus
+        // one figure shared by the denoiser's rows (the mean of its timings).
+        let timed = Plan {
+            equal_time: Some(0.01),
+            denoise: vec![Denoiser::Svgf],
+            ..last_only
+        };
+        let counted = run(&timed, &mut Silent).unwrap();
+        let (_, denoised) = &counted.denoised[0];
+        let added: Vec<f64> = denoised
+            .iter()
+            .zip(&counted.rows)
+            .map(|(d, raw)| d.seconds.value - raw.seconds.value)
+            .collect();
+        let pooled: Vec<f64> = denoised
+            .iter()
+            .map(|d| d.denoiser_seconds.as_ref().unwrap().value)
+            .collect();
+        let mean = pooled.iter().sum::<f64>() / pooled.len() as f64;
+        for a in &added {
+            assert!((a - mean).abs() < 1e-12, "{added:?} vs {mean}");
+        }
+        assert!(counted.markdown.contains("counted in ms/frame"));
         let empty = Plan {
             methods: Vec::new(),
-            ..last_only
+            ..timed
         };
         assert!(matches!(run(&empty, &mut Silent), Err(Error::Invalid(_))));
         std::fs::remove_dir_all(&dir).unwrap();

@@ -142,16 +142,25 @@ impl MethodResult {
     }
 
     /// The row of `method` whose last frames passed through `denoiser`: `replicas` hold the
-    /// denoised last frame each, measured against the last of `references`.
+    /// denoised last frame each, measured against the last of `references`. `counted`: seconds
+    /// per frame of the denoiser that its time per frame adds (equal time: a frame costs its
+    /// rendering and its denoising). The caller passes one figure for every method of a
+    /// denoiser: the filter's cost does not depend on the method, so a per-replica timing would
+    /// add only the machine's noise to the ratios.
     pub fn denoised(
         method: &str,
         spp: u32,
         denoiser: Denoiser,
         replicas: &[Replica],
         references: &[(FrameReference, Regions)],
+        counted: Option<f64>,
     ) -> Option<MethodResult> {
         let last = references.len().checked_sub(1)?;
         let mut row = MethodResult::from_replicas(method, spp, replicas, &references[last..])?;
+        if let Some(c) = counted {
+            let seconds: Vec<f64> = replicas.iter().map(|r| r.seconds_per_frame + c).collect();
+            row.seconds = Estimate::mean(&seconds);
+        }
         let seconds: Vec<f64> = replicas
             .iter()
             .map(|r| r.denoiser_seconds_per_frame)

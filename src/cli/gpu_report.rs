@@ -67,6 +67,13 @@ pub struct GpuReportArgs {
 /// Runs the report, writes the markdown file and prints it.
 pub fn command(args: &GpuReportArgs) -> CliResult<()> {
     let settings = settings(args)?;
+    // Refused before minutes of device time, not after.
+    if args.out.is_dir() {
+        return Err(CliError(format!(
+            "--out {}: a folder; name the markdown file to write",
+            args.out.display()
+        )));
+    }
     let backend = BackendArgs {
         backend: BackendKind::Vulkan,
         require_gpu: args.require_gpu,

@@ -1158,30 +1158,12 @@ fn compare_on_the_vulkan_backend_validates() {
     }
     let dir = scratch("compare-vulkan");
     let (out, cache) = (dir.join("out"), dir.join("cache"));
-    let args = [
-        "compare",
-        "--backend",
-        "vulkan",
-        "--scene",
-        "bumpy",
-        "--methods",
-        "pt:2,restir:sequential,random-walk",
-        "--replicas",
-        "2",
-        "--frames",
-        "2",
-        "--resolution",
-        "16x12",
-        "--reference-spp",
-        "16",
-        "--reference-batch-spp",
-        "8",
-        "--out",
-        out.to_str().unwrap(),
-        "--cache",
-        cache.to_str().unwrap(),
-        "--json",
-    ];
+    let args = small_compare("bumpy", "pt:2,restir:sequential,random-walk", &out, &cache);
+    let args: Vec<&str> = args
+        .iter()
+        .map(String::as_str)
+        .chain(["--backend", "vulkan", "--json"])
+        .collect();
     let json: Value = serde_json::from_str(&ok(&reshift(&args))).unwrap();
     assert_valid(&schemas()[0], &json, "compare --backend vulkan");
     for method in json["methods"].as_array().unwrap() {

@@ -73,6 +73,14 @@ impl Area {
             Area::Region(r) => regions.pixels(r),
         }
     }
+
+    /// Every area of [`Area::ALL`] that has pixels in `regions`, with its pixels.
+    pub fn non_empty(regions: &Regions) -> impl Iterator<Item = (Area, Vec<usize>)> + '_ {
+        Area::ALL
+            .into_iter()
+            .map(|area| (area, area.pixels(regions)))
+            .filter(|(_, pixels)| !pixels.is_empty())
+    }
 }
 
 /// The metrics of one method in one area.
@@ -112,13 +120,8 @@ pub fn area_metrics(
     }
     let k = replicas.len();
     let r = &reference.mean;
-    let metrics = Area::ALL
-        .into_iter()
-        .filter_map(|area| {
-            let pixels = area.pixels(regions);
-            if pixels.is_empty() {
-                return None;
-            }
+    let metrics = Area::non_empty(regions)
+        .map(|(area, pixels)| {
             let count = pixels.len() as f64;
             let reference_mean = pixels
                 .iter()
@@ -150,7 +153,7 @@ pub fn area_metrics(
             let (reference_rel, v_rel) = noise(&|p| rel_weight(r[p]));
             let bias = Summary::from_samples(&biases);
             let t = student_t_quantile(0.5 + 0.5 * BIAS_CONFIDENCE, (k - 1) as f64);
-            Some(AreaMetrics {
+            AreaMetrics {
                 area,
                 pixels: pixels.len(),
                 replicas: k,
@@ -161,7 +164,7 @@ pub fn area_metrics(
                 bias_ci: (k >= 2).then_some(t * bias.std_err),
                 variance: (k >= 2).then(|| pixel_variance(replicas, &pixels) / (3.0 * count)),
                 reference_mse,
-            })
+            }
         })
         .collect();
     Some(metrics)

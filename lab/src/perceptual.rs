@@ -61,13 +61,8 @@ pub fn perceptual_metrics(
         .iter()
         .map(|image| Maps::new(image, reference))
         .collect::<Option<_>>()?;
-    let metrics = Area::ALL
-        .into_iter()
-        .filter_map(|area| {
-            let pixels = area.pixels(regions);
-            if pixels.is_empty() {
-                return None;
-            }
+    let metrics = Area::non_empty(regions)
+        .map(|(area, pixels)| {
             let flip: Vec<f64> = maps.iter().map(|m| area_mean(&m.flip, &pixels)).collect();
             let low: Vec<f64> = maps
                 .iter()
@@ -75,11 +70,11 @@ pub fn perceptual_metrics(
                     pixels.iter().map(|&p| m.low_frequency[p]).sum::<f64>() / pixels.len() as f64
                 })
                 .collect();
-            Some(PerceptualMetrics {
+            PerceptualMetrics {
                 area,
                 flip: Estimate::mean(&flip),
                 low_frequency: Estimate::mean(&low),
-            })
+            }
         })
         .collect();
     Some(metrics)

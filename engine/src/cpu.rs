@@ -403,6 +403,7 @@ fn shade(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::with_threads;
     use crate::{run, run_pt};
 
     fn scene(name: &str, size: u32) -> Scene {
@@ -426,14 +427,6 @@ mod tests {
             pixels.collect(),
             bytemuck::cast_slice(&run.reservoirs).to_vec(),
         )
-    }
-
-    fn with_threads<R: Send>(n: usize, f: impl FnOnce() -> R + Send) -> R {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .unwrap()
-            .install(f)
     }
 
     /// Same seed → bit-identical frames and final reservoirs with 1 and 2 threads, for a preset

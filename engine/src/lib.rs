@@ -47,6 +47,17 @@ pub use restir::mis::MisKind;
 pub use shifts::preset::{PassSpec, Preset, PresetError, RadiusRule, Shade};
 pub use shifts::{PixelReservoir, ShiftKind, Target};
 
+/// `f` on a rayon pool of `n` threads: the tests that output does not depend on the thread
+/// count run the same work with 1 and 2.
+#[cfg(test)]
+pub(crate) fn with_threads<R: Send>(n: usize, f: impl FnOnce() -> R + Send) -> R {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .unwrap()
+        .install(f)
+}
+
 /// What a run does besides the preset: the replica seed, the number of frames of the camera
 /// trajectory, and whether diagnostics are collected (they re-apply shifts and cost time).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -204,6 +204,7 @@ fn depth_derivative(guide: &Guide, size: Size, p: usize, dx: i32, dy: i32) -> f3
 mod tests {
     use super::*;
     use crate::denoise::guide::NONE;
+    use crate::with_threads;
     use sss::integrator::pt::{self, PtSettings};
     use sss::scene::{GBuffer, Scene};
 
@@ -309,14 +310,6 @@ mod tests {
         assert_eq!(alone, reset);
         let kept = filter(&guides[..2], &frames[..2], &params);
         assert_ne!(kept, alone);
-    }
-
-    fn with_threads<R: Send>(n: usize, f: impl FnOnce() -> R + Send) -> R {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .unwrap()
-            .install(f)
     }
 
     /// 1 and 2 threads give the same bits.

@@ -1,7 +1,6 @@
 //! The `reshift` subcommands (DESIGN §7). Each module owns its clap arguments and one command.
 
 pub mod bias;
-mod bias_output;
 pub mod common;
 pub mod compare;
 pub mod experiment;

@@ -10,10 +10,10 @@
 //! `shift_twins.glsl` (the includes of the registered shifts' GLSL twins).
 //!
 //! Shaders: every `glsl/*.glsl` is one compute entry point; the GLSL twins it includes live
-//! beside their Rust modules (`restir/glsl/`, `sss/glsl/`, `shifts/glsl/`) and are found through
-//! `-I`, as are the generated headers. The SPIR-V goes to `$OUT_DIR/<stem>.spv`,
-//! `$OUT_DIR/spirv_table.rs` maps stems to it, and the cfg `reshift_glslc` tells the crate to
-//! embed it. Without `glslc` the build still succeeds (with a warning) and the backend reports
+//! beside their Rust modules (`restir/glsl/`, `geometry/glsl/`, `sss/glsl/`, `shifts/glsl/`) and
+//! are found through `-I`, as are the generated headers. The SPIR-V goes to
+//! `$OUT_DIR/<stem>.spv`, `$OUT_DIR/spirv_table.rs` maps stems to it, and the cfg
+//! `reshift_glslc` tells the crate to embed it. Without `glslc` the build still succeeds (with a warning) and the backend reports
 //! what to install; a shader that fails to compile fails the build.
 //!
 //! Freshness: the script watches the `glslc` it runs, or, when there is none, every directory it
@@ -119,7 +119,12 @@ const CONTRACTS: [&str; 7] = [
 
 /// Include directories of the GLSL twins, relative to this crate (the generated headers are
 /// found through `$OUT_DIR/glsl`).
-const INCLUDE_DIRS: [&str; 3] = ["../restir/glsl", "../sss/glsl", "../shifts/glsl"];
+const INCLUDE_DIRS: [&str; 4] = [
+    "../restir/glsl",
+    "../geometry/glsl",
+    "../sss/glsl",
+    "../shifts/glsl",
+];
 
 /// Writes the contract headers into `dir/contract/`; returns every item rendered.
 fn write_contract(dir: &Path) -> Vec<twin::Item> {

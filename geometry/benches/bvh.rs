@@ -4,11 +4,11 @@
 
 use std::time::{Duration, Instant};
 
+use geometry::{Frame, Geometry, Hit, Ray, TriangleMesh, shapes};
 use glam::{Vec2, Vec3, Vec3A};
 use obvhs::{BvhBuildParams, ray::RayHit};
 use rayon::prelude::*;
 use restir::rng::{Stream, StreamKey};
-use sss::geometry::{Frame, Geometry, Hit, Ray, TriangleMesh, shapes};
 
 const SEED: u64 = 0xBE4C;
 const RAYS: usize = 1 << 20;

@@ -1,5 +1,5 @@
-// Ray queries on the obvhs CWBVH as sss::geometry::Geometry uploads it: the GLSL twin of
-// sss/src/geometry/bvh.rs (read the two side by side; same node test, same watertight triangle
+// Ray queries on the obvhs CWBVH as geometry::Geometry uploads it: the GLSL twin of
+// geometry/src/bvh.rs (read the two side by side; same node test, same watertight triangle
 // test, same operation order, `precise` so that no multiply-add is fused).
 //
 // The including shader enables GL_EXT_shader_explicit_arithmetic_types_int64 (shaderInt64 and

@@ -252,10 +252,10 @@ mod x86 {
     use glam::Vec3A;
 
     use super::{BOX_EXIT_MARGIN, HIT_LANES, Kernel, PacketHits, plane_rows};
-    use crate::geometry::watertight::{PreparedRay, edge_functions};
+    use crate::watertight::{PreparedRay, edge_functions};
     use std::mem::MaybeUninit;
 
-    use crate::geometry::wide::{ChildRef, LANES, Packet, WideNode};
+    use crate::wide::{ChildRef, LANES, Packet, WideNode};
 
     /// Lane-wise `f32` operations on 4 (SSE) or 8 (AVX) lanes: the box and triangle tests are
     /// written once over this. Comparisons return all-ones lanes; `max`/`min` return the second
@@ -722,10 +722,10 @@ mod x86 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::Geometry;
-    use crate::geometry::testing::{rays, scene};
-    use crate::geometry::watertight::intersect_triangle;
-    use crate::geometry::wide::WideBvh;
+    use crate::Geometry;
+    use crate::testing::{rays, scene};
+    use crate::watertight::intersect_triangle;
+    use crate::wide::WideBvh;
 
     /// Lanes of a mask.
     fn lanes_of(mask: u32) -> impl Iterator<Item = usize> {

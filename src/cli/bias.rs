@@ -9,10 +9,11 @@ use glam::DVec3;
 use lab::bias::{
     Protocol, Table, bias_rows, reference_images_with, replicas_needed, summarize, test_bytes,
 };
+use lab::limits::MAX_REPLICAS;
 use lab::methods::Method;
 use lab::reference_cache::REFERENCE_SEED;
 use lab::regions::Regions;
-use sss::limits::{self, MAX_REPLICAS, MAX_SPP};
+use sss::limits::{self, MAX_SPP};
 use sss::scene::GBuffer;
 
 use super::bias_output::{bias_json, verdict_line};

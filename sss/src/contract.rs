@@ -84,10 +84,10 @@ pub mod bvh {
         /// hit count goes on past them. The CPU keeps every hit.
         pub const DEFAULT_MAX_HITS: usize = 8;
         /// The `prim` and `object` of no hit, and the `object` of a closest-hit query on any
-        /// object (`Option::None` of [`crate::geometry::Hit`]).
+        /// object (`Option::None` of [`geometry::Hit`]).
         pub const NO_HIT: u32 = u32::MAX;
 
-        /// The queries of [`crate::geometry::Geometry`] (`closest_hit`, `occluded`,
+        /// The queries of [`geometry::Geometry`] (`closest_hit`, `occluded`,
         /// `all_hits_on_object`) that `bvh.glsl`'s one traversal serves:
         /// `bvh_traverse(ray, BVH_<QUERY>, object)`.
         #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

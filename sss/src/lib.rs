@@ -8,7 +8,6 @@ pub mod bssrdf;
 /// re-export them where they are used.
 pub mod contract;
 pub mod error;
-pub mod geometry;
 pub mod integrator;
 pub mod limits;
 pub mod material;

@@ -26,6 +26,7 @@ use engine::vulkan::{
     groups_for,
 };
 use geometry::Hit;
+use geometry::contract::bvh::NO_HIT;
 use restir::rng::StreamKey;
 use restir::shift::Domain;
 use shifts::{Hybrid, SssDomain, SssSample};
@@ -34,7 +35,6 @@ use sss::bssrdf::{
     pick_hit,
 };
 use sss::contract::bssrdf::INDEX_UNKNOWN;
-use sss::contract::bvh::NO_HIT;
 use sss::scene::{GBuffer, GPixel, Scene};
 
 /// `parity_bssrdf.glsl`: scene (0–8), G-buffer (9), queries (10), results (11); push constants

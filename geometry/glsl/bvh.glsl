@@ -8,12 +8,12 @@
 // global triangle id of each leaf slot (CwBvh::primitive_indices) and its object id.
 // BVH_NODE_COUNT must name a uint holding the node count (0 for an empty scene).
 
-#ifndef SSS_BVH_GLSL
-#define SSS_BVH_GLSL
+#ifndef GEOMETRY_BVH_GLSL
+#define GEOMETRY_BVH_GLSL
 
 // BVH_DEFAULT_MAX_HITS, BVH_NO_HIT and the queries BVH_CLOSEST, BVH_OCCLUDED, BVH_ALL_HITS
-// (sss/src/contract.rs).
-#include "contract/sss.glsl"
+// (geometry/src/contract.rs).
+#include "contract/geometry.glsl"
 
 // obvhs::cwbvh::node::CwBvhNode, repr(C): p, e[3] + imask, child_base_idx, primitive_base_idx,
 // child_meta[8], then min/max quantised planes per axis (8 bytes each).

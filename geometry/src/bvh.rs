@@ -3,9 +3,9 @@
 //!
 //! One obvhs binary BVH (PLOC + reinsertion) is built over all objects' triangles and converted
 //! twice: into obvhs's CWBVH (compressed 8-wide, Ylitie et al. 2017), exported as is for the
-//! GPU twin (`geometry/glsl/bvh.glsl`), and into the CPU layout of `wide.rs` (uncompressed 8-wide
+//! GPU twin (`glsl/bvh.glsl`), and into the CPU layout of `wide.rs` (uncompressed 8-wide
 //! nodes, four-triangle packets), traversed by `traverse.rs` with the SIMD kernels of
-//! `kernel.rs`. Scenes of several objects also get one such tree per object: the
+//! `kernel/`. Scenes of several objects also get one such tree per object: the
 //! object-restricted queries (the BSSRDF probe's) walk it, so it is their object filter and they
 //! never visit another object's nodes. Triangles use the watertight test of Woop, Benthin & Wald 2013
 //! (`watertight.rs`), so a ray through a shared edge or vertex of a closed mesh cannot slip

@@ -9,6 +9,9 @@
 //! traverses its own uncompressed layout of the same tree ([`wide`]).
 
 pub mod bvh;
+/// What the BVH's GLSL twin (`glsl/bvh.glsl`) shares with this crate (`twin::contract!`;
+/// rendered to `contract/geometry.glsl` by `engine/build.rs`).
+pub mod contract;
 pub mod error;
 pub mod frame;
 mod kernel;

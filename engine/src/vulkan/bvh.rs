@@ -8,7 +8,7 @@ use super::{Buffer, Context, VulkanError};
 
 /// Hits per ray that `bvh.glsl`'s all-hits query keeps in the parity kernels (its default
 /// `BVH_MAX_HITS`).
-pub const BVH_MAX_HITS: usize = sss::contract::bvh::DEFAULT_MAX_HITS;
+pub const BVH_MAX_HITS: usize = geometry::contract::bvh::DEFAULT_MAX_HITS;
 
 /// The four BVH buffers: nodes (80-byte `CwBvhNode`s), triangles in leaf-slot order
 /// (9 `f32` each), the global triangle id and the object id of each leaf slot.

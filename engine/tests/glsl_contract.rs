@@ -142,7 +142,7 @@ fn the_scanner_finds_numbered_kinds() {
     for line in [
         "#define BVH_MAX_HITS KEPT_HITS",
         "#define BVH_MAX_HITS BVH_DEFAULT_MAX_HITS",
-        "#define SSS_BVH_GLSL",
+        "#define GEOMETRY_BVH_GLSL",
         "#define MIS_WEIGHT(KIND, stem) \\",
         "const float BSSRDF_TAU = 6.28318548202514648;",
         "const uint MASK = BVH_NO_HIT >> 1u;",

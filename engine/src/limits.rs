@@ -23,20 +23,6 @@ mod tests {
 
     use super::*;
 
-    /// docs/scene-format.md lists every limit with its value.
-    #[test]
-    fn the_limits_are_documented() {
-        let doc = include_str!("../../docs/scene-format.md");
-        let rows = [
-            ("PIPELINE_BYTES_PER_PIXEL", PIPELINE_BYTES_PER_PIXEL),
-            ("IMAGE_BYTES_PER_PIXEL", IMAGE_BYTES_PER_PIXEL),
-        ];
-        for (name, value) in rows {
-            let row = format!("| `{name}` | `{value}` |");
-            assert!(doc.contains(&row), "docs/scene-format.md lacks {row:?}");
-        }
-    }
-
     #[test]
     fn run_bytes_count_the_pipeline_and_every_frame() {
         assert_eq!(run_bytes(10, 2), Some(10 * (512 + 24)));

@@ -1,6 +1,6 @@
-//! BVH benchmark (`cargo bench -p sss --bench bvh`): build time, incoherent closest-hit rays/s
-//! (one thread and all threads), and SSS probe rays/s (all hits on one object along short chords,
-//! as in BSSRDF importance sampling [001 §2.1]). Prints a table; asserts nothing.
+//! BVH benchmark (`cargo bench -p geometry --bench bvh`): build time, incoherent closest-hit
+//! rays/s (one thread and all threads), and SSS probe rays/s (all hits on one object along short
+//! chords, as in BSSRDF importance sampling [001 §2.1]). Prints a table; asserts nothing.
 
 use std::time::{Duration, Instant};
 

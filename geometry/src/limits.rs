@@ -79,22 +79,6 @@ pub fn bytes(n: u64) -> String {
 mod tests {
     use super::*;
 
-    /// docs/scene-format.md lists every limit with its value.
-    #[test]
-    fn the_limits_are_documented() {
-        let doc = include_str!("../../docs/scene-format.md");
-        let rows = [
-            ("MAX_MESH_FILE_BYTES", MAX_MESH_FILE_BYTES.to_string()),
-            ("MAX_MESH_VERTICES", MAX_MESH_VERTICES.to_string()),
-            ("MAX_MESH_TRIANGLES", MAX_MESH_TRIANGLES.to_string()),
-            ("MAX_COORDINATE", format!("{MAX_COORDINATE:e}")),
-        ];
-        for (name, value) in rows {
-            let row = format!("| `{name}` | `{value}` |");
-            assert!(doc.contains(&row), "docs/scene-format.md lacks {row:?}");
-        }
-    }
-
     #[test]
     fn bytes_have_a_binary_unit() {
         assert_eq!(bytes(512), "512 bytes");

@@ -128,28 +128,6 @@ mod tests {
         assert!(resolution(file, "camera.resolution", 0, 5).is_err());
     }
 
-    /// docs/scene-format.md lists every limit with its value.
-    #[test]
-    fn the_limits_are_documented() {
-        let doc = include_str!("../../docs/scene-format.md");
-        let rows = [
-            ("MAX_IMAGE_SIDE", MAX_IMAGE_SIDE.to_string()),
-            ("MAX_PIXELS", MAX_PIXELS.to_string()),
-            ("MEMORY_BUDGET", MEMORY_BUDGET.to_string()),
-            ("MAX_FRAMES", MAX_FRAMES.to_string()),
-            ("MAX_SPP", MAX_SPP.to_string()),
-            ("MAX_SCENE_FILE_BYTES", MAX_SCENE_FILE_BYTES.to_string()),
-            ("MAX_LIGHTS", MAX_LIGHTS.to_string()),
-            ("MAX_SHAPE_TRIANGLES", MAX_SHAPE_TRIANGLES.to_string()),
-            ("MAX_SCENE_TRIANGLES", MAX_SCENE_TRIANGLES.to_string()),
-            ("MAX_EMISSION", format!("{MAX_EMISSION:e}")),
-        ];
-        for (name, value) in rows {
-            let row = format!("| `{name}` | `{value}` |");
-            assert!(doc.contains(&row), "docs/scene-format.md lacks {row:?}");
-        }
-    }
-
     #[test]
     fn memory_and_counts() {
         let file = Path::new("(command line)");

@@ -2,18 +2,19 @@
 //! shaders to SPIR-V with `glslc` (DESIGN §6, docs/gpu-backend.md).
 //!
 //! Contract: the crates declare what their GLSL twins share with them in `twin::contract!`
-//! files (`restir/src/contract.rs`, `sss/src/contract.rs`, `shifts/src/contract.rs`,
-//! `src/contract.rs`, `src/purpose.rs`) and register shifts in `shifts/src/registry.rs`. This
-//! script includes the same files, so the items it renders are the ones the crates compile, and
-//! writes `$OUT_DIR/glsl/contract/`: `restir.glsl`, `sss.glsl`, `shifts.glsl` (with the shift
-//! kinds and their dispatch list), `engine.glsl`, one header per push-constant block, and
-//! `shift_twins.glsl` (the includes of the registered shifts' GLSL twins).
+//! files (`restir/src/contract.rs`, `geometry/src/contract.rs`, `sss/src/contract.rs`,
+//! `shifts/src/contract.rs`, `src/contract.rs`, `src/purpose.rs`) and register shifts in
+//! `shifts/src/registry.rs`. This script includes the same files, so the items it renders are the
+//! ones the crates compile, and writes `$OUT_DIR/glsl/contract/`: `restir.glsl`,
+//! `geometry.glsl`, `sss.glsl`, `shifts.glsl` (with the shift kinds and their dispatch list),
+//! `engine.glsl`, one header per push-constant block, and `shift_twins.glsl` (the includes of
+//! the registered shifts' GLSL twins).
 //!
 //! Shaders: every `glsl/*.glsl` is one compute entry point; the GLSL twins it includes live
-//! beside their Rust modules (`restir/glsl/`, `sss/glsl/`, `shifts/glsl/`) and are found through
-//! `-I`, as are the generated headers. The SPIR-V goes to `$OUT_DIR/<stem>.spv`,
-//! `$OUT_DIR/spirv_table.rs` maps stems to it, and the cfg `reshift_glslc` tells the crate to
-//! embed it. Without `glslc` the build still succeeds (with a warning) and the backend reports
+//! beside their Rust modules (`restir/glsl/`, `geometry/glsl/`, `sss/glsl/`, `shifts/glsl/`) and
+//! are found through `-I`, as are the generated headers. The SPIR-V goes to
+//! `$OUT_DIR/<stem>.spv`, `$OUT_DIR/spirv_table.rs` maps stems to it, and the cfg
+//! `reshift_glslc` tells the crate to embed it. Without `glslc` the build still succeeds (with a warning) and the backend reports
 //! what to install; a shader that fails to compile fails the build.
 //!
 //! Freshness: the script watches the `glslc` it runs, or, when there is none, every directory it
@@ -27,6 +28,11 @@ use std::process::Command;
 #[allow(dead_code)]
 mod restir_contract {
     include!("../restir/src/contract.rs");
+}
+
+#[allow(dead_code)]
+mod geometry_contract {
+    include!("../geometry/src/contract.rs");
 }
 
 #[allow(dead_code)]
@@ -107,8 +113,9 @@ macro_rules! shift_registry {
 include!("../shifts/src/registry.rs");
 
 /// The contract files this script includes, relative to this crate.
-const CONTRACTS: [&str; 7] = [
+const CONTRACTS: [&str; 8] = [
     "../restir/src/contract.rs",
+    "../geometry/src/contract.rs",
     "../sss/src/contract.rs",
     "../shifts/src/contract.rs",
     "../shifts/src/registry.rs",
@@ -119,7 +126,12 @@ const CONTRACTS: [&str; 7] = [
 
 /// Include directories of the GLSL twins, relative to this crate (the generated headers are
 /// found through `$OUT_DIR/glsl`).
-const INCLUDE_DIRS: [&str; 3] = ["../restir/glsl", "../sss/glsl", "../shifts/glsl"];
+const INCLUDE_DIRS: [&str; 4] = [
+    "../restir/glsl",
+    "../geometry/glsl",
+    "../sss/glsl",
+    "../shifts/glsl",
+];
 
 /// Writes the contract headers into `dir/contract/`; returns every item rendered.
 fn write_contract(dir: &Path) -> Vec<twin::Item> {
@@ -134,6 +146,15 @@ fn write_contract(dir: &Path) -> Vec<twin::Item> {
             "CONTRACT_RESTIR_GLSL",
             "restir/src/contract.rs",
             &restir_contract::glsl_items(),
+        ),
+    );
+    let geometry = geometry_contract::glsl_items();
+    write(
+        "geometry.glsl",
+        twin::header(
+            "CONTRACT_GEOMETRY_GLSL",
+            "geometry/src/contract.rs",
+            &geometry,
         ),
     );
     let sss = sss_contract::glsl_items();
@@ -183,6 +204,7 @@ fn write_contract(dir: &Path) -> Vec<twin::Item> {
         );
     }
     let mut items = restir_contract::glsl_items();
+    items.extend(geometry);
     items.extend(sss);
     items.extend(shifts);
     items.extend(engine);
@@ -219,7 +241,8 @@ fn check_layouts(glslc: &std::ffi::OsStr, include: &Path, out_dir: &Path, items:
     let mut probes = vec![(
         "layout_probe".to_string(),
         String::from(
-            "#version 460\n#include \"contract/restir.glsl\"\n#include \"contract/sss.glsl\"\n\
+            "#version 460\n#include \"contract/restir.glsl\"\n#include \"contract/geometry.glsl\"\n\
+             #include \"contract/sss.glsl\"\n\
              #include \"contract/shifts.glsl\"\n#include \"contract/engine.glsl\"\n\
              layout(local_size_x = 1) in;\n",
         ),

@@ -1,5 +1,5 @@
 #version 460
-// Parity kernel for sss/glsl/bvh.glsl: per ray, the closest hit, occlusion and all hits on one
+// Parity kernel for geometry/glsl/bvh.glsl: per ray, the closest hit, occlusion and all hits on one
 // object (engine/tests/vulkan_parity.rs).
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 

@@ -1,12 +1,12 @@
 //! Candidate generation [001 §3.1, Eq. 10]: M BSSRDF samples per pixel, every hit of each probe a
 //! candidate with density `p_disk · p_light`, then the selected (canonical) sample shadow-tested.
 
+use geometry::Hit;
 use restir::reservoir::{InvalidCandidate, Reservoir, Ris};
 use restir::rng::StreamKey;
 use restir::shift::Domain;
 use shifts::{SssDomain, SssSample};
 use sss::bssrdf::{BssrdfSample, EntryPoint, Probe};
-use sss::geometry::Hit;
 
 use crate::purpose;
 

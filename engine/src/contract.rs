@@ -44,7 +44,7 @@ twin::contract! {
     }
 
     /// One global triangle id: vertices, per-vertex shading normals and the object id
-    /// (`sss::geometry::Geometry`), binding 4 of the scene.
+    /// (`geometry::Geometry`), binding 4 of the scene.
     #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
     pub struct GpuTriangle {
         pub v: [f32; 9],

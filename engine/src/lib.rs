@@ -19,6 +19,7 @@ pub mod denoise;
 pub mod diagnostics;
 pub mod hash;
 pub mod image;
+pub mod limits;
 pub mod plan;
 /// `purpose` tags of the pipeline's random streams. Every random number of a pass comes from
 /// `StreamKey { pixel, frame, pass, purpose }.stream(seed)`, with `pixel` the receiving pixel's

@@ -19,9 +19,9 @@
 
 use std::cell::RefCell;
 
+use geometry::Ray;
 use glam::{DVec3, Vec3, Vec3A};
 use restir::rng::{Stream, StreamKey};
-use sss::geometry::Ray;
 use sss::integrator::pt::{self, PtSettings};
 use sss::random_walk::{self, ExitLighting, Medium, MeshBoundary, estimate_exitant};
 use sss::scene::{GBuffer, GPixel, Light, Scene};

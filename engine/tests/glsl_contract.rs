@@ -1,5 +1,5 @@
 //! The GLSL hand-numbers no kind: every integer constant that the twins (`restir/glsl`,
-//! `sss/glsl`, `shifts/glsl`) and the kernels (`engine/glsl`) spell as a number —
+//! `geometry/glsl`, `sss/glsl`, `shifts/glsl`) and the kernels (`engine/glsl`) spell as a number —
 //! `const uint|int|uint64_t NAME = <numbers and operators>;` or `#define NAME <numbers>` — must be
 //! in [`ALLOWED`], which says why it is no constant of the Rust contract. Every other kind or
 //! shared constant comes from a `twin::contract!` file through the headers `engine/build.rs`
@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 const ALLOWED: [(&str, &str); 5] = [
     (
         "BVH_STACK_SIZE",
-        "sss/glsl/bvh.glsl: obvhs's TRAVERSAL_STACK_SIZE (a dependency's constant, not ours), \
+        "geometry/glsl/bvh.glsl: obvhs's TRAVERSAL_STACK_SIZE (a dependency's constant, not ours), \
          the length of the traversal stack array",
     ),
     (
@@ -37,8 +37,9 @@ const ALLOWED: [(&str, &str); 5] = [
 ];
 
 /// The GLSL folders scanned, relative to the workspace root.
-const FOLDERS: [&str; 5] = [
+const FOLDERS: [&str; 6] = [
     "restir/glsl",
+    "geometry/glsl",
     "sss/glsl",
     "shifts/glsl",
     "engine/glsl",
@@ -141,7 +142,7 @@ fn the_scanner_finds_numbered_kinds() {
     for line in [
         "#define BVH_MAX_HITS KEPT_HITS",
         "#define BVH_MAX_HITS BVH_DEFAULT_MAX_HITS",
-        "#define SSS_BVH_GLSL",
+        "#define GEOMETRY_BVH_GLSL",
         "#define MIS_WEIGHT(KIND, stem) \\",
         "const float BSSRDF_TAU = 6.28318548202514648;",
         "const uint MASK = BVH_NO_HIT >> 1u;",

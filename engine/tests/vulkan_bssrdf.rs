@@ -25,6 +25,8 @@ use engine::vulkan::{
     BVH_MAX_HITS, Buffer, CANDIDATES, Context, FrameParams, GpuPixel, GpuScene, PassParams, Shader,
     groups_for,
 };
+use geometry::Hit;
+use geometry::contract::bvh::NO_HIT;
 use restir::rng::StreamKey;
 use restir::shift::Domain;
 use shifts::{Hybrid, SssDomain, SssSample};
@@ -33,8 +35,6 @@ use sss::bssrdf::{
     pick_hit,
 };
 use sss::contract::bssrdf::INDEX_UNKNOWN;
-use sss::contract::bvh::NO_HIT;
-use sss::geometry::Hit;
 use sss::scene::{GBuffer, GPixel, Scene};
 
 /// `parity_bssrdf.glsl`: scene (0–8), G-buffer (9), queries (10), results (11); push constants

@@ -9,9 +9,9 @@ use engine::vulkan::{
     BVH_MAX_HITS, Buffer, BurleyInput, BurleyOutput, BvhRayInput, BvhRayOutput, Context, Dispatch,
     GpuBvh, GpuStreamKey, Kernel, RngParams, Shader, VulkanError, groups_for,
 };
+use geometry::{Geometry, Hit, Ray, shapes};
 use glam::{Affine3A, Vec3, Vec3A};
 use restir::rng::StreamKey;
-use sss::geometry::{Geometry, Hit, Ray, shapes};
 use sss::profile::Burley;
 
 fn gpu_time(seconds: Option<f64>) -> String {

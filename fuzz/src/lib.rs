@@ -5,9 +5,9 @@
 
 use std::path::Path;
 
+use geometry::load::{MeshFormat, parse_mesh};
 use sss::InputError;
 use sss::error::MAX_MESSAGE_CHARS;
-use sss::geometry::load::{MeshFormat, parse_mesh};
 use sss::integrator::Reference;
 use sss::scene::Scene;
 

@@ -23,7 +23,6 @@ use restir::stats::{
 };
 use sss::InputError;
 use sss::integrator::pt::{self, PtSettings};
-use sss::limits;
 use sss::scene::{GBuffer, Scene};
 
 use crate::regions::{Region, Regions};
@@ -95,12 +94,12 @@ const REPLICA_BYTES_PER_PIXEL: u64 = size_of::<DVec3>() as u64;
 const BATCH_BYTES_PER_PIXEL: u64 = size_of::<DVec3>() as u64;
 
 /// Bytes a bias test at `pixels` holds: every replica's image, every reference batch and one
-/// run of `frames` frames (`sss::limits::run_bytes`); `None` on overflow.
+/// run of `frames` frames (`engine::limits::run_bytes`); `None` on overflow.
 pub fn test_bytes(pixels: u64, replicas: u32, batches: u32, frames: u32) -> Option<u64> {
     let kept = (replicas as u64 * REPLICA_BYTES_PER_PIXEL)
         .checked_add(batches as u64 * BATCH_BYTES_PER_PIXEL)?
         .checked_mul(pixels)?;
-    kept.checked_add(limits::run_bytes(pixels, frames)?)
+    kept.checked_add(engine::limits::run_bytes(pixels, frames)?)
 }
 
 /// The final frame (`frames − 1`) of replicas `0..replicas` of `preset` on `backend`; replica `i`
@@ -597,7 +596,7 @@ mod tests {
         assert_eq!(test_bytes(pixels, 2, 3, 16), Some(base + pixels * 24));
         assert_eq!(
             test_bytes(pixels, 2, 2, 17),
-            Some(base + pixels * limits::IMAGE_BYTES_PER_PIXEL)
+            Some(base + pixels * engine::limits::IMAGE_BYTES_PER_PIXEL)
         );
         assert_eq!(test_bytes(u64::MAX / 4, 2, 2, 1), None);
     }

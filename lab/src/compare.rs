@@ -13,7 +13,8 @@ use std::path::{Path, PathBuf};
 
 use engine::Backend;
 use engine::denoise::{self, DenoiseError, Denoiser, Guide};
-use sss::limits::{self, IMAGE_BYTES_PER_PIXEL};
+use engine::limits::{IMAGE_BYTES_PER_PIXEL, run_bytes};
+use sss::limits;
 use sss::scene::{GBuffer, Scene};
 
 use crate::error::Error;
@@ -114,7 +115,7 @@ impl Plan {
             return invalid("no method given");
         }
         let origin = Path::new("(comparison plan)");
-        limits::replicas(origin, "replicas", self.replicas)?;
+        crate::limits::replicas(origin, "replicas", self.replicas)?;
         limits::frames(origin, "frames", self.frames)?;
         if self.equal_time.is_some_and(|t| !(t.is_finite() && t > 0.0)) {
             return invalid("the equal-time budget must be a positive number of seconds");
@@ -123,7 +124,7 @@ impl Plan {
         let kept = (self.methods.len() as u64)
             .checked_mul(self.replicas as u64)
             .and_then(|n| n.checked_mul(pixels * IMAGE_BYTES_PER_PIXEL));
-        let needed = kept.zip(limits::run_bytes(pixels, self.frames));
+        let needed = kept.zip(run_bytes(pixels, self.frames));
         let value = format!(
             "{} methods × {} replicas × {} frames at {}×{}",
             self.methods.len(),

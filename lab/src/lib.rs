@@ -17,6 +17,7 @@ pub mod findings;
 pub mod flip;
 pub mod gpu_report;
 pub mod images;
+pub mod limits;
 pub mod low_frequency;
 pub mod method_result;
 pub mod methods;

@@ -19,10 +19,10 @@
 
 use std::fmt;
 
+use geometry::Ray;
 use glam::{Vec3, Vec3A};
 use rayon::prelude::*;
 use restir::rng::StreamKey;
-use sss::geometry::Ray;
 use sss::integrator::pt::SHADOW_EPSILON;
 use sss::material::Material;
 use sss::scene::{GBuffer, GPixel, Scene};

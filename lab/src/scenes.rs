@@ -5,8 +5,9 @@
 use std::path::Path;
 
 use engine::hash::fnv1a;
+use geometry::limits::read_file;
 use sss::InputError;
-use sss::limits::{MAX_SCENE_FILE_BYTES, read_file};
+use sss::limits::MAX_SCENE_FILE_BYTES;
 use sss::material::MEASURED_NAMES;
 use sss::scene::Scene;
 

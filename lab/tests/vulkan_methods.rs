@@ -333,7 +333,7 @@ fn unknown_device_is_a_one_line_error() {
 /// front face: a BSSRDF probe along the normal crosses all of them, so candidate generation
 /// traverses `layers` triangles per probe (the camera ray stops at the first layer).
 fn layered_scene(layers: u32) -> Scene {
-    use sss::geometry::{Geometry, TriangleMesh};
+    use geometry::{Geometry, TriangleMesh};
     let slab = scene("slab", 8, 6);
     let front = glam::Vec3::new(0.0, 0.7, 0.025);
     let mut layered = TriangleMesh::default();
@@ -347,7 +347,7 @@ fn layered_scene(layers: u32) -> Scene {
         ]);
         layered.indices.push([base, base + 1, base + 2]);
     }
-    let floor = sss::geometry::shapes::quad(8.0, 8.0);
+    let floor = geometry::shapes::quad(8.0, 8.0);
     Scene {
         geometry: Geometry::new(&[layered, floor]),
         ..slab

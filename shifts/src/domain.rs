@@ -4,11 +4,11 @@
 
 use std::fmt;
 
+use geometry::Ray;
 use glam::{Vec3, Vec3A};
 use restir::rng::{Stream, StreamKey};
 use restir::shift::{Domain, LocalCoords};
 use sss::bssrdf::{self, EntryPoint, ExitPoint, TechniqueSelection};
-use sss::geometry::Ray;
 use sss::material::{Material, Translucent};
 use sss::scene::{DIRECTIONAL_DISTANCE, GPixel, Light, Scene};
 

@@ -30,6 +30,7 @@
 mod common;
 
 use common::{SEED, VISIBLE, fixture, refs};
+use geometry::Frame;
 use glam::{Vec2, Vec3};
 use restir::check::{CheckReport, ShiftCase, finite_difference_jacobian, negative_control};
 use restir::rng::{Stream, StreamKey};
@@ -40,7 +41,6 @@ use sss::bssrdf::{
     BssrdfSample, EntryPoint, Technique, TechniqueSelection, find_index, invert_random_numbers,
     technique_terms,
 };
-use sss::geometry::Frame;
 use sss::scene::Light;
 
 /// Relative step of the kit: `h = 0.1 · 0.01` = 1e-3 scene units / radians / units of γ

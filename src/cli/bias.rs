@@ -11,12 +11,13 @@ use lab::bias::{
     BiasRow, Protocol, Table, bias_rows, overall, reference_images_with, replicas_needed,
     summarize, test_bytes,
 };
+use lab::limits::MAX_REPLICAS;
 use lab::methods::Method;
 use lab::reference_cache::REFERENCE_SEED;
 use lab::regions::Regions;
 use restir::stats::Verdict;
 use serde_json::{Value, json};
-use sss::limits::{self, MAX_REPLICAS, MAX_SPP};
+use sss::limits::{self, MAX_SPP};
 use sss::scene::GBuffer;
 
 use super::common::{

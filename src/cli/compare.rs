@@ -159,7 +159,7 @@ fn plan(args: &CompareArgs) -> CliResult<Plan> {
     if methods.is_empty() {
         return Err(CliError("--methods: no method given".into()));
     }
-    limits::replicas(command_line(), "--replicas", args.replicas)?;
+    lab::limits::replicas(command_line(), "--replicas", args.replicas)?;
     limits::frames(command_line(), "--frames", args.frames)?;
     if let Some(t) = args.equal_time
         && !(t.is_finite() && t > 0.0)

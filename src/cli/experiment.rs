@@ -9,8 +9,6 @@ use clap::{Args, ValueEnum};
 use lab::experiments::{Experiment, Settings};
 use sss::InputError;
 
-use sss::limits;
-
 use super::common::{BackendArgs, Bars, CliResult, command_line, parse_resolution};
 
 /// An experiment name on the command line; the names and their help are
@@ -95,7 +93,7 @@ pub fn command(args: &ExperimentArgs) -> CliResult<()> {
         .into());
     }
     let replicas = args.replicas.unwrap_or(defaults.replicas);
-    limits::replicas(command_line(), "--replicas", replicas)?;
+    lab::limits::replicas(command_line(), "--replicas", replicas)?;
     let resolution = match &args.resolution {
         Some(text) => parse_resolution(text)?,
         None => defaults.resolution,

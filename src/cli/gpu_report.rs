@@ -124,7 +124,7 @@ fn settings(args: &GpuReportArgs) -> CliResult<Settings> {
     let compare = if args.no_compare {
         None
     } else {
-        limits::replicas(command_line(), "--compare-replicas", args.compare_replicas)?;
+        lab::limits::replicas(command_line(), "--compare-replicas", args.compare_replicas)?;
         limits::frames(command_line(), "--compare-frames", args.compare_frames)?;
         let stem = args
             .out

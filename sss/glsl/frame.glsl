@@ -1,5 +1,5 @@
-// The glam vector operations the scene twins mirror, and the twin of sss::geometry::Frame
-// (sss/src/geometry/frame.rs). glam's Vec3 dot is x*x' + y*y' + z*z' left to right, length is
+// The glam vector operations the scene twins mirror, and the twin of geometry::Frame
+// (geometry/src/frame.rs). glam's Vec3 dot is x*x' + y*y' + z*z' left to right, length is
 // sqrt(dot), normalize is v * (1 / length), cross is the textbook formula; GLSL's built-in dot,
 // length, normalize and cross may be evaluated in another order or fused, so the twins call
 // these instead. Every result is `precise`: no multiply-add is fused.

@@ -1,6 +1,6 @@
 // The scene on the device (engine::vulkan::GpuScene): bindings SCENE_BINDING + 0 .. + 8 of
 // the Vulkan backend contract, the per-pixel GPixel and the per-frame FrameParams, and twins of
-// sss::geometry::Geometry's triangle accessors (sss/src/geometry/bvh.rs).
+// geometry::Geometry's triangle accessors (geometry/src/bvh.rs).
 //
 // The including shader enables GL_EXT_shader_explicit_arithmetic_types_int64 and defines
 // SCENE_BINDING (0 in every pass shader) before including this file.

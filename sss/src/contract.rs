@@ -11,7 +11,6 @@ pub fn glsl_items() -> Vec<twin::Item> {
         xie::glsl_items(),
         dipole::glsl_items(),
         light::glsl_items(),
-        bvh::glsl_items(),
         material::glsl_items(),
         bssrdf::glsl_items(),
         pt::glsl_items(),
@@ -71,31 +70,6 @@ pub mod light {
         /// Distance from a shading point at which a directional light's vertex x3 is placed
         /// (scene units); scenes are a few units across, so the vertex lies outside any of them.
         pub const DIRECTIONAL_DISTANCE: f32 = 1.0e4;
-    }
-}
-
-/// `bvh.glsl`.
-pub mod bvh {
-    twin::contract! {
-        glsl_prefix = BVH;
-
-        /// Hits per ray that `bvh.glsl`'s all-hits query keeps unless the including kernel
-        /// defines `BVH_MAX_HITS` first (the pass kernels keep the engine's `KEPT_HITS`); its
-        /// hit count goes on past them. The CPU keeps every hit.
-        pub const DEFAULT_MAX_HITS: usize = 8;
-        /// The `prim` and `object` of no hit, and the `object` of a closest-hit query on any
-        /// object (`Option::None` of [`crate::geometry::Hit`]).
-        pub const NO_HIT: u32 = u32::MAX;
-
-        /// The queries of [`crate::geometry::Geometry`] (`closest_hit`, `occluded`,
-        /// `all_hits_on_object`) that `bvh.glsl`'s one traversal serves:
-        /// `bvh_traverse(ray, BVH_<QUERY>, object)`.
-        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-        pub enum BvhQuery in BVH {
-            Closest,
-            Occluded,
-            AllHits,
-        }
     }
 }
 

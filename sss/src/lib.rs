@@ -1,6 +1,7 @@
 //! `sss`: the subsurface-scattering path space (DESIGN §4): diffusion profiles, materials,
-//! geometry and BVH, scenes, lights and camera, BSSRDF importance sampling, and the integrators
-//! (path-tracing baseline, progressive reference, volumetric random walk).
+//! scenes (on the `geometry` crate's meshes and BVH), lights and camera, BSSRDF importance
+//! sampling, and the integrators (path-tracing baseline, progressive reference, volumetric
+//! random walk).
 
 pub mod bssrdf;
 /// What the GLSL twins (`sss/glsl/`) share with this crate: per twin its constants and kinds
@@ -8,7 +9,6 @@ pub mod bssrdf;
 /// re-export them where they are used.
 pub mod contract;
 pub mod error;
-pub mod geometry;
 pub mod integrator;
 pub mod limits;
 pub mod material;

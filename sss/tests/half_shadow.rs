@@ -9,9 +9,9 @@
 //! angle `2 acos(−s/r)`), independently of the estimator, and compared with the progressive
 //! reference at distances s ∈ {−2, −1, −½, 0, ½, 1, 2}·d (d = the widest channel's d).
 
+use geometry::Ray;
 use glam::{DVec3, Vec3, Vec3A};
 use sss::bssrdf::TechniqueSelection;
-use sss::geometry::Ray;
 use sss::integrator::{HitPolicy, PtSettings, Reference, ReferenceConfig, Shard};
 use sss::material::Material;
 use sss::scene::{GBuffer, GPixel, Scene, luminance};

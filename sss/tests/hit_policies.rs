@@ -5,9 +5,9 @@
 //! without its `n_hits` factor (i.e. taking `p_disk` as the density of the kept hit and forgetting
 //! the `1/n` pick) is rejected by the same test.
 
+use geometry::Hit;
 use glam::Vec3;
 use restir::stats::{Welford, holm, welch};
-use sss::geometry::Hit;
 use sss::integrator::pt::{estimate, sample_stream};
 use sss::integrator::{HitPolicy, PtSettings, Shading};
 use sss::scene::{GBuffer, GPixel, Scene, luminance};

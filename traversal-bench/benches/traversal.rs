@@ -14,7 +14,9 @@
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
-use sss::geometry::{Geometry, Hit, Ray};
+use geometry::{Geometry, Hit, Ray};
+use sss::bssrdf::{ExitPoint, Probe, TechniqueSelection};
+use sss::integrator::pt::SHADOW_EPSILON;
 use sss::material::{Material, Translucent};
 use sss::scene::Scene;
 use traversal_bench::{EMBREE_STATUS, rays, scanned};
@@ -249,10 +251,29 @@ fn material(scene: &Scene, object: u32) -> Translucent {
     }
 }
 
+/// SSS probe chords: exit points x1 uniform on `object`, techniques and random numbers drawn as
+/// `sss::bssrdf::Probe::sample` does, chords from `Probe::ray`.
+fn probes(geometry: &Geometry, object: u32, material: &Translucent, count: usize) -> Vec<Ray> {
+    let selection = TechniqueSelection::default();
+    rays::chords(geometry, object, count, |prim, bary, rng| {
+        let n = geometry.geometric_normal(prim);
+        let x1 = ExitPoint::new(
+            geometry.position(prim, bary),
+            n,
+            geometry.shading_normal(prim, bary),
+            n,
+            object,
+            material,
+        );
+        let probe = Probe::sample(&selection, rng.next_f32(), rng.next_f32(), rng.next_f32());
+        probe.ray(&x1)
+    })
+}
+
 #[cfg(embree)]
 /// One mesh per object, as triangle soup with the exact vertices `geometry` holds (for Embree).
-fn object_meshes(geometry: &Geometry) -> Vec<sss::geometry::TriangleMesh> {
-    let mut meshes = vec![sss::geometry::TriangleMesh::default(); geometry.object_count() as usize];
+fn object_meshes(geometry: &Geometry) -> Vec<geometry::TriangleMesh> {
+    let mut meshes = vec![geometry::TriangleMesh::default(); geometry.object_count() as usize];
     for prim in 0..geometry.triangle_count() {
         let mesh = &mut meshes[geometry.object_of(prim) as usize];
         let base = mesh.positions.len() as u32;
@@ -271,8 +292,8 @@ fn bench(
     rounds: usize,
 ) {
     let incoherent = rays::incoherent(geometry, object, count);
-    let shadow = rays::shadow(geometry, object, count);
-    let probes = rays::probes(geometry, object, jade, count);
+    let shadow = rays::shadow(geometry, object, count, SHADOW_EPSILON);
+    let probes = probes(geometry, object, jade, count);
     let workloads = [
         Workload {
             name: "closest hit, incoherent",

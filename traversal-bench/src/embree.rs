@@ -5,7 +5,7 @@
 
 use std::ffi::{c_char, c_int, c_uint, c_void};
 
-use sss::geometry::{Ray, TriangleMesh};
+use geometry::{Ray, TriangleMesh};
 
 type RtcDevice = *mut c_void;
 type RtcScene = *mut c_void;
@@ -316,9 +316,9 @@ impl Drop for Embree {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use geometry::Geometry;
+    use geometry::shapes::cuboid;
     use glam::{Affine3A, Vec3, Vec3A};
-    use sss::geometry::Geometry;
-    use sss::geometry::shapes::cuboid;
 
     /// Two unit cubes on the x axis (centres 0 and 3) and a ray along +x through both: checks
     /// the hand-written layouts and the id mapping against reshift's answers.

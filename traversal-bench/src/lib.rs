@@ -1,5 +1,5 @@
 //! Side-by-side CPU traversal benchmark (`cargo bench -p traversal-bench`): reshift's
-//! [`sss::geometry::Geometry`] against Embree 3 on the same meshes and the same rays.
+//! [`geometry::Geometry`] against Embree 3 on the same meshes and the same rays.
 //!
 //! Embree is optional and bench-only: `build.rs` links it when `libembree-dev` is installed
 //! (`cfg(embree)`); otherwise the benchmark runs reshift alone and says Embree is absent.

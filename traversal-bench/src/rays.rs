@@ -1,12 +1,11 @@
 //! The benchmark's ray sets, all from explicit `StreamKey` streams: incoherent rays, shadow
-//! segments toward a quad light, and SSS probe chords issued by `sss::bssrdf` exactly as the
-//! renderer issues them.
+//! segments toward a quad light, and chords from uniform surface points issued by a caller's
+//! function (the benchmark's SSS probe chords, issued by `sss::bssrdf` exactly as the renderer
+//! issues them).
 
+use geometry::{Geometry, Ray};
 use glam::{Vec2, Vec3, Vec3A};
 use restir::rng::{Stream, StreamKey};
-use sss::bssrdf::{ExitPoint, Probe, TechniqueSelection};
-use sss::geometry::{Geometry, Ray};
-use sss::material::Translucent;
 
 const SEED: u64 = 0x7A4E;
 
@@ -83,10 +82,10 @@ pub fn incoherent(geometry: &Geometry, object: u32, count: usize) -> Vec<Ray> {
         .collect()
 }
 
-/// Shadow segments from uniform points on `object` (offset by `sss`'s shadow ε along the normal
-/// on the light's side) to uniform points on a quad light one object size above it, as
-/// `sss::integrator::pt` issues them.
-pub fn shadow(geometry: &Geometry, object: u32, count: usize) -> Vec<Ray> {
+/// Shadow segments from uniform points on `object` (offset by `epsilon` along the normal on the
+/// light's side; the benchmark passes `sss::integrator::pt::SHADOW_EPSILON`) to uniform points on
+/// a quad light one object size above it, as `sss::integrator::pt` issues them.
+pub fn shadow(geometry: &Geometry, object: u32, count: usize, epsilon: f32) -> Vec<Ray> {
     let (lo, hi) = object_bounds(geometry, object);
     let size = (hi - lo).max_element();
     let sampler = SurfaceSampler::new(geometry, object);
@@ -102,32 +101,27 @@ pub fn shadow(geometry: &Geometry, object: u32, count: usize) -> Vec<Ray> {
             );
             let n = geometry.geometric_normal(prim);
             let side = if n.dot(light - x) < 0.0 { -1.0 } else { 1.0 };
-            let from = x + side * sss::integrator::pt::SHADOW_EPSILON * n;
+            let from = x + side * epsilon * n;
             Ray::segment(from.into(), light.into())
         })
         .collect()
 }
 
-/// SSS probe chords: exit points x1 uniform on `object`, techniques and random numbers drawn as
-/// `sss::bssrdf::Probe::sample` does, chords from `Probe::ray` (empty chords redrawn).
-pub fn probes(geometry: &Geometry, object: u32, material: &Translucent, count: usize) -> Vec<Ray> {
+/// `count` chords from points uniform on `object`: `chord(prim, bary, rng)` issues the chord at
+/// the point `(prim, bary)`, drawing its own random numbers from `rng`; `None` (an empty chord)
+/// is redrawn.
+pub fn chords(
+    geometry: &Geometry,
+    object: u32,
+    count: usize,
+    mut chord: impl FnMut(u32, Vec2, &mut Stream) -> Option<Ray>,
+) -> Vec<Ray> {
     let sampler = SurfaceSampler::new(geometry, object);
-    let selection = TechniqueSelection::default();
     let mut rng = StreamKey::new(0, 0, 0, 3).stream(SEED);
     let mut rays = Vec::with_capacity(count);
     while rays.len() < count {
         let (prim, bary) = sampler.sample(&mut rng);
-        let n = geometry.geometric_normal(prim);
-        let x1 = ExitPoint::new(
-            geometry.position(prim, bary),
-            n,
-            geometry.shading_normal(prim, bary),
-            n,
-            object,
-            material,
-        );
-        let probe = Probe::sample(&selection, rng.next_f32(), rng.next_f32(), rng.next_f32());
-        rays.extend(probe.ray(&x1));
+        rays.extend(chord(prim, bary, &mut rng));
     }
     rays
 }

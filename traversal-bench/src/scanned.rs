@@ -5,8 +5,8 @@
 
 use std::collections::HashMap;
 
+use geometry::TriangleMesh;
 use glam::{Vec3, vec3};
-use sss::geometry::TriangleMesh;
 
 /// Lattice value noise in `[−1, 1]`, smooth (quintic fade) between integer points.
 fn value_noise(p: Vec3) -> f32 {

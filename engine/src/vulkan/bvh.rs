@@ -1,14 +1,14 @@
-//! The scene BVH on the device: `sss::geometry::Geometry`'s obvhs CWBVH uploaded as is, for
-//! `sss/glsl/bvh.glsl` (bindings `BVH_BINDING .. BVH_BINDING + 3`, in [`GpuBvh::buffers`] order).
+//! The scene BVH on the device: `geometry::Geometry`'s obvhs CWBVH uploaded as is, for
+//! `geometry/glsl/bvh.glsl` (bindings `BVH_BINDING .. BVH_BINDING + 3`, in [`GpuBvh::buffers`] order).
 
 use bytemuck::{Pod, Zeroable};
-use sss::geometry::Geometry;
+use geometry::Geometry;
 
 use super::{Buffer, Context, VulkanError};
 
 /// Hits per ray that `bvh.glsl`'s all-hits query keeps in the parity kernels (its default
 /// `BVH_MAX_HITS`).
-pub const BVH_MAX_HITS: usize = sss::contract::bvh::DEFAULT_MAX_HITS;
+pub const BVH_MAX_HITS: usize = geometry::contract::bvh::DEFAULT_MAX_HITS;
 
 /// The four BVH buffers: nodes (80-byte `CwBvhNode`s), triangles in leaf-slot order
 /// (9 `f32` each), the global triangle id and the object id of each leaf slot.
@@ -61,7 +61,7 @@ impl GpuBvh {
 }
 
 /// `parity_bvh.glsl`'s `BvhRayInput` (std430: nine 4-byte scalars, 36 bytes); the ray of
-/// `sss::geometry::Ray` plus the object of the all-hits query.
+/// `geometry::Ray` plus the object of the all-hits query.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct BvhRayInput {
@@ -101,7 +101,7 @@ mod tests {
         assert_eq!(offset_of!(BvhRayOutput, hit_count), 20);
         assert_eq!(offset_of!(BvhRayOutput, hit_ts), 24 + 4 * BVH_MAX_HITS);
         // The node layout bvh.glsl reads: 80-byte obvhs nodes.
-        let geometry = Geometry::new(&[sss::geometry::shapes::icosphere(1.0, 1)]);
+        let geometry = Geometry::new(&[geometry::shapes::icosphere(1.0, 1)]);
         assert_eq!(size_of_val(&geometry.bvh().nodes[0]), 80);
     }
 }

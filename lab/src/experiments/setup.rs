@@ -56,11 +56,11 @@ pub struct Report {
 }
 
 impl Settings {
-    /// The replicas and the resolution within [`sss::limits`].
+    /// The replicas and the resolution within [`crate::limits`] and [`sss::limits`].
     pub fn check(&self) -> Result<(), InputError> {
         let origin = Path::new("(experiment settings)");
         let (width, height) = self.resolution;
-        limits::replicas(origin, "replicas", self.replicas)?;
+        crate::limits::replicas(origin, "replicas", self.replicas)?;
         limits::resolution(origin, "resolution", width, height)
     }
 

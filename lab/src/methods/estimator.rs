@@ -229,7 +229,7 @@ impl Method {
         limits::frames(origin, "frames", frames)
             .and_then(|_| limits::resolution(origin, "width×height", width, height))
             .and_then(|_| {
-                let bytes = limits::run_bytes(width as u64 * height as u64, frames);
+                let bytes = engine::limits::run_bytes(width as u64 * height as u64, frames);
                 let value = format!("{frames} frames at {width}×{height}");
                 limits::memory(origin, "frames", &value, bytes, "the run")
             })

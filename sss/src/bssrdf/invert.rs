@@ -3,13 +3,13 @@
 
 use std::f32::consts::TAU;
 
+use geometry::{Geometry, Hit};
 use glam::Vec3;
 
 use super::pdf::technique_terms;
 use super::probe::{EntryPoint, ExitPoint, trace_probe};
 use super::sample::{BssrdfSample, Probe};
 use super::technique::{Technique, TechniqueSelection};
-use crate::geometry::{Geometry, Hit};
 
 pub use crate::contract::bssrdf::InvertFail;
 

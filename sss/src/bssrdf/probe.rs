@@ -1,9 +1,9 @@
 //! The exit point x1, the entry point x2 and the probe ray of BSSRDF IS (DESIGN §9 "Probe ray").
 
+use geometry::{Frame, Geometry, Hit, Ray};
 use glam::{Vec2, Vec3, Vec3A};
 
 use super::technique::{Axis, RadiusSampling, Technique};
-use crate::geometry::{Frame, Geometry, Hit, Ray};
 use crate::material::{FresnelTransmission, Translucent};
 use crate::profile::Burley;
 

@@ -1,10 +1,10 @@
 //! Sampling x2 by BSSRDF IS, replay of stored random numbers, and the stored sample record.
 
+use geometry::{Geometry, Hit, Ray};
 use glam::Vec2;
 
 use super::probe::{EntryPoint, ExitPoint, probe_ray_with, trace_probe};
 use super::technique::{RadiusSampling, Technique, TechniqueSelection};
-use crate::geometry::{Geometry, Hit, Ray};
 
 /// One BSSRDF IS draw before tracing: the technique and its two random numbers. Replaying it at
 /// another x1 is delayed reconnection's random replay [001 §3.2.2].

@@ -1,12 +1,12 @@
 //! Tests of BSSRDF IS on analytic meshes: the probe, inversion round trips, the posterior over
 //! techniques, and the density of sampled entry points.
 
+use geometry::{Geometry, Hit, TriangleMesh, shapes};
 use glam::{DVec3, Vec2, Vec3};
 use restir::rng::{Stream, StreamKey};
 use restir::stats::{Welford, chi_square_gof, normal_quantile};
 
 use super::*;
-use crate::geometry::{Geometry, Hit, TriangleMesh, shapes};
 use crate::material::{BoundaryKind, Translucent};
 use crate::profile::ScaleFit;
 

@@ -32,13 +32,13 @@
 //! Random numbers: sample `j` of pixel `p` in frame `f` is the path tracer's sample `j`
 //! ([`pt::sample_stream`]), so a fixed count `n` gives exactly `pt` with Xie radii at `n` spp.
 
+use geometry::Hit;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::pt::{self, Image, PtSettings, Shading};
 use crate::InputError;
 use crate::bssrdf::RadiusSampling;
-use crate::geometry::Hit;
 use crate::material::Material;
 use crate::scene::{GBuffer, Scene, luminance};
 

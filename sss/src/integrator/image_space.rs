@@ -45,13 +45,13 @@
 
 use std::f32::consts::{FRAC_1_PI, PI, TAU};
 
+use geometry::{Frame, Hit};
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use restir::rng::{Stream, StreamKey};
 
 use super::pt::{self, Image, PtSettings, Shading, occluded};
 use crate::InputError;
-use crate::geometry::{Frame, Hit};
 use crate::material::{DipoleProfiles, FresnelTransmission, Material, Translucent};
 use crate::scene::{GBuffer, GPixel, Scene};
 

@@ -20,6 +20,7 @@
 //! of seed 002). BSSRDF IS keeps sampling Burley radii under the dipole profile: `p_disk > 0`
 //! wherever the truncated dipole `f` is, so the estimate is unbiased for it.
 
+use geometry::{Hit, Ray};
 use glam::{DVec3, Vec3, Vec3A};
 use rayon::prelude::*;
 use restir::rng::{Stream, StreamKey};
@@ -28,7 +29,6 @@ use crate::bssrdf::{
     EntryPoint, ExitPoint, Probe, RadiusSampling, TechniqueSelection, contribution,
     contribution_dipole, p_disk_with, pick_hit,
 };
-use crate::geometry::{Hit, Ray};
 use crate::material::{DipoleProfiles, Lambert, Material, Translucent};
 use crate::profile::ProfileKind;
 use crate::scene::{GBuffer, GPixel, Scene};

@@ -25,13 +25,14 @@
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
+use geometry::limits::{bytes as human, read_file};
 use glam::DVec3;
 
 use super::exact::ExactSum;
 use super::pt::{self, HitPolicy, PtSettings};
 use crate::InputError;
 use crate::bssrdf::{RadiusSampling, TechniqueSelection};
-use crate::limits::{self, MAX_PIXELS, bytes as human};
+use crate::limits::{self, MAX_PIXELS};
 use crate::profile::ProfileKind;
 use crate::scene::{GBuffer, Scene};
 
@@ -376,7 +377,7 @@ impl Reference {
 
     /// Reads a checkpoint written by [`Reference::save`].
     pub fn load(path: &Path) -> Result<Reference, InputError> {
-        Reference::from_bytes(&limits::read_file(path, MAX_CHECKPOINT_BYTES)?, path)
+        Reference::from_bytes(&read_file(path, MAX_CHECKPOINT_BYTES)?, path)
     }
 
     /// Parses checkpoint bytes; `path` names them in errors. Every size in the header is checked

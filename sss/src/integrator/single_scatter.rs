@@ -44,13 +44,13 @@
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
+use geometry::Hit;
 use glam::Vec3;
 use restir::rng::{Stream, StreamKey};
 
 use super::pt::{self, Image, PtSettings};
 use crate::InputError;
 use crate::bssrdf::{EntryPoint, ExitPoint, bssrdf_of_profile};
-use crate::geometry::Hit;
 use crate::material::{FresnelTransmission, Material};
 use crate::profile::{Burley, ScatteringOrders};
 use crate::random_walk::{

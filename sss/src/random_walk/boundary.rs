@@ -1,8 +1,7 @@
 //! The closed surface that bounds the walk: the [`Boundary`] query and analytic shapes.
 
+use geometry::{Geometry, Ray};
 use glam::Vec3;
-
-use crate::geometry::{Geometry, Ray};
 
 /// Where a ray from inside the medium first meets the boundary.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -83,7 +82,7 @@ pub struct MeshBoundary<'a> {
     pub geometry: &'a Geometry,
     pub object: u32,
     /// Set when the object's triangles are wound clockwise seen from outside (negative
-    /// [`TriangleMesh::signed_volume`](crate::geometry::TriangleMesh::signed_volume)), so that the
+    /// [`TriangleMesh::signed_volume`](geometry::TriangleMesh::signed_volume)), so that the
     /// geometric normal points inward.
     pub inward_winding: bool,
 }
@@ -108,7 +107,7 @@ impl Boundary for MeshBoundary<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::shapes::cuboid;
+    use geometry::shapes::cuboid;
 
     #[test]
     fn half_space_exits_only_upward() {

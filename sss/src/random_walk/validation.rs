@@ -2,12 +2,12 @@
 //! [`super`] states the analytic check). Replicas (independent batches of walks, each with its
 //! own streams) are the statistical unit.
 
+use geometry::Geometry;
+use geometry::shapes::icosphere;
 use glam::Vec3;
 use restir::rng::{Stream, StreamKey};
 use restir::stats::{Equivalence, Summary, Verdict, equivalence};
 
-use crate::geometry::Geometry;
-use crate::geometry::shapes::icosphere;
 use crate::material::fresnel::fresnel_by_angles;
 
 use super::boundary::{Boundary, HalfSpace, MeshBoundary, Sphere};

@@ -70,9 +70,9 @@ pub fn source(name: &str) -> Option<&'static str> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::Ray;
     use crate::material::Material;
     use crate::scene::{GBuffer, Light, Scene};
+    use geometry::Ray;
     use glam::{Vec3, Vec3A, vec3};
     use std::path::Path;
 

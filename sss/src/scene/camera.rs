@@ -5,9 +5,8 @@
 //! `(px + 0.5, py + 0.5) + jitter(f)`; [`Camera::project`] is the unjittered projection, so the
 //! hit point of [`Camera::ray`] projects back to the jittered sample position.
 
+use geometry::Ray;
 use glam::{Vec2, Vec3, Vec3A};
-
-use crate::geometry::Ray;
 
 /// Frames of the camera trajectory (seed 001 §6 records the temporal history over 16 frames).
 pub const FRAMES: u32 = 16;

@@ -149,7 +149,7 @@ intensity = [1.0, 1.0, 1.0]
 
     /// What each pixel must see, from an analytic intersection of its camera ray, where the
     /// ray is not within `margin` of a silhouette or the wall's border: (object, depth, normal).
-    fn expected(ray: &crate::geometry::Ray, margin: f32) -> Option<Option<(u32, f32, Vec3)>> {
+    fn expected(ray: &geometry::Ray, margin: f32) -> Option<Option<(u32, f32, Vec3)>> {
         let (o, d) = (Vec3::from(ray.origin), Vec3::from(ray.dir));
         let b = o.dot(d);
         let miss_distance = (o - b * d).length();

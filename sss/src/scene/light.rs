@@ -12,9 +12,8 @@
 
 use std::f32::consts::PI;
 
+use geometry::Frame;
 use glam::Vec3;
-
-use crate::geometry::Frame;
 
 pub use crate::contract::light::DIRECTIONAL_DISTANCE;
 

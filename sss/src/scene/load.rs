@@ -4,6 +4,8 @@
 use std::collections::HashMap;
 use std::path::Path;
 
+use geometry::limits::MAX_COORDINATE;
+use geometry::{Geometry, TriangleMesh, load_mesh, shapes};
 use glam::{Affine3A, Quat, Vec3};
 
 use super::format::{
@@ -15,10 +17,7 @@ use super::many_lights::ManyLights;
 use super::parse::parse;
 use super::{Camera, Object, Scene};
 use crate::InputError;
-use crate::geometry::{Geometry, TriangleMesh, load_mesh, shapes};
-use crate::limits::{
-    self, MAX_COORDINATE, MAX_EMISSION, MAX_LIGHTS, MAX_SCENE_TRIANGLES, MAX_SHAPE_TRIANGLES,
-};
+use crate::limits::{self, MAX_EMISSION, MAX_LIGHTS, MAX_SCENE_TRIANGLES, MAX_SHAPE_TRIANGLES};
 use crate::material::{BoundaryKind, Lambert, MEASURED_NAMES, Material, Translucent, measured};
 use crate::profile::ScaleFit;
 

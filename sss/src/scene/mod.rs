@@ -18,9 +18,11 @@ pub use gbuffer::{GBuffer, GPixel, REPROJECTION_DEPTH_TOLERANCE, REPROJECTION_NO
 pub use light::{DIRECTIONAL_DISTANCE, Light, LightSample, Lights, luminance};
 pub use many_lights::ManyLights;
 
+use geometry::Geometry;
+use geometry::limits::read_file;
+
 use crate::InputError;
-use crate::geometry::Geometry;
-use crate::limits::{MAX_SCENE_FILE_BYTES, read_file};
+use crate::limits::MAX_SCENE_FILE_BYTES;
 use crate::material::Material;
 
 /// A scene object; its index in [`Scene::objects`] is its object id in [`Scene::geometry`].

@@ -18,9 +18,9 @@
 
 use std::cell::RefCell;
 
+use geometry::Hit;
 use glam::Vec3;
 use restir::rng::{Stream, StreamKey};
-use sss::geometry::Hit;
 use sss::integrator::pt::{self, PtSettings};
 use sss::integrator::single_scatter::{
     MultipleScattering, Shading, SingleScatterSettings, path_traced,

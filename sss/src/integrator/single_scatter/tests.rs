@@ -6,12 +6,12 @@
 
 use std::path::Path;
 
+use geometry::Ray;
 use glam::{DVec3, Vec3, Vec3A};
 use restir::rng::{Stream, StreamKey};
 use restir::stats::{Summary, Verdict, equivalence};
 
 use super::*;
-use crate::geometry::Ray;
 use crate::random_walk::lighting::test_support::Furnace;
 use crate::random_walk::validation::{
     gauss_legendre_01, reflectance_exact, single_scattering_exact,

@@ -1,14 +1,14 @@
-//! BVH benchmark (`cargo bench -p sss --bench bvh`): build time, incoherent closest-hit rays/s
-//! (one thread and all threads), and SSS probe rays/s (all hits on one object along short chords,
-//! as in BSSRDF importance sampling [001 §2.1]). Prints a table; asserts nothing.
+//! BVH benchmark (`cargo bench -p geometry --bench bvh`): build time, incoherent closest-hit
+//! rays/s (one thread and all threads), and SSS probe rays/s (all hits on one object along short
+//! chords, as in BSSRDF importance sampling [001 §2.1]). Prints a table; asserts nothing.
 
 use std::time::{Duration, Instant};
 
+use geometry::{Frame, Geometry, Hit, Ray, TriangleMesh, shapes};
 use glam::{Vec2, Vec3, Vec3A};
 use obvhs::{BvhBuildParams, ray::RayHit};
 use rayon::prelude::*;
 use restir::rng::{Stream, StreamKey};
-use sss::geometry::{Frame, Geometry, Hit, Ray, TriangleMesh, shapes};
 
 const SEED: u64 = 0xBE4C;
 const RAYS: usize = 1 << 20;

@@ -158,7 +158,7 @@ pub(super) fn intersect_triangle(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::testing::rays;
+    use crate::testing::rays;
 
     /// The construction of Woop et al. 2013 §3 written out with scalar divisions and the shear
     /// rows transposed, as the SIMD version in [`PreparedRay::new`] must reproduce bit for bit.

@@ -1,5 +1,5 @@
-// Ray queries on the obvhs CWBVH as sss::geometry::Geometry uploads it: the GLSL twin of
-// sss/src/geometry/bvh.rs (read the two side by side; same node test, same watertight triangle
+// Ray queries on the obvhs CWBVH as geometry::Geometry uploads it: the GLSL twin of
+// geometry/src/bvh.rs (read the two side by side; same node test, same watertight triangle
 // test, same operation order, `precise` so that no multiply-add is fused).
 //
 // The including shader enables GL_EXT_shader_explicit_arithmetic_types_int64 (shaderInt64 and
@@ -8,12 +8,12 @@
 // global triangle id of each leaf slot (CwBvh::primitive_indices) and its object id.
 // BVH_NODE_COUNT must name a uint holding the node count (0 for an empty scene).
 
-#ifndef SSS_BVH_GLSL
-#define SSS_BVH_GLSL
+#ifndef GEOMETRY_BVH_GLSL
+#define GEOMETRY_BVH_GLSL
 
 // BVH_DEFAULT_MAX_HITS, BVH_NO_HIT and the queries BVH_CLOSEST, BVH_OCCLUDED, BVH_ALL_HITS
-// (sss/src/contract.rs).
-#include "contract/sss.glsl"
+// (geometry/src/contract.rs).
+#include "contract/geometry.glsl"
 
 // obvhs::cwbvh::node::CwBvhNode, repr(C): p, e[3] + imask, child_base_idx, primitive_base_idx,
 // child_meta[8], then min/max quantised planes per axis (8 bytes each).

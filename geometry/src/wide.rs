@@ -247,8 +247,8 @@ impl Builder<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::Geometry;
-    use crate::geometry::testing::scene;
+    use crate::Geometry;
+    use crate::testing::scene;
 
     /// The triangles under a child reference, and the deepest pending-entry count a traversal
     /// of it can reach.

@@ -3,9 +3,9 @@
 //!
 //! One obvhs binary BVH (PLOC + reinsertion) is built over all objects' triangles and converted
 //! twice: into obvhs's CWBVH (compressed 8-wide, Ylitie et al. 2017), exported as is for the
-//! GPU twin (`sss/glsl/bvh.glsl`), and into the CPU layout of `wide.rs` (uncompressed 8-wide
+//! GPU twin (`glsl/bvh.glsl`), and into the CPU layout of `wide.rs` (uncompressed 8-wide
 //! nodes, four-triangle packets), traversed by `traverse.rs` with the SIMD kernels of
-//! `kernel.rs`. Scenes of several objects also get one such tree per object: the
+//! `kernel/`. Scenes of several objects also get one such tree per object: the
 //! object-restricted queries (the BSSRDF probe's) walk it, so it is their object filter and they
 //! never visit another object's nodes. Triangles use the watertight test of Woop, Benthin & Wald 2013
 //! (`watertight.rs`), so a ray through a shared edge or vertex of a closed mesh cannot slip
@@ -309,10 +309,10 @@ unsafe fn run_avx2<Q: Query>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::shapes;
-    use crate::geometry::testing::{brute_force, hit_bits, rays, scene, unit_vector};
-    use crate::geometry::traverse::INLINE_SLOTS;
-    use crate::geometry::watertight::intersect_triangle;
+    use crate::shapes;
+    use crate::testing::{brute_force, hit_bits, rays, scene, unit_vector};
+    use crate::traverse::INLINE_SLOTS;
+    use crate::watertight::intersect_triangle;
     use glam::{Affine3A, Vec3, Vec3A};
     use obvhs::ray::RayHit;
     use restir::rng::StreamKey;

@@ -345,7 +345,7 @@ mod tests {
     use glam::{Vec3, Vec3A};
 
     use super::*;
-    use crate::geometry::{Geometry, Ray, TriangleMesh};
+    use crate::{Geometry, Ray, TriangleMesh};
 
     /// Inner nodes per depth of `bvh`.
     fn inner_levels(bvh: &WideBvh) -> Vec<usize> {

@@ -166,7 +166,7 @@ mod tests {
 
     #[test]
     fn mirroring_keeps_outward_winding() {
-        let mesh = crate::geometry::shapes::cuboid(vec3(1.0, 2.0, 3.0));
+        let mesh = crate::shapes::cuboid(vec3(1.0, 2.0, 3.0));
         let mirrored = mesh.transformed(&Affine3A::from_scale(vec3(-1.0, 1.0, 1.0)));
         assert!((mirrored.signed_volume() - 48.0).abs() < 1e-9);
         assert_eq!(

@@ -12,7 +12,7 @@
 //! * Printed: MSE per method with its 95% CI, and the ratio restir / plain with its 95% CI on the
 //!   log scale.
 //!
-//! `cargo run --release -p lab --example boundary_restir_mse -- [scene] [WxH] [replicas] [ref spp]
+//! `cargo run --release -p experiments --example boundary_restir_mse -- [scene] [WxH] [replicas] [ref spp]
 //! [mfp scale]` (defaults: `slab 64x48 32 4096 1`; the scale multiplies every translucent
 //! material's `scale`).
 

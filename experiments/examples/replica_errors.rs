@@ -11,7 +11,7 @@
 //! method within a replica, so a slow phase of a shared machine hits every method alike; wall
 //! times are still noisy, the MSEs are deterministic.
 //!
-//! `cargo run --release -p lab --example replica_errors -- <scene> <WxH> <replicas> <methods>
+//! `cargo run --release -p experiments --example replica_errors -- <scene> <WxH> <replicas> <methods>
 //! [paired-with [reference-spp]]`, e.g. `… bumpy 128x96 8 pt,restir:hybrid,restir:hybrid/shade=all
 //! restir:hybrid` (reference 8192 spp by default, in batches of 128, cached in `out/cache`).
 

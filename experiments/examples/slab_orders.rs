@@ -5,7 +5,7 @@
 //! replica `i`, each method's own streams). It tells a model error of the diffusion term from a
 //! defect of the path-traced orders.
 //!
-//! `cargo run --release -p lab --example slab_orders -- [scene] [WxH] [replicas] [spp]`
+//! `cargo run --release -p experiments --example slab_orders -- [scene] [WxH] [replicas] [spp]`
 //! (defaults: `slab 40x30 8 32`, frame 15).
 
 use glam::DVec3;

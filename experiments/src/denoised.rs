@@ -8,13 +8,13 @@
 use engine::denoise::Denoiser;
 use serde_json::json;
 
-use crate::compare::{self, Outcome};
-use crate::error::Error;
 use crate::findings::{self, Finding, Quantity, all_below, cost_below};
-use crate::method_result::MethodResult;
-use crate::progress::Progress;
-use crate::regions::Region;
-use crate::report::write_text;
+use lab::compare::{self, Outcome};
+use lab::error::Error;
+use lab::method_result::MethodResult;
+use lab::progress::Progress;
+use lab::regions::Region;
+use lab::report::write_text;
 
 use super::setup::{Report, Settings, equal_time_plan};
 

@@ -10,18 +10,18 @@ use engine::{Diagnostics, RunConfig};
 use serde_json::json;
 use sss::scene::{GBuffer, Scene};
 
-use crate::compare;
-use crate::error::Error;
 use crate::findings::{self, Quantity, all_above, all_below, mse_below};
-use crate::method_result::Measured;
-use crate::methods::restir;
-use crate::progress::Progress;
-use crate::reference_cache::REFERENCE_SEED;
-use crate::regions::{Region, Regions};
-use crate::report::tables::with_ci;
-use crate::report::{file_stem, output_dir};
-use crate::scenes::{load_scene, with_resolution};
-use crate::uncertainty::Estimate;
+use lab::compare;
+use lab::error::Error;
+use lab::method_result::Measured;
+use lab::methods::restir;
+use lab::progress::Progress;
+use lab::reference_cache::REFERENCE_SEED;
+use lab::regions::{Region, Regions};
+use lab::report::tables::with_ci;
+use lab::report::{file_stem, output_dir};
+use lab::scenes::{load_scene, with_resolution};
+use lab::uncertainty::Estimate;
 
 use super::setup::{FRAMES, Report, Settings, equal_time_plan};
 

@@ -8,11 +8,11 @@
 //! it **holds** when every interval lies on the claimed side, **fails** when some interval lies
 //! entirely on the other side, and is **inconclusive** otherwise.
 
-use crate::method_result::MethodResult;
-use crate::metrics::Area;
-use crate::regions::Region;
-use crate::report::tables::sig;
-use crate::uncertainty::{CONFIDENCE, Estimate};
+use lab::method_result::MethodResult;
+use lab::metrics::Area;
+use lab::regions::Region;
+use lab::report::tables::sig;
+use lab::uncertainty::{CONFIDENCE, Estimate};
 
 /// What the measurements say of a claim.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -1,13 +1,16 @@
-//! Named reproductions of seed 001's figures (DESIGN §7), each ending in a table of the paper's
-//! qualitative findings and whether the measured numbers reproduce them ([`crate::findings`]).
-//! The comparisons (Fig. 6–9) run [`crate::compare`] at equal time; the diagnostics figures
-//! (Fig. 4, 5, 10) average `engine::diagnostics` per region. `ground-truth` measures every
-//! method against the volumetric random walk [000]. docs/experiments.md has the protocol
-//! and measured results.
+//! `experiments`: seed 001's experiments and their findings, built on the lab's comparisons
+//! ([`lab::compare`]). Each named experiment ([`Experiment`]) reproduces one of seed 001's
+//! figures (DESIGN §7) and ends in a table of the paper's qualitative findings and whether the
+//! measured numbers reproduce them ([`findings`]). The comparisons (Fig. 6–9) run
+//! [`lab::compare`] at equal time; the diagnostics figures (Fig. 4, 5, 10) average
+//! `engine::diagnostics` per region. `ground-truth` measures every method against the volumetric
+//! random walk [000]. The one-off measurements of the examples (`examples/`) read the same
+//! methods and regions. docs/experiments.md has the protocol and measured results.
 
 mod ablation;
 mod denoised;
 mod figures;
+pub mod findings;
 pub mod ground_truth;
 mod materials;
 mod mfp_scaling;
@@ -17,8 +20,8 @@ mod shift_comparison;
 
 pub use setup::{Report, Settings, equal_time_plan};
 
-use crate::error::Error;
-use crate::progress::Progress;
+use lab::error::Error;
+use lab::progress::Progress;
 
 /// An experiment by name ([`Experiment::name`]); [`Experiment::about`] says what it reproduces.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

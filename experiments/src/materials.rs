@@ -1,11 +1,11 @@
 //! Fig. 8 of seed 001: hybrid and sequential against equal-time and 1-spp path tracing on the
 //! ten measured materials (`materials`).
 
-use crate::compare;
-use crate::error::Error;
 use crate::findings::{self, all_below, cost_below, mse_below};
-use crate::progress::Progress;
-use crate::regions::Region;
+use lab::compare;
+use lab::error::Error;
+use lab::progress::Progress;
+use lab::regions::Region;
 
 use super::setup::{Report, Settings, equal_time_plan};
 

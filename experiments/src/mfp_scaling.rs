@@ -3,16 +3,16 @@
 
 use serde_json::json;
 
-use crate::compare;
-use crate::error::Error;
 use crate::findings::{self, Finding, all_above, log_cost_ratio, log_mse_ratio, row};
-use crate::method_result::Measured;
-use crate::metrics::Area;
-use crate::progress::Progress;
-use crate::regions::Region;
-use crate::report::output_dir;
-use crate::report::tables::with_ci;
-use crate::uncertainty::Estimate;
+use lab::compare;
+use lab::error::Error;
+use lab::method_result::Measured;
+use lab::metrics::Area;
+use lab::progress::Progress;
+use lab::regions::Region;
+use lab::report::output_dir;
+use lab::report::tables::with_ci;
+use lab::uncertainty::Estimate;
 
 use super::setup::{Report, Settings, equal_time_plan};
 

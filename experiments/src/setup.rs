@@ -8,12 +8,12 @@ use serde_json::Value;
 use sss::InputError;
 use sss::limits;
 
-use crate::compare::{DEFAULT_BASELINE, Outcome, Plan, frame_reference_spp, parse_methods};
-use crate::error::Error;
-use crate::methods::Method;
-use crate::reference_cache::ReferenceSource;
-use crate::report::write_text;
-use crate::scenes::{load_scene, with_resolution};
+use lab::compare::{DEFAULT_BASELINE, Outcome, Plan, frame_reference_spp, parse_methods};
+use lab::error::Error;
+use lab::methods::Method;
+use lab::reference_cache::ReferenceSource;
+use lab::report::write_text;
+use lab::scenes::{load_scene, with_resolution};
 
 /// Frames of every experiment's camera trajectory.
 pub const FRAMES: u32 = 16;

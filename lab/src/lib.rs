@@ -2,8 +2,7 @@
 //! ([`methods`]), obtains references ([`reference_cache`]), measures methods against them per
 //! region ([`regions`], [`metrics`], [`flip`], [`low_frequency`], [`perceptual`],
 //! [`method_result`]), runs
-//! comparisons ([`compare`]), the named experiments of seed 001 with their findings
-//! ([`experiments`], [`findings`]) and the replica bias protocol ([`bias`]), and writes tables,
+//! comparisons ([`compare`]) and the replica bias protocol ([`bias`]), and writes tables,
 //! `results.json` and images ([`report`], [`images`]). It renders through the `engine` crate and
 //! knows nothing of how a backend runs a pass; long jobs report to a caller's
 //! [`progress::Progress`].
@@ -12,8 +11,6 @@ pub mod bias;
 pub mod chained;
 pub mod compare;
 pub mod error;
-pub mod experiments;
-pub mod findings;
 pub mod flip;
 pub mod gpu_report;
 pub mod images;

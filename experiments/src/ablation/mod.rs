@@ -1,10 +1,10 @@
 //! `ablation` (issue 10): one ReSTIR preset varied one knob at a time — temporal cap, spatial
 //! cap, neighbours, Rao-Blackwellised shading, camera motion, jitter, resolution (2× and 3× the
 //! run's) — each row's efficiency `1/(MSE·s)` over 1-spp `pt` per region with its 95% interval
-//! (the delta method over replicas, paired by seed, [`crate::uncertainty`]), and its efficiency,
+//! (the delta method over replicas, paired by seed, [`lab::uncertainty`]), and its efficiency,
 //! MSE and time over the unmodified preset where both ran on the same images. Rows sharing a camera and a resolution are one
 //! [`compare::run`] (`<out>/<group>/`), so their ratios pair by seed. Every row's reuse
-//! telemetry ([`crate::telemetry`], CPU backend) comes from separate runs of the same seeds
+//! telemetry ([`lab::telemetry`], CPU backend) comes from separate runs of the same seeds
 //! with diagnostics on (which cost time, so they are not the timed runs): `telemetry.md`.
 
 mod rows;
@@ -16,19 +16,19 @@ use engine::RunConfig;
 use serde_json::json;
 use sss::scene::{GBuffer, Scene};
 
-use crate::compare::{self, DEFAULT_BASELINE, Plan, parse_methods};
-use crate::error::Error;
-use crate::method_result::{Measured, MethodResult};
-use crate::methods::restir;
-use crate::metrics::Area;
-use crate::progress::Progress;
-use crate::reference_cache::{REFERENCE_SEED, ReferenceSource};
-use crate::regions::{Region, Regions};
-use crate::report::tables::milliseconds;
-use crate::report::{output_dir, write_text};
-use crate::scenes::{load_scene, with_resolution};
-use crate::telemetry::{self, RegionSummary};
-use crate::uncertainty::INTERVAL_METHOD;
+use lab::compare::{self, DEFAULT_BASELINE, Plan, parse_methods};
+use lab::error::Error;
+use lab::method_result::{Measured, MethodResult};
+use lab::methods::restir;
+use lab::metrics::Area;
+use lab::progress::Progress;
+use lab::reference_cache::{REFERENCE_SEED, ReferenceSource};
+use lab::regions::{Region, Regions};
+use lab::report::tables::milliseconds;
+use lab::report::{output_dir, write_text};
+use lab::scenes::{load_scene, with_resolution};
+use lab::telemetry::{self, RegionSummary};
+use lab::uncertainty::INTERVAL_METHOD;
 
 use super::setup::{FRAMES, Report, Settings};
 use tables::{findings, markdown, row_json, telemetry_markdown};
@@ -140,7 +140,7 @@ pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, E
         "frames": FRAMES,
         "reference_spp": settings.reference_spp,
         "interval": INTERVAL_METHOD,
-        "confidence": crate::uncertainty::CONFIDENCE,
+        "confidence": lab::uncertainty::CONFIDENCE,
         "rows": measured.iter().map(row_json).collect::<Vec<_>>(),
         "runs": runs,
     });

@@ -2,10 +2,10 @@
 
 use serde_json::{Value, json};
 
-use crate::method_result::Measured;
-use crate::regions::Region;
-use crate::report::tables::{verdict_word, with_ci};
-use crate::telemetry;
+use lab::method_result::Measured;
+use lab::regions::Region;
+use lab::report::tables::{verdict_word, with_ci};
+use lab::telemetry;
 
 use super::rows::CPU_ONLY;
 use super::{FRAMES, Measurement, Settings};
@@ -230,8 +230,8 @@ pub(super) fn row_json(m: &Measurement) -> Value {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::experiments::ablation::{Framing, Variation};
-    use crate::uncertainty::Interval;
+    use crate::ablation::{Framing, Variation};
+    use lab::uncertainty::Interval;
 
     fn measured(lo: f64, value: f64, hi: f64) -> Option<Measured> {
         Some(Measured {

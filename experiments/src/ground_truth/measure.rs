@@ -19,8 +19,8 @@
 use engine::Image;
 use restir::stats::{Summary, student_t_quantile, welch};
 
-use crate::bias::luminance;
-use crate::regions::{Region, Regions};
+use lab::bias::luminance;
+use lab::regions::{Region, Regions};
 
 /// Confidence of every interval of the experiment.
 pub const CONFIDENCE: f64 = 0.99;
@@ -365,12 +365,9 @@ mod tests {
     /// same numbers has ratio 1 inside its interval. Model errors: +10% is measured as such.
     #[test]
     fn efficiency_and_model_error() {
-        let regions = Regions::from_visible_samples(
-            40,
-            1,
-            vec![Some(crate::regions::VISIBILITY_SAMPLES); 40],
-        )
-        .unwrap();
+        let regions =
+            Regions::from_visible_samples(40, 1, vec![Some(lab::regions::VISIBILITY_SAMPLES); 40])
+                .unwrap();
         let truth = images(16, 40, 1.0, 0.3, 100);
         let walk = Measure::new(
             "walk",

@@ -1,6 +1,6 @@
 //! `ground-truth`: every method of the registry against the volumetric random walk — the
 //! transport the diffusion BSSRDF approximates [000] — on the built-in scenes and on a sphere
-//! of each measured material (`sphere-<material>`, [`crate::scenes::material_sphere`]). Each
+//! of each measured material (`sphere-<material>`, [`lab::scenes::material_sphere`]). Each
 //! material's `boundary` is the walk's and the single-scatter estimator's; the BSSRDF methods
 //! keep their normalised Fresnel `F_t(ior)`.
 //!
@@ -27,13 +27,13 @@ use sss::scene::{GBuffer, Scene};
 pub use measure::{CONFIDENCE, Interval, Measure, RegionMeasure, noise};
 pub use truth::{TRUTH_SEED, TRUTH_VERSION, Truth, TruthKey};
 
-use crate::error::Error;
-use crate::methods::{Method, REGISTRY, restir};
-use crate::progress::Progress;
-use crate::reference_cache::REFERENCE_SEED;
-use crate::regions::Regions;
-use crate::report::{output_dir, write_text};
-use crate::scenes::{SPHERE_PREFIX, load_scene, with_resolution};
+use lab::error::Error;
+use lab::methods::{Method, REGISTRY, restir};
+use lab::progress::Progress;
+use lab::reference_cache::REFERENCE_SEED;
+use lab::regions::Regions;
+use lab::report::{output_dir, write_text};
+use lab::scenes::{SPHERE_PREFIX, load_scene, with_resolution};
 use sss::material::MEASURED_NAMES;
 
 use super::setup::{FRAMES, Report, Settings};
@@ -224,9 +224,9 @@ fn replicas(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::progress::Silent;
-    use crate::regions::Region;
     use engine::Backend;
+    use lab::progress::Silent;
+    use lab::regions::Region;
 
     /// The experiment flags a method with a known model error and not the walk itself, on real
     /// renders of `sphere-skin1` at 32×24 (132 translucent pixels): the walk's ground truth

@@ -7,7 +7,7 @@ use serde_json::{Value, json};
 
 use super::measure::{Measure, RegionMeasure};
 use super::{SceneResult, WALK_FAMILY};
-use crate::regions::Region;
+use lab::regions::Region;
 
 /// `+3.71% [+2.60, +4.82]`: a relative model error and its interval, in percent.
 fn model_error(r: &RegionMeasure) -> String {

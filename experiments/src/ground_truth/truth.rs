@@ -15,10 +15,10 @@ use engine::{Backend, Image};
 use glam::Vec3;
 use sss::scene::Scene;
 
-use crate::error::Error;
-use crate::methods::Method;
-use crate::progress::Progress;
-use crate::report::{file_stem, output_dir};
+use lab::error::Error;
+use lab::methods::Method;
+use lab::progress::Progress;
+use lab::report::{file_stem, output_dir};
 
 /// Seed of batch 0 (ASCII "GRNDTRTH"); batch `b` uses `TRUTH_SEED + b`.
 pub const TRUTH_SEED: u64 = 0x4752_4E44_5452_5448;
@@ -194,8 +194,8 @@ fn save(path: &Path, key: &TruthKey, batches: &[Image]) -> Result<(), Error> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::progress::Silent;
-    use crate::scenes::with_resolution;
+    use lab::progress::Silent;
+    use lab::scenes::with_resolution;
 
     /// Computed once, then reused bit for bit; a file of another key (here: a truncated one) is
     /// recomputed, not trusted; one batch is refused.

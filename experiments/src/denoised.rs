@@ -16,7 +16,7 @@ use lab::progress::Progress;
 use lab::regions::Region;
 use lab::report::write_text;
 
-use super::setup::{Report, Settings, equal_time_plan};
+use super::setup::{Report, Settings, equal_time_comparison};
 
 /// The presets of Fig. 6 and 7.
 const PRESETS: [&str; 4] = [
@@ -48,9 +48,9 @@ pub fn run(settings: &Settings, name: &str, progress: &mut dyn Progress) -> Resu
                 ..settings.clone()
             };
             let folder = out.join(format!("{scene}-{width}x{height}"));
-            let plan = compare::Plan {
+            let plan = compare::Comparison {
                 denoise: denoise.clone(),
-                ..equal_time_plan(&sized, scene, &methods, &folder)?
+                ..equal_time_comparison(&sized, scene, &methods, &folder)?
             };
             let outcome = compare::run(&plan, progress)?;
             let findings = denoised_findings(&outcome);

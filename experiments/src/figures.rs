@@ -23,7 +23,7 @@ use lab::report::{file_stem, output_dir};
 use lab::scenes::{load_scene, with_resolution};
 use lab::uncertainty::Estimate;
 
-use super::setup::{FRAMES, Report, Settings, equal_time_plan};
+use super::setup::{FRAMES, Report, Settings, equal_time_comparison};
 
 /// Per area of [`AREAS`], a value's region mean over replicas; `None` where a region is empty.
 type RegionMeans = Vec<Option<Estimate>>;
@@ -117,7 +117,7 @@ pub fn temporal_shift(settings: &Settings, progress: &mut dyn Progress) -> Resul
     let specs = ["restir:sequential", "restir:sequential/temporal=delayed"];
     let root = settings.out_dir("temporal-shift");
     let outcome = compare::run(
-        &equal_time_plan(settings, "bumpy", &specs, &root)?,
+        &equal_time_comparison(settings, "bumpy", &specs, &root)?,
         progress,
     )?;
     let (scene, regions) = scene_and_regions(settings, "bumpy")?;

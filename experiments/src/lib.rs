@@ -18,7 +18,7 @@ pub mod model_gap;
 mod setup;
 mod shift_comparison;
 
-pub use setup::{Report, Settings, equal_time_plan};
+pub use setup::{Report, Settings, equal_time_comparison};
 
 use lab::error::Error;
 use lab::progress::Progress;

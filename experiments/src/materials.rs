@@ -7,13 +7,13 @@ use lab::error::Error;
 use lab::progress::Progress;
 use lab::regions::Region;
 
-use super::setup::{Report, Settings, equal_time_plan};
+use super::setup::{Report, Settings, equal_time_comparison};
 
 pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, Error> {
     let methods = ["pt", "pt:1", "restir:hybrid", "restir:sequential"];
     let out = settings.out_dir("materials");
     let outcome = compare::run(
-        &equal_time_plan(settings, "materials", &methods, &out)?,
+        &equal_time_comparison(settings, "materials", &methods, &out)?,
         progress,
     )?;
     let r = &outcome.rows;

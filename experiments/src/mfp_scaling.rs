@@ -14,7 +14,7 @@ use lab::report::output_dir;
 use lab::report::tables::with_ci;
 use lab::uncertainty::Estimate;
 
-use super::setup::{Report, Settings, equal_time_plan};
+use super::setup::{Report, Settings, equal_time_comparison};
 
 const MFP_SCENES: [(&str, f64); 5] = [
     ("mfp-0.25", 0.25),
@@ -35,7 +35,7 @@ pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, E
     let mut gains: Vec<[Option<Estimate>; 4]> = Vec::new();
     let mut runs = Vec::new();
     for (scene, scale) in MFP_SCENES {
-        let plan = equal_time_plan(settings, scene, &methods, &root.join(scene))?;
+        let plan = equal_time_comparison(settings, scene, &methods, &root.join(scene))?;
         let outcome = compare::run(&plan, progress)?;
         let r = &outcome.rows;
         let t = Region::Translucent;

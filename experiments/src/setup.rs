@@ -8,7 +8,7 @@ use serde_json::Value;
 use sss::InputError;
 use sss::limits;
 
-use lab::compare::{DEFAULT_BASELINE, Outcome, Plan, frame_reference_spp, parse_methods};
+use lab::compare::{Comparison, DEFAULT_BASELINE, Outcome, frame_reference_spp, parse_methods};
 use lab::error::Error;
 use lab::methods::Method;
 use lab::reference_cache::ReferenceSource;
@@ -95,12 +95,12 @@ impl Report {
 
 /// The comparison of `methods` on built-in `scene` into `out`, the path tracer at the
 /// per-frame time of `restir:hybrid` on this scene and backend (the median of 3 runs).
-pub fn equal_time_plan(
+pub fn equal_time_comparison(
     settings: &Settings,
     scene: &str,
     methods: &[&str],
     out: &Path,
-) -> Result<Plan, Error> {
+) -> Result<Comparison, Error> {
     let loaded = load_scene(scene)?;
     let scene_at = with_resolution(loaded.scene, Some(settings.resolution));
     let hybrid = Method::parse("restir:hybrid")?;
@@ -112,7 +112,7 @@ pub fn equal_time_plan(
         })
         .collect::<Result<Vec<f64>, Error>>()?;
     times.sort_by(f64::total_cmp);
-    Ok(Plan {
+    Ok(Comparison {
         scene: scene_at,
         scene_key: loaded.key,
         methods: parse_methods(methods)?,

@@ -8,7 +8,7 @@ use lab::method_result::MethodResult;
 use lab::progress::Progress;
 use lab::regions::Region;
 
-use super::setup::{Report, Settings, equal_time_plan};
+use super::setup::{Report, Settings, equal_time_comparison};
 
 const PRESETS: [&str; 4] = [
     "restir:reconnection",
@@ -24,7 +24,7 @@ pub fn run(
     progress: &mut dyn Progress,
 ) -> Result<Report, Error> {
     let methods: Vec<&str> = ["pt"].into_iter().chain(PRESETS).chain(["pt:1"]).collect();
-    let plan = equal_time_plan(settings, scene, &methods, &settings.out_dir(name))?;
+    let plan = equal_time_comparison(settings, scene, &methods, &settings.out_dir(name))?;
     let outcome = compare::run(&plan, progress)?;
     let table = findings::markdown(&shift_findings(&outcome.rows));
     Report::of_comparison(outcome, table)

@@ -2,11 +2,11 @@
 //! measured per region at every frame of the camera trajectory; the job of `reshift compare` and
 //! of the experiments built on it.
 //!
-//! [`run`] takes a [`Plan`], obtains the references ([`crate::reference_cache`]: the plan's at
+//! [`run`] takes a [`Comparison`], obtains the references ([`crate::reference_cache`]: the plan's at
 //! the last frame, and cheaper ones at the earlier frames for the convergence record), renders
 //! the replicas (seeds `0..K`; with an equal-time budget a bare `pt` is first calibrated), reduces
 //! them to [`MethodResult`]s and writes `table.md`, `table.csv`, `results.json` ([`Results`]),
-//! the images ([`crate::images`]), the figures ([`crate::report::plots`]) and `report.html`
+//! the images ([`crate::report::images`]), the figures ([`crate::report::plots`]) and `report.html`
 //! ([`crate::report::html`]) into the plan's folder.
 
 use std::path::{Path, PathBuf};
@@ -17,13 +17,13 @@ use sss::limits::{self, IMAGE_BYTES_PER_PIXEL};
 use sss::scene::{GBuffer, Scene};
 
 use crate::error::Error;
-use crate::images::write_comparison_images;
 use crate::method_result::{MethodResult, Replica};
 use crate::methods::pt::Pt;
 use crate::methods::{Method, MethodError, SampleCounts};
 use crate::progress::Progress;
 use crate::reference_cache::{self, FrameReference, Obtained, REFERENCE_SEED, ReferenceSource};
 use crate::regions::Regions;
+use crate::report::images::write_comparison_images;
 use crate::report::results::{FrameReferenceEntry, MethodEntry, ReferenceEntry, Results, RunEntry};
 use crate::report::{figure, html, output_dir, plots, tables, write_text};
 
@@ -40,7 +40,7 @@ pub const EQUAL_TIME_SPEC: &str = "pt";
 pub const DEFAULT_BASELINE: &str = "pt";
 
 /// What to compare, where, and against what.
-pub struct Plan {
+pub struct Comparison {
     /// The scene with the camera at the comparison's resolution.
     pub scene: Scene,
     /// Names the scene's cached references ([`crate::scenes::LoadedScene::key`]).
@@ -105,7 +105,7 @@ pub fn frame_reference_spp(spp: u32, batch_spp: u32) -> u32 {
     (spp / 32 / batch * batch).max(2 * batch)
 }
 
-impl Plan {
+impl Comparison {
     /// The plan's counts within [`sss::limits`], and the replicas' final frames (kept until the
     /// table is made) and one run within the memory budget.
     fn check(&self) -> Result<(), Error> {
@@ -143,7 +143,7 @@ impl Plan {
     }
 
     /// The reference source of `frame`: the plan's for the last frame; for an earlier one, the
-    /// cache at [`Plan::frame_reference_spp`] (`None` without a cache or a convergence record).
+    /// cache at [`Comparison::frame_reference_spp`] (`None` without a cache or a convergence record).
     fn reference_of(&self, frame: u32) -> Option<ReferenceSource> {
         if frame + 1 == self.frames {
             return Some(self.reference.clone());
@@ -164,7 +164,7 @@ impl Plan {
 /// Runs the comparison of `plan`, reporting to `progress` (phases `reference frame F` and
 /// `replicas`). A stop request ends it after the current replica with the replicas rendered so
 /// far (`results.interrupted`), or, while a reference renders, with [`Error::Interrupted`].
-pub fn run(plan: &Plan, progress: &mut dyn Progress) -> Result<Outcome, Error> {
+pub fn run(plan: &Comparison, progress: &mut dyn Progress) -> Result<Outcome, Error> {
     plan.check()?;
     let out = output_dir(&plan.out)?;
     let scene = &plan.scene;
@@ -377,7 +377,7 @@ struct Renders {
 /// that fails on a replica leaves that method's denoised row out with one line in
 /// `denoise_errors`; one that is not installed is left out of every method with one line.
 fn render_replicas(
-    plan: &Plan,
+    plan: &Comparison,
     frames: &[u32],
     progress: &mut dyn Progress,
 ) -> Result<Renders, Error> {
@@ -486,7 +486,7 @@ fn denoise_replica(
 /// trajectory when earlier frames are measured or `whole_trajectory` is asked for (a temporal
 /// denoiser), else only the last frame (which a memoryless method renders alone).
 fn render_replica(
-    plan: &Plan,
+    plan: &Comparison,
     method: &Method,
     frames: &[u32],
     seed: u64,
@@ -601,7 +601,7 @@ mod tests {
     #[test]
     fn a_comparison_writes_its_outputs_and_reuses_the_reference() {
         let dir = std::env::temp_dir().join(format!("reshift-compare-{}", std::process::id()));
-        let plan = Plan {
+        let plan = Comparison {
             scene: with_resolution(Scene::builtin("bumpy").unwrap(), Some((12, 9))),
             scene_key: "bumpy".into(),
             methods: parse_methods(&["pt:2", "restir:hybrid"]).unwrap(),
@@ -693,7 +693,7 @@ mod tests {
             again.denoised[0].1[1].metrics,
             first.denoised[0].1[1].metrics
         );
-        let last_only = Plan {
+        let last_only = Comparison {
             frame_reference_spp: None,
             baseline: "none".into(),
             denoise: Vec::new(),
@@ -707,7 +707,7 @@ mod tests {
         }
         // Equal time counts the denoiser: every denoised row's seconds are its rendering's plus
         // one figure shared by the denoiser's rows (the mean of its timings).
-        let timed = Plan {
+        let timed = Comparison {
             equal_time: Some(0.01),
             denoise: vec![Denoiser::Svgf],
             ..last_only
@@ -728,7 +728,7 @@ mod tests {
             assert!((a - mean).abs() < 1e-12, "{added:?} vs {mean}");
         }
         assert!(counted.markdown.contains("counted in ms/frame"));
-        let empty = Plan {
+        let empty = Comparison {
             methods: Vec::new(),
             ..timed
         };

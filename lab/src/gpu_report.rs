@@ -25,7 +25,7 @@ use sss::integrator::adaptive::AdaptiveParams;
 use sss::integrator::single_scatter::ChannelSelection;
 use sss::scene::Scene;
 
-use crate::compare::{self, DEFAULT_BASELINE, Plan};
+use crate::compare::{self, Comparison, DEFAULT_BASELINE};
 use crate::error::Error;
 use crate::methods::Method;
 use crate::progress::Progress;
@@ -436,7 +436,7 @@ fn compare_section(
         methods.push((spec.clone(), Method::parse(&spec)?));
     }
     let (scene, scene_key) = at(settings, c.size)?;
-    let plan = Plan {
+    let plan = Comparison {
         scene,
         scene_key,
         methods,

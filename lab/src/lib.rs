@@ -3,17 +3,17 @@
 //! region ([`regions`], [`metrics`], [`flip`], [`low_frequency`], [`perceptual`],
 //! [`method_result`]), runs
 //! comparisons ([`compare`]) and the replica bias protocol ([`bias`]), and writes tables,
-//! `results.json` and images ([`report`], [`images`]). It renders through the `engine` crate and
+//! `results.json` and images ([`report`], drawn with [`draw`]). It renders through the `engine` crate and
 //! knows nothing of how a backend runs a pass; long jobs report to a caller's
 //! [`progress::Progress`].
 
 pub mod bias;
 pub mod chained;
 pub mod compare;
+pub mod draw;
 pub mod error;
 pub mod flip;
 pub mod gpu_report;
-pub mod images;
 pub mod low_frequency;
 pub mod method_result;
 pub mod methods;

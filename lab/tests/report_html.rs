@@ -12,7 +12,7 @@ use std::process::Command;
 
 use engine::Backend;
 use engine::denoise::Denoiser;
-use lab::compare::{Plan, parse_methods, run};
+use lab::compare::{Comparison, parse_methods, run};
 use lab::progress::Silent;
 use lab::reference_cache::ReferenceSource;
 use lab::scenes::with_resolution;
@@ -112,7 +112,7 @@ fn the_report_renders_in_a_browser() {
     };
     let dir = std::env::temp_dir().join(format!("reshift-report-html-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
-    let plan = Plan {
+    let plan = Comparison {
         scene: with_resolution(Scene::builtin("bumpy").unwrap(), Some((48, 36))),
         scene_key: "bumpy".into(),
         methods: parse_methods(&["pt", "restir:hybrid"]).unwrap(),

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use clap::Args;
 use engine::denoise::Denoiser;
 use lab::compare::{
-    self, DEFAULT_BASELINE, DEFAULT_METHODS, Plan, frame_reference_spp, parse_methods,
+    self, Comparison, DEFAULT_BASELINE, DEFAULT_METHODS, frame_reference_spp, parse_methods,
 };
 use lab::reference_cache::ReferenceSource;
 use lab::report::file_stem;
@@ -116,7 +116,7 @@ pub fn parse_denoise(text: &str) -> CliResult<(Vec<Denoiser>, bool)> {
 /// its partial results and fails.
 pub fn command(args: &CompareArgs) -> CliResult<()> {
     let (denoise, named) = parse_denoise(&args.denoise)?;
-    let plan = Plan {
+    let plan = Comparison {
         denoise,
         ..plan(args)?
     };
@@ -154,7 +154,7 @@ pub fn command(args: &CompareArgs) -> CliResult<()> {
 }
 
 /// The plan of `args`, checked with errors that name the flags.
-fn plan(args: &CompareArgs) -> CliResult<Plan> {
+fn plan(args: &CompareArgs) -> CliResult<Comparison> {
     let methods = parse_methods(&args.methods)?;
     if methods.is_empty() {
         return Err(CliError("--methods: no method given".into()));
@@ -199,7 +199,7 @@ fn plan(args: &CompareArgs) -> CliResult<Plan> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("out/compare-{}", file_stem(&key))));
-    Ok(Plan {
+    Ok(Comparison {
         scene: with_resolution(scene, Some(resolution)),
         scene_key: key,
         methods,

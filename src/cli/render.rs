@@ -6,8 +6,8 @@
 use std::path::PathBuf;
 
 use clap::Args;
+use lab::draw::false_colour_map;
 use lab::methods::Method;
-use lab::report::plots::false_colour_map;
 use lab::report::{file_stem, output_dir};
 use serde_json::json;
 

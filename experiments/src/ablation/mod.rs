@@ -16,7 +16,7 @@ use engine::RunConfig;
 use serde_json::json;
 use sss::scene::{GBuffer, Scene};
 
-use lab::compare::{self, DEFAULT_BASELINE, Plan, parse_methods};
+use lab::compare::{self, Comparison, DEFAULT_BASELINE, parse_methods};
 use lab::error::Error;
 use lab::method_result::{Measured, MethodResult};
 use lab::methods::restir;
@@ -167,7 +167,7 @@ fn group_plan(
     first: &Variation,
     members: &[&Variation],
     out: &std::path::Path,
-) -> Result<Plan, Error> {
+) -> Result<Comparison, Error> {
     let loaded = load_scene(scene_name)?;
     let scene = first
         .framing
@@ -178,7 +178,7 @@ fn group_plan(
     };
     let mut specs = vec![DEFAULT_BASELINE.to_string()];
     specs.extend(members.iter().map(|v| v.spec.clone()));
-    Ok(Plan {
+    Ok(Comparison {
         scene,
         scene_key: key,
         methods: parse_methods(&specs)?,

@@ -9,15 +9,15 @@ use std::path::Path;
 use engine::Image;
 use sss::integrator::Reference;
 
+use super::file_stem;
+use super::results::{ErrorMapScale, ImageFiles};
+use crate::draw::{false_colour_map, quantile};
 use crate::error::Error;
 use crate::flip::write_flip_map;
 use crate::low_frequency;
 use crate::metrics::error_maps;
 use crate::perceptual::Maps;
 use crate::reference_cache::{FrameReference, mean_image};
-use crate::report::file_stem;
-use crate::report::plots::false_colour_map;
-use crate::report::results::{ErrorMapScale, ImageFiles};
 
 /// Writes `reference.exr`/`.png` and, per method `(name, replica-0 final frame)`, its frame and
 /// error maps into `out`; every map of a kind is scaled to the 99th percentile of all methods'
@@ -101,55 +101,4 @@ pub fn write_comparison_images(
         written.push(files);
     }
     Ok((written, scale))
-}
-
-/// A five-stop approximation of viridis for `t` clamped to [0, 1].
-pub fn ramp(t: f64) -> [u8; 3] {
-    const STOPS: [[f64; 3]; 5] = [
-        [68.0, 1.0, 84.0],
-        [59.0, 82.0, 139.0],
-        [33.0, 145.0, 140.0],
-        [94.0, 201.0, 98.0],
-        [253.0, 231.0, 37.0],
-    ];
-    let x = t.clamp(0.0, 1.0) * 4.0;
-    let i = (x.floor() as usize).min(3);
-    let f = x - i as f64;
-    std::array::from_fn(|c| (STOPS[i][c] * (1.0 - f) + STOPS[i + 1][c] * f).round() as u8)
-}
-
-/// The `q`-quantile (0..=1) of the finite values, for colour-map scales robust to fireflies;
-/// 0 when there is none.
-pub fn quantile(values: &[f64], q: f64) -> f64 {
-    let mut finite: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
-    if finite.is_empty() {
-        return 0.0;
-    }
-    finite.sort_by(f64::total_cmp);
-    let at = ((finite.len() - 1) as f64 * q.clamp(0.0, 1.0)).round() as usize;
-    finite[at]
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn ramp_is_ordered_and_clamped() {
-        assert_eq!(ramp(0.0), [68, 1, 84]);
-        assert_eq!(ramp(1.0), [253, 231, 37]);
-        assert_eq!(ramp(-3.0), ramp(0.0));
-        assert_eq!(ramp(7.0), ramp(1.0));
-        // Luminance-like ordering: green grows monotonically along the ramp.
-        let greens: Vec<u8> = (0..=20).map(|i| ramp(i as f64 / 20.0)[1]).collect();
-        assert!(greens.windows(2).all(|w| w[0] <= w[1]), "{greens:?}");
-    }
-
-    #[test]
-    fn quantile_ignores_non_finite_values() {
-        let values = [3.0, f64::NAN, 1.0, 2.0, f64::INFINITY, 4.0];
-        assert_eq!(quantile(&values, 0.0), 1.0);
-        assert_eq!(quantile(&values, 1.0), 4.0);
-        assert_eq!(quantile(&[], 0.5), 0.0);
-    }
 }

@@ -1,10 +1,12 @@
 //! What a job writes: output folders and text files ([`output_dir`], [`write_text`]), the
 //! comparison tables as Markdown and CSV with their intervals ([`tables`]), `results.json` as
-//! typed structs ([`results`]), plots ([`plots`]), the inset figure ([`figure`]) and the
-//! self-contained `report.html` ([`html`]).
+//! typed structs ([`results`]), the reference and per-method images and error maps
+//! ([`images`]), plots ([`plots`]), the inset figure ([`figure`]) and the self-contained
+//! `report.html` ([`html`]).
 
 pub mod figure;
 pub mod html;
+pub mod images;
 pub mod plots;
 pub mod results;
 pub mod tables;

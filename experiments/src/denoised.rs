@@ -12,9 +12,9 @@ use crate::findings::{self, Finding, Quantity, all_below, cost_below};
 use lab::compare::{self, Outcome};
 use lab::error::Error;
 use lab::method_result::MethodResult;
+use lab::output::write_text;
 use lab::progress::Progress;
 use lab::regions::Region;
-use lab::report::write_text;
 
 use super::setup::{Report, Settings, equal_time_comparison};
 

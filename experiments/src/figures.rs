@@ -15,11 +15,11 @@ use lab::compare;
 use lab::error::Error;
 use lab::method_result::Measured;
 use lab::methods::restir;
+use lab::output::{file_stem, output_dir};
 use lab::progress::Progress;
 use lab::reference_cache::REFERENCE_SEED;
 use lab::regions::{Region, Regions};
 use lab::report::tables::with_ci;
-use lab::report::{file_stem, output_dir};
 use lab::scenes::{load_scene, with_resolution};
 use lab::uncertainty::Estimate;
 

@@ -8,9 +8,9 @@ use lab::compare;
 use lab::error::Error;
 use lab::method_result::Measured;
 use lab::metrics::Area;
+use lab::output::output_dir;
 use lab::progress::Progress;
 use lab::regions::Region;
-use lab::report::output_dir;
 use lab::report::tables::with_ci;
 use lab::uncertainty::Estimate;
 

@@ -11,8 +11,8 @@ use sss::limits;
 use lab::compare::{Comparison, DEFAULT_BASELINE, Outcome, frame_reference_spp, parse_methods};
 use lab::error::Error;
 use lab::methods::Method;
+use lab::output::write_text;
 use lab::reference_cache::ReferenceSource;
-use lab::report::write_text;
 use lab::scenes::{load_scene, with_resolution};
 
 /// Frames of every experiment's camera trajectory.

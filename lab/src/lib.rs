@@ -3,7 +3,8 @@
 //! region ([`regions`], [`metrics`], [`flip`], [`low_frequency`], [`perceptual`],
 //! [`method_result`]), runs
 //! comparisons ([`compare`]) and the replica bias protocol ([`bias`]), and writes tables,
-//! `results.json` and images ([`report`], drawn with [`draw`]). It renders through the `engine` crate and
+//! `results.json` and images ([`report`], drawn with [`draw`]) into its output folders
+//! ([`output`]). It renders through the `engine` crate and
 //! knows nothing of how a backend runs a pass; long jobs report to a caller's
 //! [`progress::Progress`].
 
@@ -18,6 +19,7 @@ pub mod low_frequency;
 pub mod method_result;
 pub mod methods;
 pub mod metrics;
+pub mod output;
 pub mod perceptual;
 pub mod progress;
 pub mod reference_cache;

@@ -16,8 +16,8 @@ use sss::integrator::{Reference, ReferenceConfig, Shard};
 use sss::scene::{GBuffer, Scene};
 
 use crate::error::Error;
+use crate::output::{file_stem, output_dir};
 use crate::progress::Progress;
-use crate::report::{file_stem, output_dir};
 
 /// Seed of the reference's batches (ASCII "REFERENC"); replicas use seeds `0..K`.
 pub const REFERENCE_SEED: u64 = 0x5245_4645_5245_4E43;

@@ -10,8 +10,8 @@ use engine::denoise::Denoiser;
 use lab::compare::{
     self, Comparison, DEFAULT_BASELINE, DEFAULT_METHODS, frame_reference_spp, parse_methods,
 };
+use lab::output::file_stem;
 use lab::reference_cache::ReferenceSource;
-use lab::report::file_stem;
 
 use sss::limits;
 

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use clap::Args;
 use lab::draw::false_colour_map;
 use lab::methods::Method;
-use lab::report::{file_stem, output_dir};
+use lab::output::{file_stem, output_dir};
 use serde_json::json;
 
 use sss::limits;

@@ -29,10 +29,10 @@ pub use truth::{TRUTH_SEED, TRUTH_VERSION, Truth, TruthKey};
 
 use lab::error::Error;
 use lab::methods::{Method, REGISTRY, restir};
+use lab::output::{output_dir, write_text};
 use lab::progress::Progress;
 use lab::reference_cache::REFERENCE_SEED;
 use lab::regions::Regions;
-use lab::report::{output_dir, write_text};
 use lab::scenes::{SPHERE_PREFIX, load_scene, with_resolution};
 use sss::material::MEASURED_NAMES;
 

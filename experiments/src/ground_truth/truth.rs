@@ -17,8 +17,8 @@ use sss::scene::Scene;
 
 use lab::error::Error;
 use lab::methods::Method;
+use lab::output::{file_stem, output_dir};
 use lab::progress::Progress;
-use lab::report::{file_stem, output_dir};
 
 /// Seed of batch 0 (ASCII "GRNDTRTH"); batch `b` uses `TRUTH_SEED + b`.
 pub const TRUTH_SEED: u64 = 0x4752_4E44_5452_5448;

@@ -34,10 +34,10 @@ pub use terms::{TERM_NAMES, Terms};
 
 use lab::bias::luminance;
 use lab::error::Error;
+use lab::output::output_dir;
 use lab::progress::Progress;
 use lab::reference_cache::REFERENCE_SEED;
 use lab::regions::{Region, Regions};
-use lab::report::output_dir;
 use lab::scenes::{load_scene, with_resolution};
 
 use super::setup::{FRAMES, Report, Settings};
@@ -352,7 +352,7 @@ pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, E
         "confidence": CONFIDENCE,
         "gaps": all.iter().map(gap_json).collect::<Vec<_>>(),
     });
-    lab::report::write_text(
+    lab::output::write_text(
         &out.join("results.json"),
         &serde_json::to_string_pretty(&json).expect("JSON values"),
     )?;

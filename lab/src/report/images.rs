@@ -9,13 +9,13 @@ use std::path::Path;
 use engine::Image;
 use sss::integrator::Reference;
 
-use super::file_stem;
 use super::results::{ErrorMapScale, ImageFiles};
 use crate::draw::{false_colour_map, quantile};
 use crate::error::Error;
 use crate::flip::write_flip_map;
 use crate::low_frequency;
 use crate::metrics::error_maps;
+use crate::output::file_stem;
 use crate::perceptual::Maps;
 use crate::reference_cache::{FrameReference, mean_image};
 

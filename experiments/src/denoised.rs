@@ -9,14 +9,14 @@ use engine::denoise::Denoiser;
 use serde_json::json;
 
 use crate::findings::{self, Finding, Quantity, all_below, cost_below};
-use lab::compare::{self, Outcome};
+use lab::compare::{Comparison, Outcome};
 use lab::error::Error;
 use lab::method_result::MethodResult;
 use lab::output::write_text;
 use lab::progress::Progress;
 use lab::regions::Region;
 
-use super::setup::{Report, Settings, equal_time_comparison};
+use super::setup::{Report, Settings, compare, equal_time_comparison};
 
 /// The presets of Fig. 6 and 7.
 const PRESETS: [&str; 4] = [
@@ -48,15 +48,15 @@ pub fn run(settings: &Settings, name: &str, progress: &mut dyn Progress) -> Resu
                 ..settings.clone()
             };
             let folder = out.join(format!("{scene}-{width}x{height}"));
-            let plan = compare::Comparison {
+            let plan = Comparison {
                 denoise: denoise.clone(),
                 ..equal_time_comparison(&sized, scene, &methods, &folder)?
             };
-            let outcome = compare::run(&plan, progress)?;
+            let (outcome, written) = compare(&plan, progress)?;
             let findings = denoised_findings(&outcome);
-            runs.push(outcome.results.to_json());
+            runs.push(written.results.to_json());
             let title = format!("{scene} at {width}×{height}");
-            table.push_str(&format!("## {title}\n\n{}\n", outcome.markdown));
+            table.push_str(&format!("## {title}\n\n{}\n", written.markdown));
             write_text(&folder.join("findings.md"), &findings::markdown(&findings))?;
             all.extend(findings.into_iter().map(|f| Finding {
                 claim: format!("{title}: {}", f.claim),

@@ -11,7 +11,6 @@ use serde_json::json;
 use sss::scene::{GBuffer, Scene};
 
 use crate::findings::{self, Quantity, all_above, all_below, mse_below};
-use lab::compare;
 use lab::error::Error;
 use lab::method_result::Measured;
 use lab::methods::restir;
@@ -23,7 +22,7 @@ use lab::report::tables::with_ci;
 use lab::scenes::{load_scene, with_resolution};
 use lab::uncertainty::Estimate;
 
-use super::setup::{FRAMES, Report, Settings, equal_time_comparison};
+use super::setup::{FRAMES, Report, Settings, compare, equal_time_comparison};
 
 /// Per area of [`AREAS`], a value's region mean over replicas; `None` where a region is empty.
 type RegionMeans = Vec<Option<Estimate>>;
@@ -116,7 +115,7 @@ pub fn improved_fraction(settings: &Settings) -> Result<Report, Error> {
 pub fn temporal_shift(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, Error> {
     let specs = ["restir:sequential", "restir:sequential/temporal=delayed"];
     let root = settings.out_dir("temporal-shift");
-    let outcome = compare::run(
+    let (outcome, written) = compare(
         &equal_time_comparison(settings, "bumpy", &specs, &root)?,
         progress,
     )?;
@@ -145,7 +144,7 @@ pub fn temporal_shift(settings: &Settings, progress: &mut dyn Progress) -> Resul
             false,
         ),
     ]);
-    let mut report = Report::of_comparison(outcome, findings)?;
+    let mut report = Report::of_comparison(&outcome, written, findings)?;
     report.table = format!("{}\n{improved}", report.table);
     Ok(report)
 }

@@ -2,17 +2,16 @@
 //! ten measured materials (`materials`).
 
 use crate::findings::{self, all_below, cost_below, mse_below};
-use lab::compare;
 use lab::error::Error;
 use lab::progress::Progress;
 use lab::regions::Region;
 
-use super::setup::{Report, Settings, equal_time_comparison};
+use super::setup::{Report, Settings, compare, equal_time_comparison};
 
 pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, Error> {
     let methods = ["pt", "pt:1", "restir:hybrid", "restir:sequential"];
     let out = settings.out_dir("materials");
-    let outcome = compare::run(
+    let (outcome, written) = compare(
         &equal_time_comparison(settings, "materials", &methods, &out)?,
         progress,
     )?;
@@ -36,5 +35,5 @@ pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, E
         }
     }
     let table = findings::markdown(&found);
-    Report::of_comparison(outcome, table)
+    Report::of_comparison(&outcome, written, table)
 }

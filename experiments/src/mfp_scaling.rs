@@ -4,7 +4,6 @@
 use serde_json::json;
 
 use crate::findings::{self, Finding, all_above, log_cost_ratio, log_mse_ratio, row};
-use lab::compare;
 use lab::error::Error;
 use lab::method_result::Measured;
 use lab::metrics::Area;
@@ -14,7 +13,7 @@ use lab::regions::Region;
 use lab::report::tables::with_ci;
 use lab::uncertainty::Estimate;
 
-use super::setup::{Report, Settings, equal_time_comparison};
+use super::setup::{Report, Settings, compare, equal_time_comparison};
 
 const MFP_SCENES: [(&str, f64); 5] = [
     ("mfp-0.25", 0.25),
@@ -36,7 +35,7 @@ pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, E
     let mut runs = Vec::new();
     for (scene, scale) in MFP_SCENES {
         let plan = equal_time_comparison(settings, scene, &methods, &root.join(scene))?;
-        let outcome = compare::run(&plan, progress)?;
+        let (outcome, written) = compare(&plan, progress)?;
         let r = &outcome.rows;
         let t = Region::Translucent;
         let mse = |m| {
@@ -64,7 +63,7 @@ pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, E
             shown.join(" | ")
         ));
         gains.push(g);
-        runs.push(outcome.results.to_json());
+        runs.push(written.results.to_json());
     }
     let found: Vec<Finding> = [
         (0, "hybrid, equal time"),

@@ -1,5 +1,5 @@
 //! What every experiment shares: its [`Settings`], its [`Report`], its output folder and the
-//! equal-time comparison plan it runs.
+//! equal-time comparison it runs, run and written ([`compare`]).
 
 use std::path::{Path, PathBuf};
 
@@ -8,11 +8,15 @@ use serde_json::Value;
 use sss::InputError;
 use sss::limits;
 
-use lab::compare::{Comparison, DEFAULT_BASELINE, Outcome, frame_reference_spp, parse_methods};
+use lab::compare::{
+    self, Comparison, DEFAULT_BASELINE, Outcome, frame_reference_spp, parse_methods,
+};
 use lab::error::Error;
 use lab::methods::Method;
 use lab::output::write_text;
+use lab::progress::Progress;
 use lab::reference_cache::ReferenceSource;
+use lab::report::{self, Written};
 use lab::scenes::{load_scene, with_resolution};
 
 /// Frames of every experiment's camera trajectory.
@@ -75,13 +79,17 @@ impl Settings {
 impl Report {
     /// The report of a single comparison with its findings, which are written to
     /// `findings.md` beside its other outputs.
-    pub fn of_comparison(outcome: Outcome, findings: String) -> Result<Report, Error> {
+    pub fn of_comparison(
+        outcome: &Outcome,
+        written: Written,
+        findings: String,
+    ) -> Result<Report, Error> {
         write_text(&outcome.out.join("findings.md"), &findings)?;
         Ok(Report {
-            table: outcome.markdown,
+            table: written.markdown,
             findings,
-            json: outcome.results.to_json(),
-            out: outcome.out,
+            json: written.results.to_json(),
+            out: outcome.out.clone(),
         })
     }
 
@@ -91,6 +99,17 @@ impl Report {
         write_text(&self.out.join("findings.md"), &self.findings)?;
         Ok(self)
     }
+}
+
+/// Runs `comparison` ([`compare::run`]) and writes its outputs into its folder
+/// ([`report::write`]).
+pub fn compare(
+    comparison: &Comparison,
+    progress: &mut dyn Progress,
+) -> Result<(Outcome, Written), Error> {
+    let outcome = compare::run(comparison, progress)?;
+    let written = report::write(comparison, &outcome)?;
+    Ok((outcome, written))
 }
 
 /// The comparison of `methods` on built-in `scene` into `out`, the path tracer at the

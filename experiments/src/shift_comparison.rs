@@ -2,13 +2,12 @@
 //! equal-time `pt` and `pt:1`, and which shift wins in which region.
 
 use crate::findings::{self, Finding, Quantity, all_below, cost_below, mse_below};
-use lab::compare;
 use lab::error::Error;
 use lab::method_result::MethodResult;
 use lab::progress::Progress;
 use lab::regions::Region;
 
-use super::setup::{Report, Settings, equal_time_comparison};
+use super::setup::{Report, Settings, compare, equal_time_comparison};
 
 const PRESETS: [&str; 4] = [
     "restir:reconnection",
@@ -25,9 +24,9 @@ pub fn run(
 ) -> Result<Report, Error> {
     let methods: Vec<&str> = ["pt"].into_iter().chain(PRESETS).chain(["pt:1"]).collect();
     let plan = equal_time_comparison(settings, scene, &methods, &settings.out_dir(name))?;
-    let outcome = compare::run(&plan, progress)?;
+    let (outcome, written) = compare(&plan, progress)?;
     let table = findings::markdown(&shift_findings(&outcome.rows));
-    Report::of_comparison(outcome, table)
+    Report::of_comparison(&outcome, written, table)
 }
 
 /// Seed 001 §6 (Fig. 6, 7): reconnection wins in shadow, delayed reconnection in the light,

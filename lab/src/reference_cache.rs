@@ -48,6 +48,30 @@ pub struct Obtained {
     pub cached: bool,
 }
 
+/// What a results file records of an obtained reference, without its pixels: its frame, its
+/// samples per pixel in whole batches, where it was read from or saved to and whether it existed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Provenance {
+    pub frame: u32,
+    pub spp: u64,
+    pub batches: u32,
+    pub path: PathBuf,
+    pub cached: bool,
+}
+
+impl Obtained {
+    pub fn provenance(&self) -> Provenance {
+        let r = &self.reference;
+        Provenance {
+            frame: r.config.frame,
+            spp: r.batches_done() as u64 * r.config.spp_per_batch as u64,
+            batches: r.batches_done(),
+            path: self.path.clone(),
+            cached: self.cached,
+        }
+    }
+}
+
 /// The version of the transport model a cached reference was computed with. Bump it whenever the
 /// reference's estimate changes (the BSSRDF, the path tracer, the scenes' defaults: the `pt` rows
 /// of `lab/tests/pinned_output.rs` change), so that no stale cache file is ever reused.

@@ -15,6 +15,7 @@ use engine::denoise::Denoiser;
 use lab::compare::{Comparison, parse_methods, run};
 use lab::progress::Silent;
 use lab::reference_cache::ReferenceSource;
+use lab::report;
 use lab::scenes::with_resolution;
 use sss::scene::Scene;
 
@@ -136,6 +137,7 @@ fn the_report_renders_in_a_browser() {
             .collect(),
     };
     let outcome = run(&plan, &mut Silent).unwrap();
+    report::write(&plan, &outcome).unwrap();
     assert!(
         outcome.denoise_errors.is_empty(),
         "{:?}",

@@ -12,6 +12,7 @@ use lab::compare::{
 };
 use lab::output::file_stem;
 use lab::reference_cache::ReferenceSource;
+use lab::report;
 
 use sss::limits;
 
@@ -121,14 +122,15 @@ pub fn command(args: &CompareArgs) -> CliResult<()> {
         ..plan(args)?
     };
     let outcome = compare::run(&plan, &mut Bars::default())?;
+    let written = report::write(&plan, &outcome)?;
     for e in &outcome.denoise_errors {
         eprintln!("denoiser: {e}");
     }
     if args.json {
-        println!("{}", outcome.results.to_json_pretty());
+        println!("{}", written.results.to_json_pretty());
     } else {
-        println!("{}", outcome.markdown);
-        if outcome.results.baseline.is_none() {
+        println!("{}", written.markdown);
+        if written.results.baseline.is_none() {
             println!(
                 "No efficiency ratios: the baseline {:?} is not among the methods.",
                 args.baseline
@@ -139,7 +141,7 @@ pub fn command(args: &CompareArgs) -> CliResult<()> {
             outcome.out.display()
         );
     }
-    if outcome.results.interrupted {
+    if outcome.interrupted {
         return Err(CliError("interrupted: partial results written".into()));
     }
     if named && !outcome.denoise_errors.is_empty() {

@@ -3,7 +3,7 @@
 //! run's) — each row's efficiency `1/(MSE·s)` over 1-spp `pt` per region with its 95% interval
 //! (the delta method over replicas, paired by seed, [`lab::uncertainty`]), and its efficiency,
 //! MSE and time over the unmodified preset where both ran on the same images. Rows sharing a camera and a resolution are one
-//! [`compare::run`] (`<out>/<group>/`), so their ratios pair by seed. Every row's reuse
+//! [`compare`](super::setup::compare) (`<out>/<group>/`), so their ratios pair by seed. Every row's reuse
 //! telemetry ([`lab::telemetry`], CPU backend) comes from separate runs of the same seeds
 //! with diagnostics on (which cost time, so they are not the timed runs): `telemetry.md`.
 
@@ -16,7 +16,7 @@ use engine::RunConfig;
 use serde_json::json;
 use sss::scene::{GBuffer, Scene};
 
-use lab::compare::{self, Comparison, DEFAULT_BASELINE, parse_methods};
+use lab::compare::{Comparison, DEFAULT_BASELINE, parse_methods};
 use lab::error::Error;
 use lab::method_result::{Measured, MethodResult};
 use lab::methods::restir;
@@ -30,7 +30,7 @@ use lab::scenes::{load_scene, with_resolution};
 use lab::telemetry::{self, RegionSummary};
 use lab::uncertainty::INTERVAL_METHOD;
 
-use super::setup::{FRAMES, Report, Settings};
+use super::setup::{FRAMES, Report, Settings, compare};
 use tables::{findings, markdown, row_json, telemetry_markdown};
 
 /// The ReSTIR method ablated unless `--methods` names others.
@@ -96,7 +96,7 @@ pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, E
         let members: Vec<&Variation> = rows.iter().filter(|v| &v.group() == group).collect();
         let first = members[0];
         let plan = group_plan(settings, scene_name, first, &members, &root.join(group))?;
-        let outcome = compare::run(&plan, progress)?;
+        let (outcome, written) = compare(&plan, progress)?;
         let pt = outcome.rows.iter().find(|r| r.method == DEFAULT_BASELINE);
         let last = GBuffer::render(&plan.scene, FRAMES - 1);
         let regions = Regions::classify(&plan.scene, &last, REFERENCE_SEED);
@@ -127,7 +127,7 @@ pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, E
                     .map(|runs| telemetry::summarise(&runs, &regions)),
             });
         }
-        runs.push(json!({ "group": group, "results": outcome.results.to_json() }));
+        runs.push(json!({ "group": group, "results": written.results.to_json() }));
     }
     // Table order: the rows' own order.
     measured.sort_by_key(|m| rows.iter().position(|v| *v == m.variation));

@@ -2,31 +2,34 @@
 //! measured per region at every frame of the camera trajectory; the job of `reshift compare` and
 //! of the experiments built on it.
 //!
-//! [`run`] takes a [`Comparison`], obtains the references ([`crate::reference_cache`]: the plan's at
-//! the last frame, and cheaper ones at the earlier frames for the convergence record), renders
-//! the replicas (seeds `0..K`; with an equal-time budget a bare `pt` is first calibrated), reduces
-//! them to [`MethodResult`]s and writes `table.md`, `table.csv`, `results.json` ([`Results`]),
-//! the images ([`crate::report::images`]), the figures ([`crate::report::plots`]) and `report.html`
-//! ([`crate::report::html`]) into the plan's folder.
+//! [`run`] takes a [`Comparison`], obtains the references ([`crate::reference_cache`]: the
+//! comparison's at the last frame, and cheaper ones at the earlier frames for the convergence
+//! record), renders the replicas (seeds `0..K`; with an equal-time budget a bare `pt` is first
+//! calibrated; [`render`]) and reduces them to [`MethodResult`]s: an [`Outcome`]. It writes
+//! nothing but the reference cache; [`crate::report::write`] writes the outcome's tables,
+//! `results.json`, images, figures and `report.html` into its folder.
+
+mod render;
 
 use std::path::{Path, PathBuf};
 
 use engine::Backend;
-use engine::denoise::{self, DenoiseError, Denoiser, Guide};
+use engine::denoise::Denoiser;
 use sss::limits::{self, IMAGE_BYTES_PER_PIXEL};
 use sss::scene::{GBuffer, Scene};
 
 use crate::error::Error;
 use crate::method_result::{MethodResult, Replica};
-use crate::methods::pt::Pt;
-use crate::methods::{Method, MethodError, SampleCounts};
-use crate::output::{output_dir, write_text};
+use crate::methods::{Method, MethodError};
+use crate::output::output_dir;
 use crate::progress::Progress;
-use crate::reference_cache::{self, FrameReference, Obtained, REFERENCE_SEED, ReferenceSource};
+use crate::reference_cache::{
+    self, FrameReference, Obtained, Provenance, REFERENCE_SEED, ReferenceSource,
+};
 use crate::regions::Regions;
-use crate::report::images::write_comparison_images;
-use crate::report::results::{FrameReferenceEntry, MethodEntry, ReferenceEntry, Results, RunEntry};
-use crate::report::{figure, html, plots, tables};
+
+pub use render::equal_time_method;
+use render::{MethodRuns, render_replicas};
 
 /// The default method list: the path tracer, the four main presets [001 §5.1], and reshift's
 /// best measured configuration, reconnection with Rao-Blackwellised shading and 2 neighbours
@@ -73,20 +76,44 @@ pub struct Comparison {
     pub denoise: Vec<Denoiser>,
 }
 
-/// What a finished (or stopped) comparison produced.
+/// What a finished (or stopped) comparison measured.
 pub struct Outcome {
-    /// The contents of `results.json`.
-    pub results: Results,
     /// One row group per method that rendered at least one replica.
     pub rows: Vec<MethodResult>,
-    /// Per denoiser of the plan, the rows of its denoised frames (the methods whose every
+    /// Per denoiser of the comparison, the rows of its denoised frames (the methods whose every
     /// replica it denoised), in the order of `rows`.
     pub denoised: Vec<(Denoiser, Vec<MethodResult>)>,
     /// Why a denoiser left out rows, one line each (the raw rows are complete regardless).
     pub denoise_errors: Vec<String>,
-    /// The contents of `table.md`.
-    pub markdown: String,
+    /// Replica 0's last frame of every row that has one: the raw rows', then each denoiser's,
+    /// each in the order of its rows.
+    pub finals: Vec<Final>,
+    /// The reference of the last frame.
+    pub reference: Obtained,
+    /// The reference of every measured frame, in frame order (the last frame's last).
+    pub frame_references: Vec<Provenance>,
+    /// The regions of the last frame.
+    pub regions: Regions,
+    /// Whether a stop request ended the rendering before every replica was rendered.
+    pub interrupted: bool,
+    /// The output folder, created and checked before anything rendered.
     pub out: PathBuf,
+}
+
+/// Replica 0's last frame of one row: its method's spec and its denoiser (`None`: raw).
+pub struct Final {
+    pub method: String,
+    pub denoiser: Option<Denoiser>,
+    pub image: engine::Image,
+}
+
+impl Outcome {
+    /// Every row group: the raw rows, then each denoiser's.
+    pub fn groups(&self) -> Vec<(Option<Denoiser>, &[MethodResult])> {
+        std::iter::once((None, &self.rows[..]))
+            .chain(self.denoised.iter().map(|(d, g)| (Some(*d), &g[..])))
+            .collect()
+    }
 }
 
 /// `(spec, method)` of every spec, in order.
@@ -173,7 +200,7 @@ pub fn run(plan: &Comparison, progress: &mut dyn Progress) -> Result<Outcome, Er
     // comparison leaves its checkpoint.
     let last_frame = plan.frames - 1;
     let mut references = Vec::new();
-    let mut frame_entries = Vec::new();
+    let mut frame_references = Vec::new();
     let mut last: Option<Obtained> = None;
     for frame in std::iter::once(last_frame).chain(0..last_frame) {
         let Some(source) = plan.reference_of(frame) else {
@@ -181,15 +208,15 @@ pub fn run(plan: &Comparison, progress: &mut dyn Progress) -> Result<Outcome, Er
         };
         let obtained = reference_cache::obtain(&source, scene, &plan.scene_key, frame, progress)?;
         let regions = Regions::classify(scene, &GBuffer::render(scene, frame), REFERENCE_SEED);
-        frame_entries.push(FrameReferenceEntry::new(&obtained));
+        frame_references.push(obtained.provenance());
         references.push((FrameReference::new(&obtained.reference), regions));
         if frame == last_frame {
             last = Some(obtained);
         }
     }
     references.rotate_left(1);
-    frame_entries.rotate_left(1);
-    let last = last.expect("the last frame always has a reference");
+    frame_references.rotate_left(1);
+    let reference = last.expect("the last frame always has a reference");
     let frames: Vec<u32> = references.iter().map(|(r, _)| r.frame).collect();
     let renders = render_replicas(plan, &frames, progress)?;
     let interrupted = progress.stop_requested();
@@ -232,508 +259,44 @@ pub fn run(plan: &Comparison, progress: &mut dyn Progress) -> Result<Outcome, Er
             (d, group)
         })
         .collect();
-    let baseline = rows.iter().find(|r| r.method == plan.baseline);
-    // Every row with its replica-0 last frame: the raw rows, then each denoiser's.
-    let groups: Vec<(Option<Denoiser>, &[MethodResult])> = std::iter::once((None, &rows[..]))
-        .chain(denoised.iter().map(|(d, g)| (Some(*d), &g[..])))
-        .collect();
-    let mut labelled = Vec::new();
-    for (denoiser, group) in &groups {
-        for row in group.iter() {
-            let run = renders.runs.iter().find(|r| r.spec == row.method);
-            let replicas = match denoiser {
-                None => run.map(|r| &r.replicas),
-                Some(d) => run.and_then(|r| r.denoised.iter().find(|(e, _)| e == d).map(|x| &x.1)),
-            };
-            if let Some(image) = replicas.and_then(|r| r.first()?.frames.last()) {
-                labelled.push((row, row.label(), image));
-            }
-        }
-    }
-    let finals: Vec<(&str, &engine::Image)> =
-        labelled.iter().map(|(_, l, i)| (l.as_str(), *i)).collect();
-    let (images, scale) = write_comparison_images(&out, &finals, &last.reference)?;
-    let (_, regions) = references.last().expect("the last frame");
-    let bands: Vec<figure::Band> = groups
-        .iter()
-        .map(|(denoiser, group)| figure::Band {
-            denoiser: *denoiser,
-            rows: group,
-            baseline: group.iter().find(|r| r.method == plan.baseline),
-            finals: labelled
-                .iter()
-                .filter(|(r, _, _)| r.denoiser == *denoiser)
-                .map(|(r, _, i)| (r.method.as_str(), *i))
-                .collect(),
-        })
-        .collect();
-    let figures = plots::write_figures(&out, &rows, &bands, &last.reference, regions)?;
-    let mut markdown = String::new();
-    let mut csv = String::new();
-    for (denoiser, group) in &groups {
-        let base = group.iter().find(|r| r.method == plan.baseline);
-        if let Some(d) = denoiser {
-            let counted = if plan.equal_time.is_some() {
-                "counted in ms/frame and efficiency (equal time), as its mean over these rows"
-            } else {
-                "not counted in ms/frame and efficiency (equal spp)"
-            };
-            markdown.push_str(&format!(
-                "\nDenoised with {d} (last frame of every replica; ratios to {}; the denoiser's \
-                 time {counted}):\n\n",
-                base.map_or("-".into(), |b| b.label())
-            ));
-        }
-        markdown.push_str(&format!(
-            "{}\n{}",
-            tables::markdown(group, base),
-            tables::verdict(group, base)
-        ));
-        if denoiser.is_some() {
-            markdown.push_str(&format!("\n{}", tables::denoiser_time(group)));
-        }
-        let table = tables::csv(group, base);
-        let skip = if csv.is_empty() { 0 } else { 1 };
-        for line in table.lines().skip(skip) {
-            csv.push_str(line);
-            csv.push('\n');
-        }
-    }
-    let all_rows: Vec<MethodResult> = groups.iter().flat_map(|(_, g)| g.iter().cloned()).collect();
-    markdown.push_str(&format!("\n{}", tables::perceptual(&all_rows)));
-    for e in &renders.denoise_errors {
-        markdown.push_str(&format!("\nDenoiser: {e}\n"));
-    }
-    write_text(&out.join("table.md"), &markdown)?;
-    write_text(&out.join("table.csv"), &csv)?;
-    write_text(
-        &out.join("convergence.csv"),
-        &tables::convergence_csv(&rows),
-    )?;
-    let run = RunEntry {
-        scene: scene.name.clone(),
-        backend: plan.backend.to_string(),
-        width: last.reference.width,
-        height: last.reference.height,
-        frames: plan.frames,
-        replicas: plan.replicas,
-        equal_time: plan.equal_time,
-        baseline: baseline.map(|b| b.method.clone()),
-        interrupted,
-    };
-    let entries = labelled
-        .iter()
-        .zip(images)
-        .map(|((r, _, _), files)| {
-            let base = groups
-                .iter()
-                .find(|(d, _)| *d == r.denoiser)
-                .and_then(|(_, g)| g.iter().find(|b| b.method == plan.baseline));
-            MethodEntry::new(r, base, files)
-        })
-        .collect();
-    let reference_entry = ReferenceEntry::new(&last.reference, &last.path, last.cached);
-    let results = Results::new(
-        run,
-        reference_entry,
-        frame_entries,
-        regions,
-        scale,
-        figures,
-        denoised.iter().map(|(d, _)| d.name().to_string()).collect(),
-        renders.denoise_errors.clone(),
-        entries,
-    );
-    write_text(&out.join("results.json"), &results.to_json_pretty())?;
-    write_text(&out.join("report.html"), &html::report(&results, &out)?)?;
-    Ok(Outcome {
-        results,
+    let (_, regions) = references.pop().expect("the last frame");
+    let mut outcome = Outcome {
         rows,
         denoised,
         denoise_errors: renders.denoise_errors,
-        markdown,
+        finals: Vec::new(),
+        reference,
+        frame_references,
+        regions,
+        interrupted,
         out,
-    })
-}
-
-/// One method's replicas as rendered.
-struct MethodRuns {
-    spec: String,
-    method: Method,
-    /// The measured frames of each replica.
-    replicas: Vec<Replica>,
-    /// Per denoiser that denoised every replica so far, the denoised last frames.
-    denoised: Vec<(Denoiser, Vec<Replica>)>,
-}
-
-/// What [`render_replicas`] rendered.
-struct Renders {
-    runs: Vec<MethodRuns>,
-    denoise_errors: Vec<String>,
-}
-
-/// The replicas of every method, in order, each with its images at `frames` (ascending, the
-/// last frame last) and its last frame through each denoiser of the plan; after a stop request
-/// the list ends with the method that was rendering, with the replicas it finished. A denoiser
-/// that fails on a replica leaves that method's denoised row out with one line in
-/// `denoise_errors`; one that is not installed is left out of every method with one line.
-fn render_replicas(
-    plan: &Comparison,
-    frames: &[u32],
-    progress: &mut dyn Progress,
-) -> Result<Renders, Error> {
-    let seconds_per_spp = match plan.equal_time {
-        Some(_) if plan.methods.iter().any(|(s, _)| s == EQUAL_TIME_SPEC) => {
-            calibrate_pt(&plan.backend, &plan.scene, plan.frames)?
-        }
-        _ => 0.0,
     };
-    let guides = if plan.denoise.is_empty() {
-        Vec::new()
-    } else {
-        Guide::trajectory(&plan.scene, plan.frames)
-    };
-    let whole_trajectory = plan.denoise.iter().any(|d| d.temporal());
-    let mut denoisers = plan.denoise.clone();
-    let mut denoise_errors = Vec::new();
-    // Untimed warm-up: loading a library, creating a device or compiling kernels is not the
-    // per-frame cost a renderer pays.
-    if let Some(guide) = guides.last() {
-        let black = engine::Image::black(guide.width, guide.height);
-        for &d in &plan.denoise {
-            let _ = denoise::denoise(d, &plan.backend, &guides, std::slice::from_ref(&black));
+    outcome.finals = finals(&outcome, &renders.runs);
+    Ok(outcome)
+}
+
+/// Replica 0's last frame of every row of `outcome` that has one, from the `runs` it measured,
+/// in the order of [`Outcome::groups`].
+fn finals(outcome: &Outcome, runs: &[MethodRuns]) -> Vec<Final> {
+    let mut finals = Vec::new();
+    for (denoiser, group) in outcome.groups() {
+        for row in group {
+            let run = runs.iter().find(|r| r.spec == row.method);
+            let replicas = match denoiser {
+                None => run.map(|r| &r.replicas),
+                Some(d) => run.and_then(|r| r.denoised.iter().find(|(e, _)| *e == d).map(|x| &x.1)),
+            };
+            if let Some(image) = replicas.and_then(|r| r.first()?.frames.last()) {
+                finals.push(Final {
+                    method: row.method.clone(),
+                    denoiser,
+                    image: image.clone(),
+                });
+            }
         }
     }
-    progress.begin(
-        "replicas",
-        plan.methods.len() as u64 * plan.replicas as u64,
-        0,
-    );
-    let mut runs = Vec::new();
-    'methods: for (spec, method) in &plan.methods {
-        // `pt:N` pins its spp; a bare `pt` is scaled to the budget.
-        let method = match plan.equal_time {
-            Some(b) if spec == EQUAL_TIME_SPEC => equal_time_method(method, b, seconds_per_spp),
-            _ => method.clone(),
-        };
-        progress.item(&method.name());
-        let mut run = MethodRuns {
-            spec: spec.clone(),
-            method: method.clone(),
-            replicas: Vec::new(),
-            denoised: denoisers.iter().map(|&d| (d, Vec::new())).collect(),
-        };
-        for seed in 0..plan.replicas as u64 {
-            if progress.stop_requested() {
-                runs.push(run);
-                break 'methods;
-            }
-            let (replica, trajectory) =
-                render_replica(plan, &method, frames, seed, whole_trajectory)?;
-            let mut failed = Vec::new();
-            for (d, denoised) in &mut run.denoised {
-                match denoise_replica(*d, &plan.backend, &guides, &trajectory, &replica) {
-                    Ok(r) => denoised.push(r),
-                    Err(e) => failed.push((*d, e)),
-                }
-            }
-            for (d, e) in failed {
-                run.denoised.retain(|(x, _)| *x != d);
-                if matches!(e, DenoiseError::Unavailable(_)) {
-                    denoisers.retain(|x| *x != d);
-                    denoise_errors.push(format!("{d}: {e}; its rows are left out"));
-                } else {
-                    denoise_errors.push(format!(
-                        "{spec}, replica {seed}: {e}; its {d} row is left out"
-                    ));
-                }
-            }
-            run.replicas.push(replica);
-            progress.step();
-        }
-        runs.push(run);
-    }
-    progress.end();
-    Ok(Renders {
-        runs,
-        denoise_errors,
-    })
-}
-
-/// `replica`'s last frame through `denoiser`, from the frames of its `trajectory` (the last
-/// frames of the trajectory that `guides` guide), with the denoiser's seconds per frame (a
-/// temporal filter's time over every frame it filtered, per frame).
-fn denoise_replica(
-    denoiser: Denoiser,
-    backend: &Backend,
-    guides: &[Guide],
-    trajectory: &[engine::Image],
-    replica: &Replica,
-) -> Result<Replica, DenoiseError> {
-    let d = denoise::denoise(denoiser, backend, guides, trajectory)?;
-    let per_frame = if denoiser.temporal() {
-        d.seconds / trajectory.len() as f64
-    } else {
-        d.seconds
-    };
-    Ok(Replica {
-        frames: vec![d.image],
-        denoiser_seconds_per_frame: per_frame,
-        ..replica.clone()
-    })
-}
-
-/// Replica `seed` of `method` at `frames`, and the frames a denoiser reads: the whole
-/// trajectory when earlier frames are measured or `whole_trajectory` is asked for (a temporal
-/// denoiser), else only the last frame (which a memoryless method renders alone).
-fn render_replica(
-    plan: &Comparison,
-    method: &Method,
-    frames: &[u32],
-    seed: u64,
-    whole_trajectory: bool,
-) -> Result<(Replica, Vec<engine::Image>), Error> {
-    let (backend, scene) = (&plan.backend, &plan.scene);
-    if frames.len() == 1 && !whole_trajectory {
-        let r = method.render_on(backend, scene, plan.frames, seed)?;
-        let replica = Replica {
-            frames: vec![r.image.clone()],
-            seconds_per_frame: r.seconds_per_frame,
-            denoiser_seconds_per_frame: 0.0,
-            frames_rendered: r.frames_rendered,
-            nonfinite: r.nonfinite,
-            spp: r.spp,
-        };
-        return Ok((replica, vec![r.image]));
-    }
-    let (trajectory, seconds_per_frame) =
-        method.render_trajectory_on(backend, scene, plan.frames, seed)?;
-    let images = (0..)
-        .zip(&trajectory.frames)
-        .filter_map(|(f, image)| frames.contains(&f).then(|| image.clone()))
-        .collect();
-    let replica = Replica {
-        frames: images,
-        seconds_per_frame,
-        denoiser_seconds_per_frame: 0.0,
-        frames_rendered: trajectory.frames_rendered,
-        nonfinite: trajectory.nonfinite,
-        spp: trajectory
-            .counts
-            .as_ref()
-            .map_or(method.spp() as f64, SampleCounts::mean),
-    };
-    Ok((replica, trajectory.frames))
-}
-
-/// Seconds per sample per pixel of the path tracer on this scene (median of 3 runs at 4 spp).
-fn calibrate_pt(backend: &Backend, scene: &Scene, frames: u32) -> Result<f64, Error> {
-    let pt = Method::new(Pt { spp: 4 });
-    let mut times = Vec::new();
-    for seed in 0..3 {
-        times.push(
-            pt.render_on(backend, scene, frames, 1_000_000 + seed)?
-                .seconds_per_frame
-                / 4.0,
-        );
-    }
-    times.sort_by(f64::total_cmp);
-    Ok(times[1])
-}
-
-/// Equal time: `method` at the spp that fits `budget` seconds per frame, from its measured
-/// `seconds_per_spp` (at least 1 spp); methods of fixed cost are returned unchanged.
-pub fn equal_time_method(method: &Method, budget: f64, seconds_per_spp: f64) -> Method {
-    if seconds_per_spp > 0.0 && budget.is_finite() {
-        let spp = (budget / seconds_per_spp).round().clamp(1.0, 1e6) as u32;
-        method.with_spp(spp)
-    } else {
-        method.clone()
-    }
+    finals
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::progress::Silent;
-    use crate::scenes::with_resolution;
-
-    #[test]
-    fn equal_time_scales_the_spp_of_a_path_tracer() {
-        let pt = Method::parse("pt").unwrap();
-        assert_eq!(
-            equal_time_method(&pt, 0.1, 0.02),
-            Method::parse("pt:5").unwrap()
-        );
-        assert_eq!(equal_time_method(&pt, 0.001, 0.02), pt, "at least 1 spp");
-        let hybrid = Method::parse("restir:hybrid").unwrap();
-        assert_eq!(equal_time_method(&hybrid, 0.1, 0.02), hybrid);
-    }
-
-    /// A replica whose last frame holds a NaN is not denoised: one line naming the frame and
-    /// the count, and its seconds are left alone.
-    #[test]
-    fn a_nan_frame_is_refused_by_every_denoiser() {
-        let scene = with_resolution(Scene::builtin("bumpy").unwrap(), Some((8, 6)));
-        let guides = Guide::trajectory(&scene, 2);
-        let mut frames = vec![engine::Image::black(8, 6); 2];
-        frames[1].pixels[5].y = f32::NAN;
-        let replica = Replica {
-            frames: vec![frames[1].clone()],
-            seconds_per_frame: 0.5,
-            denoiser_seconds_per_frame: 0.0,
-            frames_rendered: 2,
-            nonfinite: 1,
-            spp: 1.0,
-        };
-        for d in Denoiser::ALL {
-            let e = denoise_replica(d, &Backend::Cpu, &guides, &frames, &replica).unwrap_err();
-            assert_eq!(
-                e.to_string(),
-                "frame 1: 1 pixel(s) with a NaN or infinite value, not denoised"
-            );
-        }
-    }
-
-    /// A whole comparison through the library: every file is written, the document agrees with
-    /// the rows, every frame is measured, a second run reuses the cached references and
-    /// reproduces the errors, and measuring the last frame alone gives the same last-frame
-    /// errors (a trajectory's last frame is the frame a single render returns).
-    #[test]
-    fn a_comparison_writes_its_outputs_and_reuses_the_reference() {
-        let dir = std::env::temp_dir().join(format!("reshift-compare-{}", std::process::id()));
-        let plan = Comparison {
-            scene: with_resolution(Scene::builtin("bumpy").unwrap(), Some((12, 9))),
-            scene_key: "bumpy".into(),
-            methods: parse_methods(&["pt:2", "restir:hybrid"]).unwrap(),
-            baseline: "pt:2".into(),
-            replicas: 3,
-            frames: 3,
-            equal_time: None,
-            reference: ReferenceSource::Cache {
-                dir: dir.join("cache"),
-                spp: 8,
-                batch_spp: 4,
-            },
-            frame_reference_spp: Some(8),
-            out: dir.join("out"),
-            backend: Backend::Cpu,
-            denoise: vec![Denoiser::Svgf],
-        };
-        let first = run(&plan, &mut Silent).unwrap();
-        // The denoised rows: one per method, measured at the last frame, their seconds the raw
-        // ones (equal spp: the denoiser's are reported, not counted), their ratios to the
-        // baseline's denoised row.
-        let (d, denoised) = &first.denoised[0];
-        assert_eq!(*d, Denoiser::Svgf);
-        assert_eq!(denoised.len(), 2);
-        for (row, raw) in denoised.iter().zip(&first.rows) {
-            assert_eq!(row.label(), format!("{}+svgf", raw.method));
-            assert_eq!(row.convergence.len(), 1);
-            let extra = row.denoiser_seconds.as_ref().unwrap().value;
-            assert!(extra > 0.0);
-            assert_eq!(row.seconds, raw.seconds);
-            assert_ne!(row.metrics, raw.metrics);
-        }
-        assert!(
-            first.denoise_errors.is_empty(),
-            "{:?}",
-            first.denoise_errors
-        );
-        assert_eq!(first.results.methods.len(), 4);
-        assert_eq!(first.results.denoisers, ["svgf"]);
-        assert!(
-            first.markdown.contains("Denoised with svgf"),
-            "{}",
-            first.markdown
-        );
-        assert!(
-            first.markdown.contains("| pt:2+svgf |"),
-            "{}",
-            first.markdown
-        );
-        assert_eq!(first.rows.len(), 2);
-        assert!(!first.results.reference.cached && !first.results.interrupted);
-        for file in [
-            "table.md",
-            "table.csv",
-            "convergence.csv",
-            "results.json",
-            "reference.exr",
-            "figure.png",
-            "convergence.png",
-            "report.html",
-            "restir-hybrid-abs-error.png",
-            "restir-hybrid-flip.png",
-            "restir-hybrid-low-frequency.png",
-            "restir-hybrid-svgf.png",
-            "restir-hybrid-svgf-flip.png",
-        ] {
-            assert!(first.out.join(file).is_file(), "{file}");
-        }
-        let written = std::fs::read_to_string(first.out.join("results.json")).unwrap();
-        assert_eq!(written, first.results.to_json_pretty());
-        assert_eq!(first.results.frame_references.len(), 3);
-        for row in &first.rows {
-            let frames: Vec<u32> = row.convergence.iter().map(|f| f.frame).collect();
-            assert_eq!(frames, [0, 1, 2], "{}", row.method);
-            assert_eq!(row.convergence[2].metrics, row.metrics);
-            assert_eq!(row.seconds.replicas(), 3);
-        }
-        assert_eq!(first.results.baseline.as_deref(), Some("pt:2"));
-        assert!(
-            first.markdown.contains("Efficiency over pt:2"),
-            "{}",
-            first.markdown
-        );
-        let again = run(&plan, &mut Silent).unwrap();
-        assert!(again.results.reference.cached);
-        assert!(again.results.frame_references.iter().all(|f| f.cached));
-        assert_eq!(again.rows[1].metrics, first.rows[1].metrics);
-        assert_eq!(
-            again.denoised[0].1[1].metrics,
-            first.denoised[0].1[1].metrics
-        );
-        let last_only = Comparison {
-            frame_reference_spp: None,
-            baseline: "none".into(),
-            denoise: Vec::new(),
-            ..plan
-        };
-        let last = run(&last_only, &mut Silent).unwrap();
-        assert!(last.results.baseline.is_none());
-        for (a, b) in last.rows.iter().zip(&first.rows) {
-            assert_eq!(a.metrics, b.metrics, "{}", a.method);
-            assert_eq!(a.convergence.len(), 1);
-        }
-        // Equal time counts the denoiser: every denoised row's seconds are its rendering's plus
-        // one figure shared by the denoiser's rows (the mean of its timings).
-        let timed = Comparison {
-            equal_time: Some(0.01),
-            denoise: vec![Denoiser::Svgf],
-            ..last_only
-        };
-        let counted = run(&timed, &mut Silent).unwrap();
-        let (_, denoised) = &counted.denoised[0];
-        let added: Vec<f64> = denoised
-            .iter()
-            .zip(&counted.rows)
-            .map(|(d, raw)| d.seconds.value - raw.seconds.value)
-            .collect();
-        let pooled: Vec<f64> = denoised
-            .iter()
-            .map(|d| d.denoiser_seconds.as_ref().unwrap().value)
-            .collect();
-        let mean = pooled.iter().sum::<f64>() / pooled.len() as f64;
-        for a in &added {
-            assert!((a - mean).abs() < 1e-12, "{added:?} vs {mean}");
-        }
-        assert!(counted.markdown.contains("counted in ms/frame"));
-        let empty = Comparison {
-            methods: Vec::new(),
-            ..timed
-        };
-        assert!(matches!(run(&empty, &mut Silent), Err(Error::Invalid(_))));
-        std::fs::remove_dir_all(&dir).unwrap();
-    }
-}
+mod tests;

@@ -4,6 +4,8 @@
 //! ([`super::plots`], [`super::figure`]) and `report.html` ([`super::html`]), from the
 //! [`Outcome`] that [`crate::compare::run`] measured.
 
+use engine::denoise::Denoiser;
+
 use crate::compare::{Comparison, Outcome};
 use crate::error::Error;
 use crate::method_result::MethodResult;
@@ -55,42 +57,7 @@ pub fn write(plan: &Comparison, outcome: &Outcome) -> Result<Written, Error> {
         })
         .collect();
     let figures = plots::write_figures(out, &outcome.rows, &bands, reference, &outcome.regions)?;
-    let mut markdown = String::new();
-    let mut csv = String::new();
-    for (denoiser, group) in &groups {
-        let base = group.iter().find(|r| r.method == plan.baseline);
-        if let Some(d) = denoiser {
-            let counted = if plan.equal_time.is_some() {
-                "counted in ms/frame and efficiency (equal time), as its mean over these rows"
-            } else {
-                "not counted in ms/frame and efficiency (equal spp)"
-            };
-            markdown.push_str(&format!(
-                "\nDenoised with {d} (last frame of every replica; ratios to {}; the denoiser's \
-                 time {counted}):\n\n",
-                base.map_or("-".into(), |b| b.label())
-            ));
-        }
-        markdown.push_str(&format!(
-            "{}\n{}",
-            tables::markdown(group, base),
-            tables::verdict(group, base)
-        ));
-        if denoiser.is_some() {
-            markdown.push_str(&format!("\n{}", tables::denoiser_time(group)));
-        }
-        let table = tables::csv(group, base);
-        let skip = if csv.is_empty() { 0 } else { 1 };
-        for line in table.lines().skip(skip) {
-            csv.push_str(line);
-            csv.push('\n');
-        }
-    }
-    let all_rows: Vec<MethodResult> = groups.iter().flat_map(|(_, g)| g.iter().cloned()).collect();
-    markdown.push_str(&format!("\n{}", tables::perceptual(&all_rows)));
-    for e in &outcome.denoise_errors {
-        markdown.push_str(&format!("\nDenoiser: {e}\n"));
-    }
+    let (markdown, csv) = table_texts(plan, outcome, &groups);
     write_text(&out.join("table.md"), &markdown)?;
     write_text(&out.join("table.csv"), &csv)?;
     write_text(
@@ -143,4 +110,51 @@ pub fn write(plan: &Comparison, outcome: &Outcome) -> Result<Written, Error> {
     write_text(&out.join("results.json"), &results.to_json_pretty())?;
     write_text(&out.join("report.html"), &html::report(&results, out)?)?;
     Ok(Written { results, markdown })
+}
+
+/// `table.md` and `table.csv` of the row `groups` of `outcome` (the raw rows, then each
+/// denoiser's): per group its table with verdicts over the baseline, then the perceptual
+/// metrics of every row and the denoisers' errors.
+fn table_texts(
+    plan: &Comparison,
+    outcome: &Outcome,
+    groups: &[(Option<Denoiser>, &[MethodResult])],
+) -> (String, String) {
+    let mut markdown = String::new();
+    let mut csv = String::new();
+    for (denoiser, group) in groups {
+        let base = group.iter().find(|r| r.method == plan.baseline);
+        if let Some(d) = denoiser {
+            let counted = if plan.equal_time.is_some() {
+                "counted in ms/frame and efficiency (equal time), as its mean over these rows"
+            } else {
+                "not counted in ms/frame and efficiency (equal spp)"
+            };
+            markdown.push_str(&format!(
+                "\nDenoised with {d} (last frame of every replica; ratios to {}; the denoiser's \
+                 time {counted}):\n\n",
+                base.map_or("-".into(), |b| b.label())
+            ));
+        }
+        markdown.push_str(&format!(
+            "{}\n{}",
+            tables::markdown(group, base),
+            tables::verdict(group, base)
+        ));
+        if denoiser.is_some() {
+            markdown.push_str(&format!("\n{}", tables::denoiser_time(group)));
+        }
+        let table = tables::csv(group, base);
+        let skip = if csv.is_empty() { 0 } else { 1 };
+        for line in table.lines().skip(skip) {
+            csv.push_str(line);
+            csv.push('\n');
+        }
+    }
+    let all_rows: Vec<MethodResult> = groups.iter().flat_map(|(_, g)| g.iter().cloned()).collect();
+    markdown.push_str(&format!("\n{}", tables::perceptual(&all_rows)));
+    for e in &outcome.denoise_errors {
+        markdown.push_str(&format!("\nDenoiser: {e}\n"));
+    }
+    (markdown, csv)
 }

@@ -15,8 +15,8 @@
 //!   from its channel's row.
 //!
 //! Here: the channels and the test's rows ([`bias_rows`], [`paired_rows`], [`overall`]); the
-//! replicas' and reference batches' final frames in [`render`]; their reduction to region means
-//! in [`summary`]; the replicas a run needs in [`planning`]; the Markdown table in [`table`].
+//! replicas' and reference batches' final frames in `render`; their reduction to region means
+//! in `summary`; the replicas a run needs in `planning`; the Markdown table in `table`.
 
 mod planning;
 mod render;

@@ -5,7 +5,7 @@
 //! [`run`] takes a [`Comparison`], obtains the references ([`crate::reference_cache`]: the
 //! comparison's at the last frame, and cheaper ones at the earlier frames for the convergence
 //! record), renders the replicas (seeds `0..K`; with an equal-time budget a bare `pt` is first
-//! calibrated; [`render`]) and reduces them to [`MethodResult`]s: an [`Outcome`]. It writes
+//! calibrated; `render`) and reduces them to [`MethodResult`]s: an [`Outcome`]. It writes
 //! nothing but the reference cache; [`crate::report::write`] writes the outcome's tables,
 //! `results.json`, images, figures and `report.html` into its folder.
 

@@ -191,7 +191,7 @@ impl Comparison {
 
 /// Runs the comparison of `plan`, reporting to `progress` (phases `reference frame F` and
 /// `replicas`). A stop request ends it after the current replica with the replicas rendered so
-/// far (`results.interrupted`), or, while a reference renders, with [`Error::Interrupted`].
+/// far ([`Outcome::interrupted`]), or, while a reference renders, with [`Error::Interrupted`].
 pub fn run(plan: &Comparison, progress: &mut dyn Progress) -> Result<Outcome, Error> {
     plan.check()?;
     let out = output_dir(&plan.out)?;
@@ -229,12 +229,35 @@ pub fn run(plan: &Comparison, progress: &mut dyn Progress) -> Result<Outcome, Er
             })?;
         rows.push(row);
     }
-    let denoised: Vec<(Denoiser, Vec<MethodResult>)> = plan
-        .denoise
+    let denoised = denoised_rows(plan, &renders.runs, &references);
+    let (_, regions) = references.pop().expect("the last frame");
+    let mut outcome = Outcome {
+        rows,
+        denoised,
+        denoise_errors: renders.denoise_errors,
+        finals: Vec::new(),
+        reference,
+        frame_references,
+        regions,
+        interrupted,
+        out,
+    };
+    outcome.finals = finals(&outcome, &renders.runs);
+    Ok(outcome)
+}
+
+/// Per denoiser of `plan`, the rows of its denoised frames: the methods of `runs` whose every
+/// replica it denoised, measured against `references` (at equal time its seconds counted as one
+/// figure, the mean of its timings over these rows).
+fn denoised_rows(
+    plan: &Comparison,
+    runs: &[MethodRuns],
+    references: &[(FrameReference, Regions)],
+) -> Vec<(Denoiser, Vec<MethodResult>)> {
+    plan.denoise
         .iter()
         .map(|&d| {
-            let complete: Vec<(&MethodRuns, &Vec<Replica>)> = renders
-                .runs
+            let complete: Vec<(&MethodRuns, &Vec<Replica>)> = runs
                 .iter()
                 .filter_map(|r| {
                     let (_, replicas) = r.denoised.iter().find(|(e, _)| *e == d)?;
@@ -258,21 +281,7 @@ pub fn run(plan: &Comparison, progress: &mut dyn Progress) -> Result<Outcome, Er
                 .collect();
             (d, group)
         })
-        .collect();
-    let (_, regions) = references.pop().expect("the last frame");
-    let mut outcome = Outcome {
-        rows,
-        denoised,
-        denoise_errors: renders.denoise_errors,
-        finals: Vec::new(),
-        reference,
-        frame_references,
-        regions,
-        interrupted,
-        out,
-    };
-    outcome.finals = finals(&outcome, &renders.runs);
-    Ok(outcome)
+        .collect()
 }
 
 /// Replica 0's last frame of every row of `outcome` that has one, from the `runs` it measured,

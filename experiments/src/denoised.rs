@@ -8,13 +8,14 @@
 use engine::denoise::Denoiser;
 use serde_json::json;
 
-use crate::findings::{self, Finding, Quantity, all_below, cost_below};
 use lab::compare::{Comparison, Outcome};
 use lab::error::Error;
 use lab::method_result::MethodResult;
 use lab::output::write_text;
 use lab::progress::Progress;
 use lab::regions::Region;
+
+use crate::findings::{self, Finding, Quantity, all_below, cost_below};
 
 use super::setup::{Report, Settings, compare, equal_time_comparison};
 

@@ -10,7 +10,6 @@ use engine::{Diagnostics, RunConfig};
 use serde_json::json;
 use sss::scene::{GBuffer, Scene};
 
-use crate::findings::{self, Quantity, all_above, all_below, mse_below};
 use lab::error::Error;
 use lab::method_result::Measured;
 use lab::methods::restir;
@@ -21,6 +20,8 @@ use lab::regions::{Region, Regions};
 use lab::report::tables::with_ci;
 use lab::scenes::{load_scene, with_resolution};
 use lab::uncertainty::Estimate;
+
+use crate::findings::{self, Quantity, all_above, all_below, mse_below};
 
 use super::setup::{FRAMES, Report, Settings, compare, equal_time_comparison};
 

@@ -1,10 +1,11 @@
 //! Fig. 8 of seed 001: hybrid and sequential against equal-time and 1-spp path tracing on the
 //! ten measured materials (`materials`).
 
-use crate::findings::{self, all_below, cost_below, mse_below};
 use lab::error::Error;
 use lab::progress::Progress;
 use lab::regions::Region;
+
+use crate::findings::{self, all_below, cost_below, mse_below};
 
 use super::setup::{Report, Settings, compare, equal_time_comparison};
 

@@ -3,7 +3,6 @@
 
 use serde_json::json;
 
-use crate::findings::{self, Finding, all_above, log_cost_ratio, log_mse_ratio, row};
 use lab::error::Error;
 use lab::method_result::Measured;
 use lab::metrics::Area;
@@ -12,6 +11,8 @@ use lab::progress::Progress;
 use lab::regions::Region;
 use lab::report::tables::with_ci;
 use lab::uncertainty::Estimate;
+
+use crate::findings::{self, Finding, all_above, log_cost_ratio, log_mse_ratio, row};
 
 use super::setup::{Report, Settings, compare, equal_time_comparison};
 

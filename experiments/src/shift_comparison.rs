@@ -1,11 +1,12 @@
 //! Fig. 6 (`bumpy`, one large light) and Fig. 7 (`many-lights`) of seed 001: the four presets,
 //! equal-time `pt` and `pt:1`, and which shift wins in which region.
 
-use crate::findings::{self, Finding, Quantity, all_below, cost_below, mse_below};
 use lab::error::Error;
 use lab::method_result::MethodResult;
 use lab::progress::Progress;
 use lab::regions::Region;
+
+use crate::findings::{self, Finding, Quantity, all_below, cost_below, mse_below};
 
 use super::setup::{Report, Settings, compare, equal_time_comparison};
 

@@ -1,5 +1,5 @@
 //! What every experiment shares: its [`Settings`], its [`Report`], its output folder and the
-//! equal-time comparison it runs, run and written ([`compare`]).
+//! equal-time comparison it runs, run and written ([`compare()`]).
 
 use std::path::{Path, PathBuf};
 

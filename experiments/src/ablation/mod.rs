@@ -2,9 +2,9 @@
 //! cap, neighbours, Rao-Blackwellised shading, camera motion, jitter, resolution (2× and 3× the
 //! run's) — each row's efficiency `1/(MSE·s)` over 1-spp `pt` per region with its 95% interval
 //! (the delta method over replicas, paired by seed, [`lab::uncertainty`]), and its efficiency,
-//! MSE and time over the unmodified preset where both ran on the same images. Rows sharing a camera and a resolution are one
-//! [`compare`](super::setup::compare()) (`<out>/<group>/`), so their ratios pair by seed. Every row's reuse
-//! telemetry ([`lab::telemetry`], CPU backend) comes from separate runs of the same seeds
+//! MSE and time over the unmodified preset where both ran on the same images. Rows sharing a
+//! camera and a resolution are one [`compare`](super::setup::compare()) (`<out>/<group>/`), so
+//! their ratios pair by seed. Every row's reuse telemetry ([`lab::telemetry`], CPU backend) comes from separate runs of the same seeds
 //! with diagnostics on (which cost time, so they are not the timed runs): `telemetry.md`.
 
 mod rows;

@@ -4,8 +4,9 @@
 //! (the delta method over replicas, paired by seed, [`lab::uncertainty`]), and its efficiency,
 //! MSE and time over the unmodified preset where both ran on the same images. Rows sharing a
 //! camera and a resolution are one [`compare`](super::setup::compare()) (`<out>/<group>/`), so
-//! their ratios pair by seed. Every row's reuse telemetry ([`lab::telemetry`], CPU backend) comes from separate runs of the same seeds
-//! with diagnostics on (which cost time, so they are not the timed runs): `telemetry.md`.
+//! their ratios pair by seed. Every row's reuse telemetry ([`lab::telemetry`], CPU backend)
+//! comes from separate runs of the same seeds with diagnostics on (which cost time, so they are
+//! not the timed runs): `telemetry.md`.
 
 mod rows;
 mod tables;

@@ -16,7 +16,7 @@
 //!   fraction of translucent pixels whose per-frame variance of that metric (across replicas)
 //!   exceeds the target σ0².
 //!
-//! Regions are the lab's (`experiments::regions`). The sample-count map of the last adaptive
+//! Regions are the lab's (`lab::regions`). The sample-count map of the last adaptive
 //! replica is written to `out_dir/adaptive-counts.png` (count / 64 as grey).
 
 use std::path::PathBuf;

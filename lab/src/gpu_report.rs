@@ -25,11 +25,12 @@ use sss::integrator::adaptive::AdaptiveParams;
 use sss::integrator::single_scatter::ChannelSelection;
 use sss::scene::Scene;
 
-use crate::compare::{self, DEFAULT_BASELINE, Plan};
+use crate::compare::{self, Comparison, DEFAULT_BASELINE};
 use crate::error::Error;
 use crate::methods::Method;
 use crate::progress::Progress;
 use crate::reference_cache::ReferenceSource;
+use crate::report;
 use crate::scenes::{LoadedScene, load_scene};
 
 /// The parity bound on `R` (see the module comment).
@@ -436,7 +437,7 @@ fn compare_section(
         methods.push((spec.clone(), Method::parse(&spec)?));
     }
     let (scene, scene_key) = at(settings, c.size)?;
-    let plan = Plan {
+    let plan = Comparison {
         scene,
         scene_key,
         methods,
@@ -459,6 +460,7 @@ fn compare_section(
             .collect(),
     };
     let outcome = compare::run(&plan, progress)?;
+    let written = report::write(&plan, &outcome)?;
     let _ = writeln!(
         md,
         "## Equal-time comparison\n\n`compare` on the device at {w}×{h}: {} replicas, {} frames, \
@@ -469,7 +471,7 @@ fn compare_section(
         1e3 * seconds,
         c.reference_spp,
         outcome.out.display(),
-        outcome.markdown
+        written.markdown
     );
     Ok(())
 }

@@ -2,26 +2,25 @@
 //! ([`methods`]), obtains references ([`reference_cache`]), measures methods against them per
 //! region ([`regions`], [`metrics`], [`flip`], [`low_frequency`], [`perceptual`],
 //! [`method_result`]), runs
-//! comparisons ([`compare`]), the named experiments of seed 001 with their findings
-//! ([`experiments`], [`findings`]) and the replica bias protocol ([`bias`]), and writes tables,
-//! `results.json` and images ([`report`], [`images`]). It renders through the `engine` crate and
+//! comparisons ([`compare`]) and the replica bias protocol ([`bias`]), and writes tables,
+//! `results.json` and images ([`report`], drawn with [`draw`]) into its output folders
+//! ([`output`]). It renders through the `engine` crate and
 //! knows nothing of how a backend runs a pass; long jobs report to a caller's
 //! [`progress::Progress`].
 
 pub mod bias;
 pub mod chained;
 pub mod compare;
+pub mod draw;
 pub mod error;
-pub mod experiments;
-pub mod findings;
 pub mod flip;
 pub mod gpu_report;
-pub mod images;
 pub mod limits;
 pub mod low_frequency;
 pub mod method_result;
 pub mod methods;
 pub mod metrics;
+pub mod output;
 pub mod perceptual;
 pub mod progress;
 pub mod reference_cache;

@@ -22,9 +22,8 @@ use engine::Image;
 use glam::DVec3;
 use rayon::prelude::*;
 
+use crate::draw::{false_colour_map, quantile};
 use crate::error::Error;
-use crate::images::quantile;
-use crate::report::plots::false_colour_map;
 
 /// The default standard deviation of the low-pass, in pixels: wavelengths of ~25 pixels
 /// (2π σ) and longer pass at more than half their amplitude.

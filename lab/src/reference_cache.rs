@@ -16,8 +16,8 @@ use sss::integrator::{Reference, ReferenceConfig, Shard};
 use sss::scene::{GBuffer, Scene};
 
 use crate::error::Error;
+use crate::output::{file_stem, output_dir};
 use crate::progress::Progress;
-use crate::report::{file_stem, output_dir};
 
 /// Seed of the reference's batches (ASCII "REFERENC"); replicas use seeds `0..K`.
 pub const REFERENCE_SEED: u64 = 0x5245_4645_5245_4E43;
@@ -46,6 +46,30 @@ pub struct Obtained {
     pub path: PathBuf,
     /// Whether it existed (a named file or a complete cache entry) rather than being computed.
     pub cached: bool,
+}
+
+/// What a results file records of an obtained reference, without its pixels: its frame, its
+/// samples per pixel in whole batches, where it was read from or saved to and whether it existed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Provenance {
+    pub frame: u32,
+    pub spp: u64,
+    pub batches: u32,
+    pub path: PathBuf,
+    pub cached: bool,
+}
+
+impl Obtained {
+    pub fn provenance(&self) -> Provenance {
+        let r = &self.reference;
+        Provenance {
+            frame: r.config.frame,
+            spp: r.batches_done() as u64 * r.config.spp_per_batch as u64,
+            batches: r.batches_done(),
+            path: self.path.clone(),
+            cached: self.cached,
+        }
+    }
 }
 
 /// The version of the transport model a cached reference was computed with. Bump it whenever the

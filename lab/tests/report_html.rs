@@ -12,9 +12,10 @@ use std::process::Command;
 
 use engine::Backend;
 use engine::denoise::Denoiser;
-use lab::compare::{Plan, parse_methods, run};
+use lab::compare::{Comparison, parse_methods, run};
 use lab::progress::Silent;
 use lab::reference_cache::ReferenceSource;
+use lab::report;
 use lab::scenes::with_resolution;
 use sss::scene::Scene;
 
@@ -112,7 +113,7 @@ fn the_report_renders_in_a_browser() {
     };
     let dir = std::env::temp_dir().join(format!("reshift-report-html-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
-    let plan = Plan {
+    let plan = Comparison {
         scene: with_resolution(Scene::builtin("bumpy").unwrap(), Some((48, 36))),
         scene_key: "bumpy".into(),
         methods: parse_methods(&["pt", "restir:hybrid"]).unwrap(),
@@ -136,6 +137,7 @@ fn the_report_renders_in_a_browser() {
             .collect(),
     };
     let outcome = run(&plan, &mut Silent).unwrap();
+    report::write(&plan, &outcome).unwrap();
     assert!(
         outcome.denoise_errors.is_empty(),
         "{:?}",

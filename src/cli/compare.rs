@@ -8,10 +8,11 @@ use std::path::PathBuf;
 use clap::Args;
 use engine::denoise::Denoiser;
 use lab::compare::{
-    self, DEFAULT_BASELINE, DEFAULT_METHODS, Plan, frame_reference_spp, parse_methods,
+    self, Comparison, DEFAULT_BASELINE, DEFAULT_METHODS, frame_reference_spp, parse_methods,
 };
+use lab::output::file_stem;
 use lab::reference_cache::ReferenceSource;
-use lab::report::file_stem;
+use lab::report;
 
 use sss::limits;
 
@@ -116,19 +117,20 @@ pub fn parse_denoise(text: &str) -> CliResult<(Vec<Denoiser>, bool)> {
 /// its partial results and fails.
 pub fn command(args: &CompareArgs) -> CliResult<()> {
     let (denoise, named) = parse_denoise(&args.denoise)?;
-    let plan = Plan {
+    let plan = Comparison {
         denoise,
         ..plan(args)?
     };
     let outcome = compare::run(&plan, &mut Bars::default())?;
+    let written = report::write(&plan, &outcome)?;
     for e in &outcome.denoise_errors {
         eprintln!("denoiser: {e}");
     }
     if args.json {
-        println!("{}", outcome.results.to_json_pretty());
+        println!("{}", written.results.to_json_pretty());
     } else {
-        println!("{}", outcome.markdown);
-        if outcome.results.baseline.is_none() {
+        println!("{}", written.markdown);
+        if written.results.baseline.is_none() {
             println!(
                 "No efficiency ratios: the baseline {:?} is not among the methods.",
                 args.baseline
@@ -139,7 +141,7 @@ pub fn command(args: &CompareArgs) -> CliResult<()> {
             outcome.out.display()
         );
     }
-    if outcome.results.interrupted {
+    if outcome.interrupted {
         return Err(CliError("interrupted: partial results written".into()));
     }
     if named && !outcome.denoise_errors.is_empty() {
@@ -154,7 +156,7 @@ pub fn command(args: &CompareArgs) -> CliResult<()> {
 }
 
 /// The plan of `args`, checked with errors that name the flags.
-fn plan(args: &CompareArgs) -> CliResult<Plan> {
+fn plan(args: &CompareArgs) -> CliResult<Comparison> {
     let methods = parse_methods(&args.methods)?;
     if methods.is_empty() {
         return Err(CliError("--methods: no method given".into()));
@@ -199,7 +201,7 @@ fn plan(args: &CompareArgs) -> CliResult<Plan> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("out/compare-{}", file_stem(&key))));
-    Ok(Plan {
+    Ok(Comparison {
         scene: with_resolution(scene, Some(resolution)),
         scene_key: key,
         methods,

@@ -1,18 +1,18 @@
 //! `reshift experiment NAME`: the named reproductions of seed 001's figures
-//! (`lab::experiments`); prints the table and the findings (or the JSON) and where the outputs
+//! (the `experiments` crate); prints the table and the findings (or the JSON) and where the outputs
 //! are.
 
 use std::path::PathBuf;
 
 use clap::builder::PossibleValue;
 use clap::{Args, ValueEnum};
-use lab::experiments::{Experiment, Settings};
+use experiments::{Experiment, Settings};
 use sss::InputError;
 
 use super::common::{BackendArgs, Bars, CliResult, command_line, parse_resolution};
 
 /// An experiment name on the command line; the names and their help are
-/// `lab::experiments::Experiment`'s.
+/// `experiments::Experiment`'s.
 #[derive(Clone, Copy, Debug)]
 pub struct Name(pub Experiment);
 

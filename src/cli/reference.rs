@@ -5,8 +5,8 @@
 use std::path::{Path, PathBuf};
 
 use clap::Args;
+use lab::output::output_dir;
 use lab::reference_cache::{REFERENCE_SEED, accumulate, mean_image};
-use lab::report::output_dir;
 use serde_json::json;
 use sss::integrator::pt::PtSettings;
 use sss::integrator::{Reference, ReferenceConfig, Shard};

@@ -6,9 +6,9 @@
 use std::path::PathBuf;
 
 use clap::Args;
+use lab::draw::false_colour_map;
 use lab::methods::Method;
-use lab::report::plots::false_colour_map;
-use lab::report::{file_stem, output_dir};
+use lab::output::{file_stem, output_dir};
 use serde_json::json;
 
 use sss::limits;

@@ -14,13 +14,13 @@ use engine::image::tonemap;
 use plotters::prelude::*;
 use sss::integrator::Reference;
 
+use crate::draw::{FONT, draw_error, png, upscale};
 use crate::error::Error;
 use crate::method_result::{Measured, MethodResult};
 use crate::metrics::Area;
 use crate::reference_cache::mean_image;
 use crate::regions::{Region, Regions};
 
-use super::plots::{FONT, draw_error, png};
 use super::tables::{sig, with_ci};
 
 /// The regions shown as insets, in row order, with the colour of their frame.
@@ -86,25 +86,6 @@ pub fn inset(regions: &Regions, region: Region, side: u32) -> Option<Rect> {
         width: side as u32,
         height: side as u32,
     })
-}
-
-/// `rgb` (row-major `width × height`, 3 bytes a pixel) enlarged `scale` times by pixel
-/// replication, so that single pixels of noise stay visible.
-pub fn upscale(rgb: &[u8], width: u32, height: u32, scale: u32) -> Vec<u8> {
-    let (w, s) = (width as usize, scale as usize);
-    let mut out = Vec::with_capacity(rgb.len() * s * s);
-    for y in 0..height as usize {
-        let row: Vec<u8> = (0..w)
-            .flat_map(|x| {
-                let p = &rgb[3 * (y * w + x)..3 * (y * w + x) + 3];
-                std::iter::repeat_n(p, s).flatten().copied()
-            })
-            .collect();
-        for _ in 0..s {
-            out.extend_from_slice(&row);
-        }
-    }
-    out
 }
 
 /// The tonemapped 8-bit sRGB bytes of `rect` of `image`.
@@ -323,17 +304,5 @@ mod tests {
         );
         assert_eq!(inset(&r, Region::Penumbra, 2), None);
         assert_eq!(inset(&r, Region::Shadowed, 99).unwrap().width, 4, "clamped");
-    }
-
-    #[test]
-    fn upscaling_replicates_pixels() {
-        let rgb = [1, 2, 3, 4, 5, 6];
-        let big = upscale(&rgb, 2, 1, 2);
-        assert_eq!(
-            big,
-            [
-                1, 2, 3, 1, 2, 3, 4, 5, 6, 4, 5, 6, 1, 2, 3, 1, 2, 3, 4, 5, 6, 4, 5, 6
-            ]
-        );
     }
 }

@@ -1,17 +1,15 @@
-//! Plots of a comparison, drawn with `plotters` into RGB buffers and written as PNG: the
+//! Plots of a comparison, drawn with `plotters` through [`crate::draw`] and written as PNG: the
 //! convergence plot (MSE against frame, log y, one line per method with its 95% band, one panel
-//! per region; [`convergence`]) and false-colour error maps with a labelled colour bar
-//! ([`false_colour_map`]). Text uses the bundled DejaVu Sans (`lab/assets/fonts`). [`write_figures`]
-//! writes the convergence plot and the inset figure ([`super::figure`]).
+//! per region; [`convergence`]). [`write_figures`] writes the convergence plot and the inset
+//! figure ([`super::figure`]).
 
 use std::path::Path;
-use std::sync::Once;
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use plotters::style::FontStyle;
 use sss::integrator::Reference;
 
+use crate::draw::{FONT, draw_error, png};
 use crate::error::Error;
 use crate::method_result::{Measured, MethodResult};
 use crate::metrics::Area;
@@ -19,12 +17,6 @@ use crate::regions::Regions;
 use crate::report::results::FigureFiles;
 
 use super::figure;
-
-/// The font family every plot's text uses.
-pub const FONT: &str = "sans-serif";
-
-/// DejaVu Sans 2.37 (Bitstream Vera licence, `lab/assets/fonts/LICENSE-DejaVu.txt`).
-const FONT_BYTES: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
 /// Size of the convergence plot.
 const CONVERGENCE_SIZE: (u32, u32) = (1200, 900);
@@ -40,37 +32,6 @@ pub const PALETTE: [RGBColor; 8] = [
     RGBColor(204, 121, 167),
     RGBColor(240, 228, 66),
 ];
-
-/// Registers the bundled font once; plotters looks fonts up by family name.
-pub fn register_font() {
-    static ONCE: Once = Once::new();
-    ONCE.call_once(|| {
-        // The font is compiled in and parses; a failure would leave text undrawn, not panic.
-        let _ = plotters::style::register_font(FONT, FontStyle::Normal, FONT_BYTES);
-    });
-}
-
-/// An error of a drawing into `path`.
-pub fn draw_error(path: &Path) -> impl Fn(&dyn std::fmt::Debug) -> Error + '_ {
-    move |e| Error::Io(format!("{}: drawing failed: {e:?}", path.display()))
-}
-
-/// Draws `draw` on a white `size` canvas and writes it to `path` as an RGB PNG.
-pub fn png(
-    path: &Path,
-    size: (u32, u32),
-    draw: impl FnOnce(&DrawingArea<BitMapBackend, Shift>) -> Result<(), Error>,
-) -> Result<(), Error> {
-    register_font();
-    let mut buffer = vec![255u8; size.0 as usize * size.1 as usize * 3];
-    {
-        let root = BitMapBackend::with_buffer(&mut buffer, size).into_drawing_area();
-        draw(&root)?;
-        root.present().map_err(|e| draw_error(path)(&e))?;
-    }
-    image::save_buffer(path, &buffer, size.0, size.1, image::ColorType::Rgb8)
-        .map_err(|e| Error::Io(format!("{}: {e}", path.display())))
-}
 
 /// Writes `convergence.png` and `figure.png` into `out`: the MSE of every method and area
 /// over frames, and the reference and each method's final frame (`finals`, replica 0) with
@@ -198,84 +159,4 @@ fn convergence_panel(
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .draw()
-}
-
-/// A false-colour map (an error map, a sample-count map): `values` (row-major
-/// `width × height`) scaled up to at least 256 pixels wide, viridis from 0 to `max` ([`crate::images::ramp`];
-/// magenta: not finite), `title` above and a colour bar with labelled ticks to the right.
-pub fn false_colour_map(
-    path: &Path,
-    values: &[f64],
-    (width, height): (u32, u32),
-    max: f64,
-    title: &str,
-) -> Result<(), Error> {
-    if values.len() != width as usize * height as usize || width == 0 || height == 0 {
-        return Err(Error::Invalid(format!(
-            "{}: {} values for a {width}×{height} false-colour map",
-            path.display(),
-            values.len()
-        )));
-    }
-    let max = if max > 0.0 && max.is_finite() {
-        max
-    } else {
-        1.0
-    };
-    let scale = 256u32.div_ceil(width).max(1);
-    let (w, h) = (width * scale, height * scale);
-    let rgb: Vec<u8> = values
-        .iter()
-        .flat_map(|&v| {
-            if v.is_finite() {
-                crate::images::ramp(v / max)
-            } else {
-                [255, 0, 255]
-            }
-        })
-        .collect();
-    let map = figure::upscale(&rgb, width, height, scale);
-    let fail = draw_error(path);
-    png(path, (w + 110, h + 34), |root| {
-        root.fill(&WHITE).map_err(|e| fail(&e))?;
-        root.draw(&Text::new(title.to_string(), (4, 6), (FONT, 15)))
-            .map_err(|e| fail(&e))?;
-        let element = BitMapElement::with_owned_buffer((0, 30), (w, h), map)
-            .ok_or_else(|| fail(&"map buffer size"))?;
-        root.draw(&element).map_err(|e| fail(&e))?;
-        let bar = root.margin(30, 4, w as i32 + 8, 0);
-        colour_bar(&bar, max).map_err(|e| fail(&e))
-    })
-}
-
-/// A vertical colour bar from 0 (bottom) to `max` (top) with five labelled ticks.
-fn colour_bar(
-    area: &DrawingArea<BitMapBackend, Shift>,
-    max: f64,
-) -> Result<(), DrawingAreaErrorKind<<BitMapBackend<'static> as DrawingBackend>::ErrorType>> {
-    let mut chart = ChartBuilder::on(area)
-        .margin_top(6)
-        .margin_bottom(6)
-        .y_label_area_size(0)
-        .right_y_label_area_size(70)
-        .build_cartesian_2d(0f64..1.0, 0f64..max)?;
-    chart
-        .configure_mesh()
-        .disable_x_mesh()
-        .disable_y_mesh()
-        .disable_x_axis()
-        .y_labels(5)
-        .y_label_formatter(&|y| format!("{y:.2e}"))
-        .label_style((FONT, 12))
-        .draw()?;
-    const STEPS: usize = 64;
-    chart.draw_series((0..STEPS).map(|i| {
-        let (a, b) = (i as f64 / STEPS as f64, (i + 1) as f64 / STEPS as f64);
-        let [r, g, bl] = crate::images::ramp(0.5 * (a + b));
-        Rectangle::new(
-            [(0.0, a * max), (1.0, b * max)],
-            RGBColor(r, g, bl).filled(),
-        )
-    }))?;
-    Ok(())
 }

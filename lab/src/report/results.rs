@@ -10,7 +10,7 @@ use sss::integrator::Reference;
 
 use crate::method_result::{FrameMetrics, Measured, MethodResult};
 use crate::metrics::{AreaMetrics, BIAS_CONFIDENCE, REL_EPSILON};
-use crate::reference_cache::Obtained;
+use crate::reference_cache::Provenance;
 use crate::regions::{Region, Regions};
 use crate::uncertainty::{CONFIDENCE, INTERVAL_METHOD, Interval};
 
@@ -286,14 +286,13 @@ impl ReferenceEntry {
 }
 
 impl FrameReferenceEntry {
-    pub fn new(obtained: &Obtained) -> FrameReferenceEntry {
-        let r = &obtained.reference;
+    pub fn new(p: &Provenance) -> FrameReferenceEntry {
         FrameReferenceEntry {
-            frame: r.config.frame,
-            spp: r.batches_done() as u64 * r.config.spp_per_batch as u64,
-            batches: r.batches_done(),
-            path: obtained.path.display().to_string(),
-            cached: obtained.cached,
+            frame: p.frame,
+            spp: p.spp,
+            batches: p.batches,
+            path: p.path.display().to_string(),
+            cached: p.cached,
         }
     }
 }

@@ -1,0 +1,364 @@
+//! Tests of the replica bias protocol on synthetic replicas of known bias per region and channel:
+//! the reduction to region means, the verdicts, pairing, planning and the reference settings.
+
+use super::*;
+use crate::regions::VISIBILITY_SAMPLES;
+use restir::rng::{Stream, StreamKey};
+use sss::scene::Scene;
+
+const PROTOCOL: Protocol = Protocol {
+    delta: 0.03,
+    alpha: 0.01,
+};
+
+/// The colour of every true radiance (so the channels differ).
+const TINT: DVec3 = DVec3::new(1.0, 0.8, 0.5);
+
+/// Each replica and each batch adds its RGB image; sizes past `u64` are `None`, not a
+/// wrapped small number.
+#[test]
+fn test_bytes_counts_replicas_batches_and_the_run() {
+    let pixels = 64 * 48;
+    let base = test_bytes(pixels, 2, 2, 16).unwrap();
+    assert_eq!(test_bytes(pixels, 3, 2, 16), Some(base + pixels * 24));
+    assert_eq!(test_bytes(pixels, 2, 3, 16), Some(base + pixels * 24));
+    assert_eq!(
+        test_bytes(pixels, 2, 2, 17),
+        Some(base + pixels * engine::limits::IMAGE_BYTES_PER_PIXEL)
+    );
+    assert_eq!(test_bytes(u64::MAX / 4, 2, 2, 1), None);
+}
+
+/// 12 × 10 pixels: a row of non-translucent pixels, then lit, penumbra and shadowed bands.
+fn regions() -> Regions {
+    let (w, h) = (12, 10);
+    let visible = (0..w * h)
+        .map(|p| match p / w {
+            0 => None,
+            1..=3 => Some(VISIBILITY_SAMPLES),
+            4..=6 => Some(VISIBILITY_SAMPLES / 2),
+            _ => Some(0),
+        })
+        .collect();
+    Regions::from_visible_samples(w, h, visible).expect("consistent")
+}
+
+/// The true radiance of pixel `p`: [`TINT`] times 1 lit, 0.5 penumbra, 0.1 shadowed, 3
+/// elsewhere.
+fn truth(regions: &Regions, p: usize) -> DVec3 {
+    TINT * match regions.visible_samples(p) {
+        None => 3.0,
+        Some(0) => 0.1,
+        Some(VISIBILITY_SAMPLES) => 1.0,
+        Some(_) => 0.5,
+    }
+}
+
+/// How a simulated estimator departs from the truth.
+#[derive(Clone, Copy, Default)]
+struct Defect {
+    /// Relative bias of every channel in the shadowed band.
+    shadow: f64,
+    /// Relative bias of the blue channel everywhere (a tint).
+    blue: f64,
+    /// The shadowed band is black in every image.
+    black_shadow: bool,
+}
+
+/// An image of `truth · (1 + defect) · (1 + common·g + 0.1·u)`, with `g` one standard
+/// normal per image (pixels correlated by reuse) and `u` one per pixel.
+fn image(regions: &Regions, s: &mut Stream, common: f64, defect: Defect) -> Vec<DVec3> {
+    let common = common * normal(s);
+    (0..regions.len())
+        .map(|p| {
+            let shadowed = regions.contains(Region::Shadowed, p);
+            if shadowed && defect.black_shadow {
+                return DVec3::ZERO;
+            }
+            let bias = if shadowed { defect.shadow } else { 0.0 };
+            let tint = DVec3::new(1.0, 1.0, 1.0 + defect.blue);
+            truth(regions, p) * tint * (1.0 + bias) * (1.0 + common + 0.1 * normal(s))
+        })
+        .collect()
+}
+
+fn normal(s: &mut Stream) -> f64 {
+    let radius = (-2.0 * (1.0 - s.next_f64()).ln()).sqrt();
+    radius * (std::f64::consts::TAU * s.next_f64()).cos()
+}
+
+/// `n` replicas (3% common factor) or, with `reference`, `n` independent batches.
+fn images(
+    regions: &Regions,
+    seed: u64,
+    n: usize,
+    reference: bool,
+    defect: Defect,
+) -> Vec<Vec<DVec3>> {
+    let mut s = StreamKey::new(0, 0, 0xB1A5, 0).stream(seed);
+    let common = if reference { 0.0 } else { 0.03 };
+    (0..n)
+        .map(|_| image(regions, &mut s, common, defect))
+        .collect()
+}
+
+/// The rows of a simulated estimator (`n` replicas with `defect`) against B = 64 batches.
+fn rows(name: &str, seed: u64, n: usize, defect: Defect) -> Vec<BiasRow> {
+    let regions = regions();
+    let reference = summarize(&images(&regions, 1, 64, true, Defect::default()), &regions);
+    let replicas = summarize(&images(&regions, seed, n, false, defect), &regions);
+    bias_rows(name, &replicas, &reference, &PROTOCOL)
+}
+
+#[test]
+fn region_means_skip_outside_pixels() {
+    let regions = regions();
+    let exact: Vec<DVec3> = (0..regions.len()).map(|p| truth(&regions, p)).collect();
+    let mean = |r| region_mean(&exact, &regions, r).expect("non-empty");
+    assert!((mean(Region::Lit) - TINT).abs().max_element() < 1e-15);
+    assert!((mean(Region::Shadowed) - 0.1 * TINT).abs().max_element() < 1e-15);
+    let translucent = (36.0 + 18.0 + 0.1 * 36.0) / 108.0 * TINT;
+    assert!(
+        (mean(Region::Translucent) - translucent)
+            .abs()
+            .max_element()
+            < 1e-12
+    );
+    assert_eq!(region_mean(&exact[1..], &regions, Region::Lit), None);
+    let nothing = Regions::from_visible_samples(2, 1, vec![None, None]).expect("consistent");
+    let two = [DVec3::ONE, DVec3::ONE];
+    assert_eq!(region_mean(&two, &nothing, Region::Translucent), None);
+    assert!(summarize(&[two.to_vec()], &nothing).is_empty());
+    assert!(Regions::from_visible_samples(2, 1, vec![None]).is_none());
+    let luminance = Channel::Luminance.of(TINT);
+    assert!((luminance - (0.2126 + 0.7152 * 0.8 + 0.0722 * 0.5)).abs() < 1e-15);
+    assert_eq!(Channel::ALL.map(|c| c.of(TINT))[..3], [1.0, 0.8, 0.5]);
+}
+
+/// δ = 3%, α = 0.01 (99% CIs, Holm across 4 regions × 4 channels), N = 64 replicas (3%
+/// common factor per image, so s.e. ≈ 0.4% per region) against B = 64 reference batches
+/// (s.e. ≈ 0.2%): a correct estimator is equivalent within ±3% in every row; the negative
+/// control, +10% in the shadowed band only, is Biased in each of its four rows there and
+/// still equivalent in lit and penumbra.
+#[test]
+fn correct_is_equivalent_and_shadow_bias_is_detected() {
+    let good = rows("good", 2, 64, Defect::default());
+    assert_eq!(good.len(), 4 * 4);
+    for row in &good {
+        assert_eq!(row.verdict, Verdict::Equivalent, "{}", Table(&good));
+    }
+    assert_eq!(overall(&good), Verdict::Equivalent);
+    let shadow = Defect {
+        shadow: 0.10,
+        ..Defect::default()
+    };
+    let bad = rows("shadow +10%", 3, 64, shadow);
+    for row in &bad {
+        let want = match row.region {
+            Region::Shadowed => Verdict::Biased,
+            Region::Lit | Region::Penumbra => Verdict::Equivalent,
+            Region::Translucent => continue,
+        };
+        assert_eq!(row.verdict, want, "{}", Table(&bad));
+        assert_eq!(
+            row.holm_rejected,
+            want == Verdict::Biased,
+            "{}",
+            Table(&bad)
+        );
+    }
+    assert_eq!(overall(&bad), Verdict::Biased);
+    let table = Table(&bad).to_string();
+    assert_eq!(table.lines().count(), 2 + 16, "{table}");
+    assert!(
+        table.contains("| shadow +10% | shadowed | blue | 36 | 64 |"),
+        "{table}"
+    );
+    assert!(table.contains("| ±3% | 99% |"), "{table}");
+    assert!(
+        table.contains("| equivalent within ±3% at 99% |"),
+        "{table}"
+    );
+}
+
+/// A tint, +10% in blue only, moves the luminance by +0.44% (blue weighs 0.0722 · 0.5 of
+/// it): every luminance row is still equivalent within ±3%, every blue row Biased.
+#[test]
+fn a_bias_in_one_channel_is_detected_in_that_channel() {
+    let blue = Defect {
+        blue: 0.10,
+        ..Defect::default()
+    };
+    let rows = rows("blue +10%", 4, 64, blue);
+    for row in &rows {
+        let want = match row.channel {
+            Channel::Blue => Verdict::Biased,
+            _ => Verdict::Equivalent,
+        };
+        assert_eq!(row.verdict, want, "{}", Table(&rows));
+    }
+}
+
+/// Paired replicas: a second backend that reproduces each replica of the first up to a
+/// relative noise of 1e-4 per pixel. δ = 0.5%, N = 16: paired, every row is equivalent,
+/// although the replicas' own spread (3% common factor) leaves the unpaired CI wider than
+/// ±0.5% (inconclusive); blue × 1.0075 (1.5δ) is Biased in every blue row and nowhere
+/// else; a replica missing on one side is a NaN pair, Biased.
+#[test]
+fn paired_rows_cancel_the_shared_noise() {
+    let regions = regions();
+    let protocol = Protocol {
+        delta: 0.005,
+        ..PROTOCOL
+    };
+    let baseline = images(&regions, 6, 16, false, Defect::default());
+    let mut s = StreamKey::new(0, 0, 0xB1A5, 1).stream(7);
+    let twin = |factor: DVec3, s: &mut Stream| -> Vec<Vec<DVec3>> {
+        let jitter = |p: DVec3, s: &mut Stream| p * factor * (1.0 + 1e-4 * normal(s));
+        baseline
+            .iter()
+            .map(|image| image.iter().map(|&p| jitter(p, s)).collect())
+            .collect()
+    };
+    let same = twin(DVec3::ONE, &mut s);
+    let rows = paired_rows("twin", &same, &baseline, &regions, &protocol);
+    assert_eq!(rows.len(), 16);
+    assert_eq!(overall(&rows), Verdict::Equivalent, "{}", Table(&rows));
+    let unpaired = bias_rows(
+        "unpaired",
+        &summarize(&same, &regions),
+        &summarize(&baseline, &regions),
+        &protocol,
+    );
+    assert_eq!(
+        overall(&unpaired),
+        Verdict::Inconclusive,
+        "{}",
+        Table(&unpaired)
+    );
+    let blue = twin(DVec3::new(1.0, 1.0, 1.0075), &mut s);
+    let rows = paired_rows("twin, blue × 1.0075", &blue, &baseline, &regions, &protocol);
+    for row in &rows {
+        let want = match row.channel {
+            Channel::Blue => Verdict::Biased,
+            _ => Verdict::Equivalent,
+        };
+        assert_eq!(row.verdict, want, "{}", Table(&rows));
+        let b = row.equivalence.relative_bias;
+        assert!(
+            row.channel != Channel::Blue || (b - 0.0075).abs() < 1e-4,
+            "{b}"
+        );
+    }
+    let rows = paired_rows("short", &same[1..], &baseline, &regions, &protocol);
+    assert_eq!(overall(&rows), Verdict::Biased, "{}", Table(&rows));
+}
+
+/// A region black in every replica (as 1-spp path tracing leaves a dark region of a tiny
+/// image) has no spread: its rows are inconclusive with p(bias = 0) = 1, never biased, with
+/// 2 replicas as with 64, against a reference that is not black. The translucent region,
+/// whose other pixels vary, shows the missing light as Biased at N = 64.
+#[test]
+fn a_region_black_in_every_replica_is_inconclusive() {
+    let black = Defect {
+        black_shadow: true,
+        ..Defect::default()
+    };
+    for n in [2, 64] {
+        let rows = rows("black shadow", 5, n, black);
+        let shadowed: Vec<BiasRow> = rows
+            .iter()
+            .filter(|r| r.region == Region::Shadowed)
+            .cloned()
+            .collect();
+        assert_eq!(shadowed.len(), 4);
+        for row in &shadowed {
+            assert_eq!(row.verdict, Verdict::Inconclusive, "{}", Table(&rows));
+            assert_eq!(row.equivalence.p_zero_bias, 1.0);
+        }
+        assert_eq!(overall(&shadowed), Verdict::Inconclusive);
+        let translucent = rows.iter().filter(|r| r.region == Region::Translucent);
+        for row in translucent.filter(|_| n == 64) {
+            assert_eq!(row.verdict, Verdict::Biased, "{}", Table(&rows));
+        }
+    }
+}
+
+/// The plan from a run's own rows: 64 replicas of the correct estimator (s.e. ≈ 0.4%)
+/// resolve ±3%, so fewer replicas suffice for power 0.9, and ±2% needs more than twice as
+/// many. ±1% needs a better reference: its own error (≈ 0.2% in each band of 36 pixels)
+/// leaves no room; nor is there a plan for a black region, whose CV is unknown.
+#[test]
+fn replicas_needed_follow_the_spread() {
+    let good = rows("good", 2, 64, Defect::default());
+    let with_delta = |delta| {
+        let protocol = Protocol { delta, ..PROTOCOL };
+        replicas_needed(&good, &protocol, 0.9)
+    };
+    let at_3 = with_delta(0.03).expect("plannable");
+    let at_2 = with_delta(0.02).expect("plannable");
+    assert!(at_3 < 64 && at_2 > 2 * at_3, "{at_3} {at_2}");
+    let Err(Unplannable::Reference { region, rel_se, .. }) = with_delta(0.01) else {
+        panic!("{:?}", with_delta(0.01))
+    };
+    assert_ne!(
+        region,
+        Region::Translucent,
+        "the widest band has the least error"
+    );
+    assert!(rel_se > 0.0015 && rel_se < 0.003, "{rel_se}");
+    let black = Defect {
+        black_shadow: true,
+        ..Defect::default()
+    };
+    let black = replicas_needed(&rows("black", 5, 64, black), &PROTOCOL, 0.9);
+    assert!(
+        matches!(
+            black,
+            Err(Unplannable::NoSpread {
+                region: Region::Shadowed,
+                ..
+            })
+        ),
+        "{black:?}"
+    );
+}
+
+#[test]
+fn reference_settings_are_validated() {
+    let scene = Scene::builtin("half-shadow").expect("built-in");
+    let field = |b, k| {
+        reference_images(&scene, 0, b, k, 1)
+            .map(|_| ())
+            .unwrap_err()
+            .field
+    };
+    assert_eq!(field(1, 4), "batches");
+    assert_eq!(field(2, 0), "spp_per_batch");
+    assert_eq!(field(1 << 16, 1 << 17), "batches");
+}
+
+/// Holm, not the per-row level, decides "Biased": a p-value of 0.008 is significant at
+/// α = 0.01 alone; when Holm does not reject it, a CI that overlaps ±δ is Inconclusive.
+#[test]
+fn holm_guards_against_false_findings() {
+    let e = Equivalence {
+        n: 10,
+        relative_bias: 0.015,
+        ci_low: 0.001,
+        ci_high: 0.039,
+        delta: 0.03,
+        confidence: 0.99,
+        p_zero_bias: 0.008,
+        verdict: Verdict::Biased,
+    };
+    assert_eq!(PROTOCOL.verdict(&e, false), Verdict::Inconclusive);
+    assert_eq!(PROTOCOL.verdict(&e, true), Verdict::Biased);
+    let outside = Equivalence { ci_low: 0.031, ..e };
+    assert_eq!(PROTOCOL.verdict(&outside, false), Verdict::Biased);
+    let inside = Equivalence {
+        ci_high: 0.029,
+        ..e
+    };
+    assert_eq!(PROTOCOL.verdict(&inside, true), Verdict::Equivalent);
+}

@@ -1,0 +1,165 @@
+//! A whole comparison through the library, measured ([`super::run`]) and written
+//! ([`crate::report::write`]).
+
+use engine::Backend;
+use engine::denoise::Denoiser;
+use sss::scene::Scene;
+
+use super::*;
+use crate::progress::Silent;
+use crate::report;
+use crate::scenes::with_resolution;
+
+/// A whole comparison through the library: every file is written, the document agrees with
+/// the rows, every frame is measured, a second run reuses the cached references and
+/// reproduces the errors, and measuring the last frame alone gives the same last-frame
+/// errors (a trajectory's last frame is the frame a single render returns).
+#[test]
+fn a_comparison_writes_its_outputs_and_reuses_the_reference() {
+    let dir = std::env::temp_dir().join(format!("reshift-compare-{}", std::process::id()));
+    let plan = Comparison {
+        scene: with_resolution(Scene::builtin("bumpy").unwrap(), Some((12, 9))),
+        scene_key: "bumpy".into(),
+        methods: parse_methods(&["pt:2", "restir:hybrid"]).unwrap(),
+        baseline: "pt:2".into(),
+        replicas: 3,
+        frames: 3,
+        equal_time: None,
+        reference: ReferenceSource::Cache {
+            dir: dir.join("cache"),
+            spp: 8,
+            batch_spp: 4,
+        },
+        frame_reference_spp: Some(8),
+        out: dir.join("out"),
+        backend: Backend::Cpu,
+        denoise: vec![Denoiser::Svgf],
+    };
+    let first = run(&plan, &mut Silent).unwrap();
+    // `run` measures; `report::write` writes.
+    assert!(!first.out.join("table.md").exists());
+    let first_written = report::write(&plan, &first).unwrap();
+    // The denoised rows: one per method, measured at the last frame, their seconds the raw
+    // ones (equal spp: the denoiser's are reported, not counted), their ratios to the
+    // baseline's denoised row.
+    let (d, denoised) = &first.denoised[0];
+    assert_eq!(*d, Denoiser::Svgf);
+    assert_eq!(denoised.len(), 2);
+    for (row, raw) in denoised.iter().zip(&first.rows) {
+        assert_eq!(row.label(), format!("{}+svgf", raw.method));
+        assert_eq!(row.convergence.len(), 1);
+        let extra = row.denoiser_seconds.as_ref().unwrap().value;
+        assert!(extra > 0.0);
+        assert_eq!(row.seconds, raw.seconds);
+        assert_ne!(row.metrics, raw.metrics);
+    }
+    assert!(
+        first.denoise_errors.is_empty(),
+        "{:?}",
+        first.denoise_errors
+    );
+    assert_eq!(first_written.results.methods.len(), 4);
+    assert_eq!(first_written.results.denoisers, ["svgf"]);
+    assert!(
+        first_written.markdown.contains("Denoised with svgf"),
+        "{}",
+        first_written.markdown
+    );
+    assert!(
+        first_written.markdown.contains("| pt:2+svgf |"),
+        "{}",
+        first_written.markdown
+    );
+    assert_eq!(first.rows.len(), 2);
+    assert!(!first_written.results.reference.cached && !first_written.results.interrupted);
+    for file in [
+        "table.md",
+        "table.csv",
+        "convergence.csv",
+        "results.json",
+        "reference.exr",
+        "figure.png",
+        "convergence.png",
+        "report.html",
+        "restir-hybrid-abs-error.png",
+        "restir-hybrid-flip.png",
+        "restir-hybrid-low-frequency.png",
+        "restir-hybrid-svgf.png",
+        "restir-hybrid-svgf-flip.png",
+    ] {
+        assert!(first.out.join(file).is_file(), "{file}");
+    }
+    let written = std::fs::read_to_string(first.out.join("results.json")).unwrap();
+    assert_eq!(written, first_written.results.to_json_pretty());
+    assert_eq!(first_written.results.frame_references.len(), 3);
+    for row in &first.rows {
+        let frames: Vec<u32> = row.convergence.iter().map(|f| f.frame).collect();
+        assert_eq!(frames, [0, 1, 2], "{}", row.method);
+        assert_eq!(row.convergence[2].metrics, row.metrics);
+        assert_eq!(row.seconds.replicas(), 3);
+    }
+    assert_eq!(first_written.results.baseline.as_deref(), Some("pt:2"));
+    assert!(
+        first_written.markdown.contains("Efficiency over pt:2"),
+        "{}",
+        first_written.markdown
+    );
+    let again = run(&plan, &mut Silent).unwrap();
+    let again_written = report::write(&plan, &again).unwrap();
+    assert!(again_written.results.reference.cached);
+    assert!(
+        again_written
+            .results
+            .frame_references
+            .iter()
+            .all(|f| f.cached)
+    );
+    assert_eq!(again.rows[1].metrics, first.rows[1].metrics);
+    assert_eq!(
+        again.denoised[0].1[1].metrics,
+        first.denoised[0].1[1].metrics
+    );
+    let last_only = Comparison {
+        frame_reference_spp: None,
+        baseline: "none".into(),
+        denoise: Vec::new(),
+        ..plan
+    };
+    let last = run(&last_only, &mut Silent).unwrap();
+    let last_written = report::write(&last_only, &last).unwrap();
+    assert!(last_written.results.baseline.is_none());
+    for (a, b) in last.rows.iter().zip(&first.rows) {
+        assert_eq!(a.metrics, b.metrics, "{}", a.method);
+        assert_eq!(a.convergence.len(), 1);
+    }
+    // Equal time counts the denoiser: every denoised row's seconds are its rendering's plus
+    // one figure shared by the denoiser's rows (the mean of its timings).
+    let timed = Comparison {
+        equal_time: Some(0.01),
+        denoise: vec![Denoiser::Svgf],
+        ..last_only
+    };
+    let counted = run(&timed, &mut Silent).unwrap();
+    let counted_written = report::write(&timed, &counted).unwrap();
+    let (_, denoised) = &counted.denoised[0];
+    let added: Vec<f64> = denoised
+        .iter()
+        .zip(&counted.rows)
+        .map(|(d, raw)| d.seconds.value - raw.seconds.value)
+        .collect();
+    let pooled: Vec<f64> = denoised
+        .iter()
+        .map(|d| d.denoiser_seconds.as_ref().unwrap().value)
+        .collect();
+    let mean = pooled.iter().sum::<f64>() / pooled.len() as f64;
+    for a in &added {
+        assert!((a - mean).abs() < 1e-12, "{added:?} vs {mean}");
+    }
+    assert!(counted_written.markdown.contains("counted in ms/frame"));
+    let empty = Comparison {
+        methods: Vec::new(),
+        ..timed
+    };
+    assert!(matches!(run(&empty, &mut Silent), Err(Error::Invalid(_))));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -12,7 +12,7 @@
 //! no shift's criterion is named by the rule.
 
 use std::fmt;
-use std::ops::Bound;
+use std::ops::{Bound, RangeBounds};
 
 /// A shift's declaration, given by its type (`impl DeclaresNumbers for MyShift`).
 pub trait DeclaresNumbers {
@@ -137,6 +137,14 @@ impl Cell {
 
 impl Region {
     pub const EVERY: Region = Region(&[Cell::EVERY]);
+
+    /// Whether the region holds a path with `‖x2 − x1‖ / max d = distance` and `n1·n2 = cosine`.
+    pub fn contains(self, distance: f32, cosine: f32) -> bool {
+        self.0.iter().any(|c| {
+            (c.distance.0, c.distance.1).contains(&distance)
+                && (c.cosine.0, c.cosine.1).contains(&cosine)
+        })
+    }
 
     /// Whether the two regions share a path.
     pub fn meets(self, other: Region) -> bool {
@@ -263,8 +271,12 @@ mod tests {
         assert!(!Interval::above(2.0).meets(Interval::at_most(2.0)));
         assert!(Interval::above(2.0).meets(Interval::at_most(2.5)));
         assert!(Interval::ALL.meets(Interval::below(-7.0)));
-        assert!(!Interval(Bound::Included(1.0), Bound::Excluded(2.0)).meets(Interval::at_least(2.0)));
-        assert!(Interval(Bound::Included(1.0), Bound::Included(2.0)).meets(Interval::at_least(2.0)));
+        assert!(
+            !Interval(Bound::Included(1.0), Bound::Excluded(2.0)).meets(Interval::at_least(2.0))
+        );
+        assert!(
+            Interval(Bound::Included(1.0), Bound::Included(2.0)).meets(Interval::at_least(2.0))
+        );
     }
 
     #[test]

@@ -287,6 +287,33 @@ impl Preset {
         self
     }
 
+    /// The preset with its spatial passes' shift replaced by `kind`, if they share one shift
+    /// (every registered preset but the sequential ones); validated by [`Preset::validate`].
+    pub fn with_spatial_shift(mut self, kind: ShiftKind) -> Result<Preset, String> {
+        let shifts: Vec<&mut ShiftKind> = (self.passes.iter_mut())
+            .filter_map(|pass| match pass {
+                PassSpec::Spatial { shift, .. } => Some(shift),
+                _ => None,
+            })
+            .collect();
+        let names: Vec<&str> = shifts.iter().map(|s| s.name()).collect();
+        match names.first() {
+            None => return Err(format!("preset `{}` has no spatial pass", self.name)),
+            Some(first) if names.iter().any(|n| n != first) => {
+                return Err(format!(
+                    "preset `{}` has several spatial shifts ({}); /spatial= needs one",
+                    self.name,
+                    names.join(", ")
+                ));
+            }
+            Some(_) => {}
+        }
+        for shift in shifts {
+            *shift = kind;
+        }
+        Ok(self)
+    }
+
     /// The preset with every spatial pass's disk radius given by `rule`.
     pub fn with_radius(mut self, rule: RadiusRule) -> Preset {
         for pass in &mut self.passes {
@@ -295,6 +322,12 @@ impl Preset {
             }
         }
         self
+    }
+
+    /// Its passes' labels in order, e.g. `candidates → temporal:hybrid → spatial4:hybrid`.
+    pub fn describe(&self) -> String {
+        let labels: Vec<String> = self.passes.iter().map(PassSpec::label).collect();
+        labels.join(" → ")
     }
 
     /// The registered preset `name` ([`PRESETS`]), or `None`.
@@ -392,7 +425,7 @@ impl Preset {
             Some((
                 i,
                 format!(
-                    "{} replays numbers pass {j} ({}) may leave foreign ({}): biased; make pass {j} inverting-reconnection-exact",
+                    "{} replays numbers that pass {j} ({}) may leave foreign ({}): biased; make pass {j} inverting-reconnection-exact",
                     self.passes[i].label(),
                     self.passes[j].label(),
                     reuse(j)?,
@@ -604,6 +637,37 @@ mod tests {
         assert_eq!(spatial_only([R, D]).validate().unwrap_err().pass, 2);
     }
 
+    /// `/spatial=` replaces the one spatial shift of a preset and refuses a preset with several;
+    /// the result is validated like any preset.
+    #[test]
+    fn the_spatial_shift_is_replaced_where_the_preset_has_one() {
+        let p = Preset::named("hybrid")
+            .unwrap()
+            .with_spatial_shift(ShiftKind::DistantReconnection)
+            .unwrap();
+        assert_eq!(
+            p.describe(),
+            "candidates → temporal:hybrid → spatial4:distant-reconnection"
+        );
+        p.validate().unwrap();
+        let refused = Preset::named("hybrid")
+            .unwrap()
+            .with_spatial_shift(ShiftKind::Reconnection)
+            .unwrap();
+        assert_eq!(refused.validate().unwrap_err().pass, 1);
+        let e = Preset::named("sequential")
+            .unwrap()
+            .with_spatial_shift(ShiftKind::DelayedReconnection)
+            .unwrap_err();
+        assert!(
+            e.contains("inverting-reconnection-deferred, delayed"),
+            "{e}"
+        );
+        let mut none = Preset::named("hybrid").unwrap();
+        none.passes.pop();
+        assert!(none.with_spatial_shift(ShiftKind::Hybrid).is_err());
+    }
+
     /// A hybrid-style shift with its own criterion: reconnection where `‖x2 − x1‖ > 2·max d` at
     /// both ends, delayed reconnection elsewhere (failing where the replayed path is far at the
     /// destination). It is registered nowhere: the rule needs only its declaration.
@@ -670,9 +734,8 @@ mod tests {
         assert!(reason.contains("pass 2 (spatial4:hybrid)"), "{reason}");
         assert_eq!(p.chain_error_with(in_temporal(Hybrid::NUMBERS)), None);
         // Both passes with the new shift: it replays only paths it never keeps.
-        let alone = |_: usize, pass: &PassSpec| {
-            pass.shift().map(|_| FarReconnectedNearDelayed::NUMBERS)
-        };
+        let alone =
+            |_: usize, pass: &PassSpec| pass.shift().map(|_| FarReconnectedNearDelayed::NUMBERS);
         assert_eq!(p.chain_error_with(alone), None);
         for name in ["delayed", "sequential"] {
             let p = Preset::named(name).unwrap();

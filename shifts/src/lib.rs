@@ -14,7 +14,9 @@
 //!
 //! [`broken`] holds the deliberately wrong shifts the conformance tests must catch. Every shift
 //! is registered by one line of `registry.rs`, which gives it its [`ShiftKind`]: a name, a GPU
-//! code and the CPU shift that presets ([`preset`]) and the backends use.
+//! code and the CPU shift that presets ([`preset`]) and the backends use; the shift's type
+//! declares what it does with a sample's stored random numbers ([`numbers`]), from which
+//! [`preset::Preset::validate`] derives which passes may replay them.
 
 pub mod broken;
 /// What the GLSL twins (`shifts/glsl/`) share with this crate: the stored sample and reservoir,

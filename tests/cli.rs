@@ -212,7 +212,7 @@ fn bad_input_is_one_line_and_non_zero() {
             "--resolution",
             "32x24",
         ],
-        "pass 3: spatial2:delayed replays numbers that pass 1 (temporal:reconnection) may leave foreign (kept): biased; make pass 1 inverting-reconnection-exact",
+        "pass 3: spatial2:delayed replays numbers pass 1 (temporal:reconnection) may leave foreign: biased; make pass 1 inverting-reconnection-exact",
     );
     // A malformed scene file.
     let broken = dir.join("broken.toml");

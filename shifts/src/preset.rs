@@ -425,10 +425,9 @@ impl Preset {
             Some((
                 i,
                 format!(
-                    "{} replays numbers that pass {j} ({}) may leave foreign ({}): biased; make pass {j} inverting-reconnection-exact",
+                    "{} replays numbers pass {j} ({}) may leave foreign: biased; make pass {j} inverting-reconnection-exact",
                     self.passes[i].label(),
                     self.passes[j].label(),
-                    reuse(j)?,
                 ),
             ))
         })

@@ -1,5 +1,5 @@
 //! The `reshift` command line (DESIGN §7): render, reference/merge, compare, bias, experiment,
-//! gpu-report, scenes, methods, and the toy GRIS bias table. Errors print one line `reshift: …` and exit 1.
+//! gpu-report, scenes, methods, shifts, and the toy GRIS bias table. Errors print one line `reshift: …` and exit 1.
 
 mod cli;
 mod toy;
@@ -26,8 +26,10 @@ struct Cli {
 enum Command {
     /// List the built-in scenes.
     Scenes(cli::ListArgs),
-    /// List the rendering methods.
+    /// List the rendering methods and the ReSTIR presets.
     Methods(cli::ListArgs),
+    /// List the registered shifts (what each declares) and the MIS schemes.
+    Shifts(cli::ListArgs),
     /// Render one method on one scene: linear EXR + tonemapped PNG + timing.
     Render(cli::render::RenderArgs),
     /// Compare methods against a cached reference: table.md, table.csv, results.json, error maps.
@@ -57,6 +59,10 @@ fn main() -> ExitCode {
         }
         Command::Methods(args) => {
             cli::methods(args);
+            Ok(())
+        }
+        Command::Shifts(args) => {
+            cli::shifts(args);
             Ok(())
         }
         Command::Render(args) => cli::render::command(args),

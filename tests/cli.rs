@@ -5,7 +5,10 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use restir::mis::MisKind;
 use serde_json::Value;
+use shifts::ShiftKind;
+use shifts::preset::{PRESET_NAMES, Preset};
 use sss::scene::Scene;
 
 fn reshift(args: &[&str]) -> Output {
@@ -75,6 +78,7 @@ fn every_subcommand_has_help() {
     for sub in [
         "scenes",
         "methods",
+        "shifts",
         "render",
         "compare",
         "bias",
@@ -102,6 +106,78 @@ fn scenes_and_methods_list_the_registries() {
         methods.contains("pt[:spp]") && methods.contains("restir:"),
         "{methods}"
     );
+}
+
+/// `reshift methods` lists every registered preset with its passes and `reshift shifts` every
+/// registered shift (the worked example and the negative controls, which exist for tests,
+/// included) with its declaration, and every MIS scheme: both read the registries, so a newly
+/// registered preset or shift is listed without another edit.
+#[test]
+fn presets_shifts_and_mis_schemes_are_listed_from_their_registries() {
+    let methods = ok(&reshift(&["methods"]));
+    for preset in Preset::all() {
+        let line = format!("{}  {}", preset.name, preset.describe());
+        assert!(
+            methods.lines().any(
+                |l| l.trim_start().starts_with(&preset.name) && l.ends_with(&preset.describe())
+            ),
+            "{line}\n{methods}"
+        );
+    }
+    let json: Value = serde_json::from_str(&ok(&reshift(&["methods", "--json"]))).unwrap();
+    let restir = json
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["family"] == "restir")
+        .unwrap();
+    let names: Vec<&str> = restir["presets"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, PRESET_NAMES);
+
+    let text = ok(&reshift(&["shifts"]));
+    for kind in ShiftKind::ALL {
+        let at = text
+            .lines()
+            .position(|l| l == kind.name())
+            .unwrap_or_else(|| panic!("{}\n{text}", kind.name()));
+        let numbers = format!("    stored random numbers: {}", kind.numbers());
+        assert!(
+            text.lines().skip(at).take(4).any(|l| l == numbers),
+            "{numbers}\n{text}"
+        );
+    }
+    assert!(text.contains("distant-reconnection\n"), "{text}");
+    let json: Value = serde_json::from_str(&ok(&reshift(&["shifts", "--json"]))).unwrap();
+    let names: Vec<&str> = json["shifts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["name"].as_str().unwrap())
+        .collect();
+    let registered: Vec<&str> = ShiftKind::ALL.iter().map(|k| k.name()).collect();
+    assert_eq!(names, registered);
+    let deferred: Vec<bool> = json["shifts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["resolves_deferred_index"].as_bool().unwrap())
+        .collect();
+    assert_eq!(
+        deferred,
+        ShiftKind::ALL.map(|k| k.resolves_deferred_index())
+    );
+    let mis: Vec<&str> = json["mis"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(mis, MisKind::ALL.map(|m| m.scheme().name()));
 }
 
 #[test]
@@ -136,7 +212,7 @@ fn bad_input_is_one_line_and_non_zero() {
             "--resolution",
             "32x24",
         ],
-        "pass 3: spatial2:delayed replays numbers pass 1 (temporal:reconnection) moved across pixels: biased; make pass 1 inverting-reconnection-exact",
+        "pass 3: spatial2:delayed replays numbers pass 1 (temporal:reconnection) may leave foreign: biased; make pass 1 inverting-reconnection-exact",
     );
     // A malformed scene file.
     let broken = dir.join("broken.toml");

@@ -7,12 +7,17 @@ use crate::contract::{BROKEN_JACOBIAN_ERROR, DELAYED_CHECK_JACOBIAN, DELAYED_CHE
 use crate::delayed::{Checks, Wanted, replay};
 use crate::domain::SssDomain;
 use crate::hybrid::Hybrid;
+use crate::numbers::{DeclaresNumbers, Numbers};
 use crate::sample::SssSample;
 
 /// Delayed reconnection with `J = 1` instead of [001 Eq. 11] (still bijective, so its Jacobians
 /// are trivially reciprocal; finite differences and unbiasedness catch it).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct DelayedWithoutJacobian;
+
+impl DeclaresNumbers for DelayedWithoutJacobian {
+    const NUMBERS: Numbers = Numbers::REPLAYED;
+}
 
 impl Shift<SssDomain<'_>> for DelayedWithoutJacobian {
     fn shift(
@@ -32,6 +37,10 @@ impl Shift<SssDomain<'_>> for DelayedWithoutJacobian {
 /// Delayed reconnection without the y2–x3 visibility test: light leaks into shadows.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct DelayedWithoutVisibility;
+
+impl DeclaresNumbers for DelayedWithoutVisibility {
+    const NUMBERS: Numbers = Numbers::REPLAYED;
+}
 
 impl Shift<SssDomain<'_>> for DelayedWithoutVisibility {
     fn shift(
@@ -54,6 +63,13 @@ impl Shift<SssDomain<'_>> for DelayedWithoutVisibility {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct HybridIgnoringCriterion;
 
+/// The hybrid's declaration, which this control breaks: skipping the offset path's test it
+/// keeps numbers on paths not connectable at the destination. The conformance kit and the
+/// unbiasedness test catch it (`shifts/tests/conformance.rs`, `lab/tests/unbiased.rs`).
+impl DeclaresNumbers for HybridIgnoringCriterion {
+    const NUMBERS: Numbers = Hybrid::NUMBERS;
+}
+
 impl Shift<SssDomain<'_>> for HybridIgnoringCriterion {
     fn shift(
         &self,
@@ -71,6 +87,10 @@ impl Shift<SssDomain<'_>> for HybridIgnoringCriterion {
 /// with it.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct DelayedJacobianOff;
+
+impl DeclaresNumbers for DelayedJacobianOff {
+    const NUMBERS: Numbers = Numbers::REPLAYED;
+}
 
 impl Shift<SssDomain<'_>> for DelayedJacobianOff {
     fn shift(

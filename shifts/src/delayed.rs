@@ -8,6 +8,7 @@ use sss::scene::{Light, Lights};
 
 use crate::contract::{DELAYED_CHECK_JACOBIAN, DELAYED_CHECK_VISIBILITY, DELAYED_CHECKS_ALL};
 use crate::domain::{PURPOSE_PICK, SssDomain};
+use crate::numbers::{DeclaresNumbers, Numbers};
 use crate::sample::SssSample;
 
 /// Delayed reconnection: replays (technique, `u_radius`, `u_angle`, intersection index) at y1 →
@@ -31,6 +32,10 @@ use crate::sample::SssSample;
 /// original hit, so such a shift is not invertible: seed 001's documented small bias.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct DelayedReconnection;
+
+impl DeclaresNumbers for DelayedReconnection {
+    const NUMBERS: Numbers = Numbers::REPLAYED;
+}
 
 impl Shift<SssDomain<'_>> for DelayedReconnection {
     fn shift(

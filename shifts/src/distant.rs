@@ -11,6 +11,7 @@ use sss::bssrdf::ExitPoint;
 use sss::material::Translucent;
 
 use crate::domain::SssDomain;
+use crate::numbers::{Cell, DeclaresNumbers, Effect, Interval, Numbers, Outcome, Region};
 use crate::reconnection::reconnect;
 use crate::sample::SssSample;
 
@@ -24,9 +25,20 @@ impl DistantReconnection {
     /// The hybrid shift's distance threshold `κ_dist = 2 · max_c d_c` [001 §5.1].
     pub fn for_material(material: &Translucent) -> DistantReconnection {
         DistantReconnection {
-            min_distance: 2.0 * material.d().max_element(),
+            min_distance: MIN_DISTANCE_PER_MAX_D * material.d().max_element(),
         }
     }
+}
+
+/// `min_distance / max_c d_c`.
+const MIN_DISTANCE_PER_MAX_D: f32 = 2.0;
+
+/// It keeps the numbers of the paths it moves, all far from the destination's x1.
+impl DeclaresNumbers for DistantReconnection {
+    const NUMBERS: Numbers = Numbers(&[Outcome {
+        effect: Effect::Kept,
+        paths: Region(&[Cell::distance(Interval::at_least(MIN_DISTANCE_PER_MAX_D))]),
+    }]);
 }
 
 /// `J = 1` (reconnection). The rule reads x2 and both exit points, which a round trip

@@ -8,6 +8,7 @@ use sss::material::Translucent;
 
 use crate::delayed::{Checks, Wanted, replay};
 use crate::domain::SssDomain;
+use crate::numbers::{Cell, DeclaresNumbers, Effect, Interval, Numbers, Outcome, Region};
 use crate::reconnection::reconnect;
 use crate::sample::SssSample;
 
@@ -18,12 +19,17 @@ pub struct Hybrid {
     pub kappa_orient: f32,
 }
 
+/// Seed 001's `κ_dist / max_c d_c` [001 §5.1].
+const KAPPA_DIST_PER_MAX_D: f32 = 2.0;
+/// Seed 001's `κ_orient` [001 §5.1].
+const KAPPA_ORIENT: f32 = 0.5;
+
 impl Hybrid {
     /// Seed 001's defaults [001 §5.1]: `κ_dist = 2 · max_c d_c`, `κ_orient = 0.5`.
     pub fn for_material(material: &Translucent) -> Hybrid {
         Hybrid {
-            kappa_dist: 2.0 * material.d().max_element(),
-            kappa_orient: 0.5,
+            kappa_dist: KAPPA_DIST_PER_MAX_D * material.d().max_element(),
+            kappa_orient: KAPPA_ORIENT,
         }
     }
 
@@ -63,6 +69,31 @@ impl Hybrid {
             replayed.finish(dst, rejected, wanted)
         }
     }
+}
+
+/// Reconnection keeps the numbers of paths connectable at both ends; delayed reconnection
+/// replays those of paths not connectable at the source. The two regions are disjoint, so a
+/// hybrid may follow a hybrid.
+impl DeclaresNumbers for Hybrid {
+    const NUMBERS: Numbers = Numbers(&[
+        Outcome {
+            effect: Effect::Kept,
+            paths: Region(&[
+                Cell::distance(Interval::at_least(KAPPA_DIST_PER_MAX_D)),
+                Cell {
+                    distance: Interval::ALL,
+                    cosine: Interval::at_most(KAPPA_ORIENT),
+                },
+            ]),
+        },
+        Outcome {
+            effect: Effect::Replayed,
+            paths: Region(&[Cell {
+                distance: Interval::below(KAPPA_DIST_PER_MAX_D),
+                cosine: Interval::above(KAPPA_ORIENT),
+            }]),
+        },
+    ]);
 }
 
 /// Base connectable → reconnection, failing unless `connectable(y1, x2)`; base not connectable →

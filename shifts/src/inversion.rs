@@ -6,6 +6,7 @@ use restir::shift::{Fail, Shift, Shifted};
 use sss::bssrdf::{BssrdfSample, EntryPoint, Probe, find_index, invert_random_numbers};
 
 use crate::domain::{PURPOSE_INVERSION, SssDomain};
+use crate::numbers::{DeclaresNumbers, Numbers};
 use crate::reconnection::reconnect;
 use crate::sample::SssSample;
 
@@ -42,6 +43,10 @@ pub use crate::contract::IndexPolicy;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct InvertingReconnection {
     pub policy: IndexPolicy,
+}
+
+impl DeclaresNumbers for InvertingReconnection {
+    const NUMBERS: Numbers = Numbers::INVERTED;
 }
 
 impl Shift<SssDomain<'_>> for InvertingReconnection {

@@ -14,12 +14,10 @@
 /// ```
 ///
 /// `glsl_twin` is a function of `shifts/glsl/<glsl_file>.glsl` (see `shift.glsl`); the CPU
-/// expression is a function of the receiver's `&Translucent` that returns the shift. Flags:
+/// expression is a function of the receiver's `&Translucent` that returns the shift, whose type
+/// declares what it does with stored random numbers ([`DeclaresNumbers`]). The flag
 /// `resolves_deferred_index` marks a shift whose selected sample needs its intersection index
-/// resolved after the pass ([`crate::resolve_deferred_index`]); `keeps_numbers`,
-/// `keeps_connectable_numbers`, `replays_numbers` and `replays_unconnectable_numbers` say what
-/// it does with the BSSRDF random numbers a sample stores ([`StoredNumbers`]; none: it
-/// re-derives them for the receiver or reads none).
+/// resolved after the pass ([`crate::resolve_deferred_index`]).
 macro_rules! shift_registry {
     ($(
         $(#[doc = $doc:literal])*
@@ -44,6 +42,14 @@ macro_rules! shift_registry {
                 }
             }
 
+            /// The documentation of the kind's registry line, its lines joined by spaces.
+            pub fn about(&self) -> String {
+                let lines: &[&str] = match self {
+                    $( ShiftKind::$kind => &[$($doc),*], )*
+                };
+                lines.iter().map(|l| l.trim()).collect::<Vec<_>>().join(" ")
+            }
+
             /// The kind called `name`, if registered.
             pub fn named(name: &str) -> Option<ShiftKind> {
                 ShiftKind::ALL.into_iter().find(|k| k.name() == name)
@@ -58,29 +64,16 @@ macro_rules! shift_registry {
             /// index resolved afterwards ([`crate::resolve_deferred_index`], deferred policy
             /// [001 §4.3]).
             pub fn resolves_deferred_index(&self) -> bool {
-                self.flags().contains(&"resolves_deferred_index")
-            }
-
-            /// What the shift does with the BSSRDF random numbers a sample stores.
-            pub fn stored_numbers(&self) -> StoredNumbers {
-                let flags = self.flags();
-                if flags.contains(&"keeps_numbers") {
-                    StoredNumbers::Kept
-                } else if flags.contains(&"keeps_connectable_numbers") {
-                    StoredNumbers::KeptIfConnectable
-                } else if flags.contains(&"replays_numbers") {
-                    StoredNumbers::Replayed
-                } else if flags.contains(&"replays_unconnectable_numbers") {
-                    StoredNumbers::ReplayedUnlessConnectable
-                } else {
-                    StoredNumbers::Rederived
+                match self {
+                    $( ShiftKind::$kind => [$(registry_flag!($flag)),*].contains(&"resolves_deferred_index"), )*
                 }
             }
 
-            /// The flags of the kind's registry line.
-            fn flags(&self) -> &'static [&'static str] {
+            /// What the shift does with the BSSRDF random numbers a sample stores: the
+            /// declaration of the type its registry line builds.
+            pub fn numbers(&self) -> Numbers {
                 match self {
-                    $( ShiftKind::$kind => &[$(registry_flag!($flag)),*], )*
+                    $( ShiftKind::$kind => declared($cpu), )*
                 }
             }
 
@@ -105,71 +98,18 @@ macro_rules! registry_flag {
     (resolves_deferred_index) => {
         "resolves_deferred_index"
     };
-    (keeps_numbers) => {
-        "keeps_numbers"
-    };
-    (keeps_connectable_numbers) => {
-        "keeps_connectable_numbers"
-    };
-    (replays_numbers) => {
-        "replays_numbers"
-    };
-    (replays_unconnectable_numbers) => {
-        "replays_unconnectable_numbers"
-    };
 }
 
-/// What a shift does with the BSSRDF random numbers `(u_radius, u_angle, technique)` that a
-/// sample stores [001 §3.2.2, §4.3]. Delayed reconnection replays them at the receiver's x1,
-/// which is unbiased only if they are the numbers of the x1 of the pixel the sample sits in;
-/// a shift that moves a sample and keeps them leaves numbers drawn at another pixel's x1
-/// (`Preset::validate` rejects a chain that replays such numbers).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum StoredNumbers {
-    /// Re-derived for the receiver (probabilistic inversion [001 Alg. 4]), or not moved.
-    Rederived,
-    /// Kept while the sample moves (reconnection): afterwards they belong to another x1.
-    Kept,
-    /// Kept, but only for paths connectable in the hybrid's sense (distant reconnection: x2 at
-    /// least the hybrid's κ_dist from both x1), which the hybrid reconnects and never replays.
-    KeptIfConnectable,
-    /// Replayed at the receiver (delayed reconnection): they must belong to the source's x1;
-    /// afterwards they belong to the receiver's.
-    Replayed,
-    /// The hybrid [001 §4.1]: kept for paths connectable at both ends, replayed for the others.
-    /// Its kept numbers are connectable, which it never replays: a hybrid may follow a hybrid.
-    ReplayedUnlessConnectable,
-}
-
-impl StoredNumbers {
-    /// Whether a sample moved by a pass of shift `self` may carry numbers of another x1.
-    pub fn leaves_foreign(self) -> bool {
-        matches!(
-            self,
-            StoredNumbers::Kept
-                | StoredNumbers::KeptIfConnectable
-                | StoredNumbers::ReplayedUnlessConnectable
-        )
-    }
-
-    /// Whether a pass of shift `self` replays numbers that an earlier pass of `earlier` may
-    /// have left foreign (the hybrid replays no connectable path, the only ones that a hybrid
-    /// or distant reconnection keeps).
-    pub fn replays_foreign_of(self, earlier: StoredNumbers) -> bool {
-        match self {
-            StoredNumbers::Replayed => earlier.leaves_foreign(),
-            StoredNumbers::ReplayedUnlessConnectable => earlier == StoredNumbers::Kept,
-            StoredNumbers::Rederived | StoredNumbers::Kept | StoredNumbers::KeptIfConnectable => {
-                false
-            }
-        }
-    }
+/// The declaration of the shift type that `build` returns, without building one.
+fn declared<S: DeclaresNumbers>(_build: impl Fn(&Translucent) -> S) -> Numbers {
+    S::NUMBERS
 }
 
 use restir::shift::Shift;
 use sss::material::Translucent;
 
 use crate::domain::SssDomain;
+use crate::numbers::{DeclaresNumbers, Numbers};
 // The registry's CPU expressions name the shifts as the crate root exports them.
 use crate::*;
 
@@ -193,25 +133,8 @@ mod tests {
             .filter(ShiftKind::resolves_deferred_index)
             .collect();
         assert_eq!(deferred, [ShiftKind::InvertingDeferred]);
-        let numbers = |n| {
-            ShiftKind::ALL
-                .into_iter()
-                .filter(|k| k.stored_numbers() == n)
-                .collect::<Vec<_>>()
-        };
-        use ShiftKind::*;
-        assert_eq!(numbers(StoredNumbers::Kept), [Reconnection]);
-        assert_eq!(
-            numbers(StoredNumbers::KeptIfConnectable),
-            [DistantReconnection]
-        );
-        assert_eq!(
-            numbers(StoredNumbers::ReplayedUnlessConnectable),
-            [Hybrid, HybridIgnoringCriterion]
-        );
-        assert_eq!(
-            numbers(StoredNumbers::Rederived),
-            [Identity, InvertingExact, InvertingDeferred]
-        );
+        for kind in ShiftKind::ALL {
+            assert!(!kind.about().is_empty(), "{}", kind.name());
+        }
     }
 }

@@ -14,7 +14,9 @@
 //!
 //! [`broken`] holds the deliberately wrong shifts the conformance tests must catch. Every shift
 //! is registered by one line of `registry.rs`, which gives it its [`ShiftKind`]: a name, a GPU
-//! code and the CPU shift that presets ([`preset`]) and the backends use.
+//! code and the CPU shift that presets ([`preset`]) and the backends use; the shift's type
+//! declares what it does with a sample's stored random numbers ([`numbers`]), from which
+//! [`preset::Preset::validate`] derives which passes may replay them.
 
 pub mod broken;
 /// What the GLSL twins (`shifts/glsl/`) share with this crate: the stored sample and reservoir,
@@ -27,6 +29,7 @@ mod domain;
 mod hybrid;
 mod inversion;
 mod kind;
+pub mod numbers;
 pub mod preset;
 mod reconnection;
 mod sample;
@@ -38,7 +41,7 @@ pub use distant::DistantReconnection;
 pub use domain::{LightPath, SssDomain};
 pub use hybrid::Hybrid;
 pub use inversion::{InvertingReconnection, resolve_deferred_index};
-pub use kind::{ShiftKind, StoredNumbers};
+pub use kind::ShiftKind;
 pub use reconnection::{Identity, Reconnection};
 pub use sss::contract::bssrdf::INDEX_UNKNOWN;
 pub use target::Target;

@@ -14,6 +14,7 @@ use sss::scene::Camera;
 
 use crate::IndexPolicy;
 use crate::kind::ShiftKind;
+use crate::numbers::Numbers;
 use crate::target::Target;
 
 /// One pass of a frame.
@@ -286,6 +287,33 @@ impl Preset {
         self
     }
 
+    /// The preset with its spatial passes' shift replaced by `kind`, if they share one shift
+    /// (every registered preset but the sequential ones); validated by [`Preset::validate`].
+    pub fn with_spatial_shift(mut self, kind: ShiftKind) -> Result<Preset, String> {
+        let shifts: Vec<&mut ShiftKind> = (self.passes.iter_mut())
+            .filter_map(|pass| match pass {
+                PassSpec::Spatial { shift, .. } => Some(shift),
+                _ => None,
+            })
+            .collect();
+        let names: Vec<&str> = shifts.iter().map(|s| s.name()).collect();
+        match names.first() {
+            None => return Err(format!("preset `{}` has no spatial pass", self.name)),
+            Some(first) if names.iter().any(|n| n != first) => {
+                return Err(format!(
+                    "preset `{}` has several spatial shifts ({}); /spatial= needs one",
+                    self.name,
+                    names.join(", ")
+                ));
+            }
+            Some(_) => {}
+        }
+        for shift in shifts {
+            *shift = kind;
+        }
+        Ok(self)
+    }
+
     /// The preset with every spatial pass's disk radius given by `rule`.
     pub fn with_radius(mut self, rule: RadiusRule) -> Preset {
         for pass in &mut self.passes {
@@ -294,6 +322,12 @@ impl Preset {
             }
         }
         self
+    }
+
+    /// Its passes' labels in order, e.g. `candidates → temporal:hybrid → spatial4:hybrid`.
+    pub fn describe(&self) -> String {
+        let labels: Vec<String> = self.passes.iter().map(PassSpec::label).collect();
+        labels.join(" → ")
     }
 
     /// The registered preset `name` ([`PRESETS`]), or `None`.
@@ -362,29 +396,38 @@ impl Preset {
         }
     }
 
-    /// The first pass that replays the BSSRDF random numbers a sample stores while an earlier
-    /// pass moves samples keeping numbers drawn at another pixel's x1 ([`crate::StoredNumbers`]), and
-    /// why. "Earlier" is earlier in the frame, or any pass once a temporal pass at or before the
-    /// replaying one carries the previous frame's final reservoirs into the frame.
+    /// The first pass that replays the BSSRDF random numbers a sample stores where an earlier
+    /// pass may have left them foreign, and why, from what the passes' shifts declare
+    /// ([`ShiftKind::numbers`]).
     fn chain_error(&self) -> Option<(usize, String)> {
+        self.chain_error_with(|_, pass| Some(pass.shift()?.numbers()))
+    }
+
+    /// [`Self::chain_error`] with the declaration of pass `i` given by `numbers(i, pass)`
+    /// ([`Numbers::replays_foreign_of`]). "Earlier" is earlier in the frame, or any pass once a
+    /// temporal pass at or before the replaying one carries the previous frame's final
+    /// reservoirs into the frame.
+    fn chain_error_with(
+        &self,
+        numbers: impl Fn(usize, &PassSpec) -> Option<Numbers>,
+    ) -> Option<(usize, String)> {
         let temporal = self
             .passes
             .iter()
             .position(|p| matches!(p, PassSpec::Temporal { .. }));
-        let reuse = |i: usize| Some((self.passes[i], self.passes[i].shift()?.stored_numbers()));
+        let reuse = |i: usize| numbers(i, &self.passes[i]);
         (0..self.passes.len()).find_map(|i| {
-            let (pass, numbers) = reuse(i)?;
+            let replaying = reuse(i)?;
             let feeds = |j: usize| j < i || temporal.is_some_and(|t| t <= i && j != i);
-            let (j, (earlier, _)) = (0..self.passes.len())
+            let j = (0..self.passes.len())
                 .filter(|&j| feeds(j))
-                .filter_map(|j| Some((j, reuse(j)?)))
-                .find(|(_, (_, e))| numbers.replays_foreign_of(*e))?;
+                .find(|&j| reuse(j).is_some_and(|e| replaying.replays_foreign_of(e)))?;
             Some((
                 i,
                 format!(
-                    "{} replays numbers pass {j} ({}) moved across pixels: biased; make pass {j} inverting-reconnection-exact",
-                    pass.label(),
-                    earlier.label()
+                    "{} replays numbers pass {j} ({}) may leave foreign: biased; make pass {j} inverting-reconnection-exact",
+                    self.passes[i].label(),
+                    self.passes[j].label(),
                 ),
             ))
         })
@@ -393,7 +436,12 @@ impl Preset {
 
 #[cfg(test)]
 mod tests {
+    use restir::shift::{Fail, Shift, Shifted};
+
     use super::*;
+    use crate::Hybrid;
+    use crate::delayed::{Checks, Wanted, replay};
+    use crate::numbers::{Cell, DeclaresNumbers, Effect, Interval, Outcome, Region};
 
     /// The rules round-trip their names; the clamped rule is `Camera::spatial_radius_px`, the
     /// unclamped one the projection itself above its floor and the floor below or behind the eye.
@@ -586,5 +634,118 @@ mod tests {
         use ShiftKind::{DelayedReconnection as D, Reconnection as R};
         spatial_only([D, R]).validate().unwrap();
         assert_eq!(spatial_only([R, D]).validate().unwrap_err().pass, 2);
+    }
+
+    /// `/spatial=` replaces the one spatial shift of a preset and refuses a preset with several;
+    /// the result is validated like any preset.
+    #[test]
+    fn the_spatial_shift_is_replaced_where_the_preset_has_one() {
+        let p = Preset::named("hybrid")
+            .unwrap()
+            .with_spatial_shift(ShiftKind::DistantReconnection)
+            .unwrap();
+        assert_eq!(
+            p.describe(),
+            "candidates → temporal:hybrid → spatial4:distant-reconnection"
+        );
+        p.validate().unwrap();
+        let refused = Preset::named("hybrid")
+            .unwrap()
+            .with_spatial_shift(ShiftKind::Reconnection)
+            .unwrap();
+        assert_eq!(refused.validate().unwrap_err().pass, 1);
+        let e = Preset::named("sequential")
+            .unwrap()
+            .with_spatial_shift(ShiftKind::DelayedReconnection)
+            .unwrap_err();
+        assert!(
+            e.contains("inverting-reconnection-deferred, delayed"),
+            "{e}"
+        );
+        let mut none = Preset::named("hybrid").unwrap();
+        none.passes.pop();
+        assert!(none.with_spatial_shift(ShiftKind::Hybrid).is_err());
+    }
+
+    /// A hybrid-style shift with its own criterion: reconnection where `‖x2 − x1‖ > 2·max d` at
+    /// both ends, delayed reconnection elsewhere (failing where the replayed path is far at the
+    /// destination). It is registered nowhere: the rule needs only its declaration.
+    struct FarReconnectedNearDelayed;
+
+    impl FarReconnectedNearDelayed {
+        fn far(x1: &sss::bssrdf::ExitPoint, x2: glam::Vec3, dst: &crate::SssDomain) -> bool {
+            (x2 - x1.position).length() > 2.0 * dst.material().d().max_element()
+        }
+    }
+
+    impl DeclaresNumbers for FarReconnectedNearDelayed {
+        const NUMBERS: Numbers = Numbers(&[
+            Outcome {
+                effect: Effect::Kept,
+                paths: Region(&[Cell::distance(Interval::above(2.0))]),
+            },
+            Outcome {
+                effect: Effect::Replayed,
+                paths: Region(&[Cell::distance(Interval::at_most(2.0))]),
+            },
+        ]);
+    }
+
+    impl Shift<crate::SssDomain<'_>> for FarReconnectedNearDelayed {
+        fn shift(
+            &self,
+            x: &crate::SssSample,
+            src: &crate::SssDomain,
+            dst: &crate::SssDomain,
+        ) -> Result<Shifted<crate::SssSample>, Fail> {
+            let x2 = src.entry_point(x).ok_or(Fail::Rejected)?.position;
+            if Self::far(src.x1(), x2, src) {
+                let y = crate::reconnection::reconnect(x, dst)?;
+                if !Self::far(dst.x1(), x2, dst) {
+                    return Err(Fail::Rejected);
+                }
+                return Ok(Shifted { y, jacobian: 1.0 });
+            }
+            let replayed = replay(x, src, dst, Checks::ALL)?;
+            let far = Self::far(dst.x1(), replayed.y2.position, dst);
+            replayed.finish(dst, far, Wanted::Every)
+        }
+    }
+
+    /// `restir:hybrid/temporal=<that shift>` is refused: its temporal pass replays near paths,
+    /// which last frame's hybrid spatial pass reconnects when they are steeply oriented
+    /// (`n1·n2 ≤ 0.5`), keeping numbers of another x1. Declared as the hybrid (the closest flag
+    /// of a list of kinds) it would pass. The shift alone, and the registered presets, pass.
+    #[test]
+    fn a_hybrid_style_shift_with_its_own_criterion_is_checked_by_its_declaration() {
+        let mut p = Preset::named("hybrid").unwrap();
+        p.name = "hybrid/temporal=far-reconnected-near-delayed".into();
+        let in_temporal = |declared: Numbers| {
+            move |i: usize, pass: &PassSpec| match i {
+                1 => Some(declared),
+                _ => Some(pass.shift()?.numbers()),
+            }
+        };
+        let (pass, reason) = p
+            .chain_error_with(in_temporal(FarReconnectedNearDelayed::NUMBERS))
+            .expect("refused");
+        assert_eq!(pass, 1, "{reason}");
+        assert!(reason.contains("pass 2 (spatial4:hybrid)"), "{reason}");
+        assert_eq!(p.chain_error_with(in_temporal(Hybrid::NUMBERS)), None);
+        // Both passes with the new shift: it replays only paths it never keeps.
+        let alone =
+            |_: usize, pass: &PassSpec| pass.shift().map(|_| FarReconnectedNearDelayed::NUMBERS);
+        assert_eq!(p.chain_error_with(alone), None);
+        for name in ["delayed", "sequential"] {
+            let p = Preset::named(name).unwrap();
+            assert!(
+                p.chain_error_with(in_temporal(FarReconnectedNearDelayed::NUMBERS))
+                    .is_some(),
+                "{name}"
+            );
+        }
+        for p in Preset::all() {
+            assert_eq!(p.chain_error(), None, "{}", p.name);
+        }
     }
 }

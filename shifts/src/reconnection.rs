@@ -3,12 +3,18 @@
 use restir::shift::{Domain, Fail, Shift, Shifted};
 
 use crate::domain::SssDomain;
+use crate::numbers::{DeclaresNumbers, Numbers};
 use crate::sample::SssSample;
 
 /// `T(x) = x`, `J = 1`, never fails: the shift of a domain onto itself (canonical samples). As a
 /// shift between two pixels it is reconnection without its support checks (still bijective).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Identity;
+
+/// Between two pixels it moves the sample keeping its numbers.
+impl DeclaresNumbers for Identity {
+    const NUMBERS: Numbers = Numbers::KEPT;
+}
 
 impl Shift<SssDomain<'_>> for Identity {
     fn shift(
@@ -30,6 +36,10 @@ impl Shift<SssDomain<'_>> for Identity {
 /// [`crate::InvertingReconnection`] refreshes them for the receiver.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Reconnection;
+
+impl DeclaresNumbers for Reconnection {
+    const NUMBERS: Numbers = Numbers::KEPT;
+}
 
 impl Shift<SssDomain<'_>> for Reconnection {
     fn shift(

@@ -9,8 +9,11 @@ pub mod reference;
 pub mod render;
 
 use clap::Args;
-use lab::methods::REGISTRY;
-use serde_json::json;
+use lab::methods::{REGISTRY, restir as restir_method};
+use restir::mis::MisKind;
+use serde_json::{Value, json};
+use shifts::ShiftKind;
+use shifts::preset::Preset;
 use sss::scene::Scene;
 
 /// `--json` for the listing commands.
@@ -44,20 +47,86 @@ pub fn scenes(args: &ListArgs) {
     }
 }
 
-/// `reshift methods`: the method registry.
+/// Prints `list` as pretty JSON.
+fn print_json(list: Value) {
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&list).expect("JSON values")
+    );
+}
+
+/// `reshift methods`: the method registry; under the ReSTIR family, the registered presets
+/// (`shifts::preset::PRESETS`) with their passes.
 pub fn methods(args: &ListArgs) {
+    let presets = Preset::all();
     if args.json {
         let list: Vec<_> = REGISTRY
             .iter()
-            .map(|e| json!({ "family": e.family, "usage": e.usage, "description": e.about }))
+            .map(|e| {
+                let mut entry =
+                    json!({ "family": e.family, "usage": e.usage, "description": e.about });
+                if e.family == restir_method::ENTRY.family {
+                    entry["presets"] = presets
+                        .iter()
+                        .map(|p| json!({ "name": p.name, "passes": p.describe() }))
+                        .collect();
+                }
+                entry
+            })
             .collect();
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&list).expect("JSON values")
-        );
+        print_json(Value::Array(list));
     } else {
         for e in REGISTRY {
             println!("{}\n    {}", e.usage, e.about);
+            if e.family == restir_method::ENTRY.family {
+                let width = presets.iter().map(|p| p.name.len()).max().unwrap_or(0);
+                println!("    presets:");
+                for p in &presets {
+                    println!("      {:width$}  {}", p.name, p.describe());
+                }
+            }
+        }
+    }
+}
+
+/// `reshift shifts`: the shift registry (`shifts/src/registry.rs`) with what each shift
+/// declares, and the MIS schemes a pass can name.
+pub fn shifts(args: &ListArgs) {
+    let deferred = |k: &ShiftKind| k.resolves_deferred_index();
+    if args.json {
+        let shifts: Vec<_> = ShiftKind::ALL
+            .iter()
+            .map(|k| {
+                json!({
+                    "name": k.name(),
+                    "code": k.code(),
+                    "stored_numbers": k.numbers().to_string(),
+                    "resolves_deferred_index": deferred(k),
+                    "description": k.about(),
+                })
+            })
+            .collect();
+        let mis: Vec<_> = MisKind::ALL
+            .iter()
+            .map(|m| json!({ "name": m.scheme().name(), "unbiased_when_supports_differ": m.scheme().bias().is_unbiased_when_supports_differ() }))
+            .collect();
+        print_json(json!({ "shifts": shifts, "mis": mis }));
+    } else {
+        for k in ShiftKind::ALL {
+            println!("{}\n    {}", k.name(), k.about());
+            println!("    stored random numbers: {}", k.numbers());
+            if deferred(&k) {
+                println!("    resolves the selected sample's intersection index after the pass");
+            }
+        }
+        println!("MIS schemes:");
+        for m in MisKind::ALL {
+            let bias = if m.scheme().bias().is_unbiased_when_supports_differ() {
+                "unbiased"
+            } else {
+                "biased unless every shift is a bijection between the supports"
+            };
+            println!("  {}  {bias}", m.scheme().name());
         }
     }
 }

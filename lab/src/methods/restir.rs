@@ -1,7 +1,8 @@
-//! `restir:<preset>[/temporal=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/radius=<clamped|unclamped>][/target=<luminance|mean|l2>][/shade=<selected|all>]`:
+//! `restir:<preset>[/temporal=<shift>][/spatial=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/radius=<clamped|unclamped>][/target=<luminance|mean|l2>][/shade=<selected|all>]`:
 //! the ReSTIR SSS frame pipeline with a registered preset [001 §5.1] (DESIGN §6). Every frame of
 //! the trajectory is rendered (temporal reuse) and the last one is kept; `/temporal=<shift>`
-//! swaps the shift of the temporal pass [001 Fig. 10], `/cap=<κ>` sets its confidence cap,
+//! swaps the shift of the temporal pass [001 Fig. 10], `/spatial=<shift>` the one shift of the
+//! spatial passes (refused for a preset with several), `/cap=<κ>` sets its confidence cap,
 //! `/spatial-cap=<κ>` caps every spatial neighbour's confidence at κ × the receiver's,
 //! `/neighbours=<n>` sets every spatial pass's neighbour count, `/target=<p̂>` the target function
 //! of every domain (`Target`), `/shade=all` shades with all inputs of the last reuse pass
@@ -20,9 +21,10 @@ use super::estimator::{Entry, Estimator, Frame, Method, Trajectory};
 
 pub const ENTRY: Entry = Entry {
     family: "restir",
-    usage: "restir:<reconnection|delayed|hybrid|sequential|sequential-exact>[/temporal=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/radius=<clamped|unclamped>][/target=<luminance|mean|l2>][/shade=<selected|all>]",
+    usage: "restir:<preset>[/temporal=<shift>][/spatial=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/radius=<clamped|unclamped>][/target=<luminance|mean|l2>][/shade=<selected|all>]",
     about: "ReSTIR SSS with spatiotemporal reuse and the preset's shift mapping [001 §5.1]; \
-            `/temporal=<shift>` swaps the temporal pass's shift (001 Fig. 10); \
+            `/temporal=<shift>` swaps the temporal pass's shift (001 Fig. 10), \
+            `/spatial=<shift>` the spatial passes' one shift (see `reshift shifts`); \
             `/cap=<κ>` sets the temporal confidence cap (default 3; seed 001 uses 20); \
             `/spatial-cap=<κ>` caps spatial neighbours' confidence (default none); \
             `/neighbours=<n>` sets the spatial passes' neighbour count; \
@@ -38,6 +40,7 @@ pub struct Restir(pub Preset);
 
 /// The preset of `restir:<preset>[/modifier=value]…`: a registered preset, optionally modified by
 /// `/temporal=<shift>` (the temporal pass's shift becomes the [`ShiftKind`] named `<shift>`),
+/// `/spatial=<shift>` (the same for the spatial passes' one shift, [`Preset::with_spatial_shift`]),
 /// `/cap=<κ>` (the temporal confidence cap, finite and > 0), `/spatial-cap=<κ>` (every spatial
 /// pass's cap), `/neighbours=<n>` (every spatial pass's count), `/radius=<clamped|unclamped>`
 /// (every spatial pass's [`RadiusRule`]), `/target=<luminance|mean|l2>` (the [`Target`] `p̂`)
@@ -54,7 +57,8 @@ pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
     })?;
     for modifier in parts {
         preset = match modifier.split_once('=') {
-            Some(("temporal", wanted)) => with_temporal_shift(preset, wanted)?,
+            Some(("temporal", wanted)) => with_temporal_shift(preset, shift_named(wanted)?),
+            Some(("spatial", wanted)) => preset.with_spatial_shift(shift_named(wanted)?)?,
             Some(("cap", value)) => preset.with_temporal_cap(positive(value)?),
             Some(("spatial-cap", value)) => preset.with_spatial_cap(positive(value)?),
             Some(("neighbours", value)) => {
@@ -94,7 +98,7 @@ pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
 }
 
 /// The modifiers [`preset`] knows, for its error message.
-const MODIFIERS: &str = "temporal=<shift>, cap=<κ>, spatial-cap=<κ>, neighbours=<n>, radius=<clamped|unclamped>, target=<luminance|mean|l2>, shade=<selected|all>";
+const MODIFIERS: &str = "temporal=<shift>, spatial=<shift>, cap=<κ>, spatial-cap=<κ>, neighbours=<n>, radius=<clamped|unclamped>, target=<luminance|mean|l2>, shade=<selected|all>";
 
 /// A confidence cap: a finite number > 0.
 fn positive(value: &str) -> Result<f32, String> {
@@ -105,21 +109,22 @@ fn positive(value: &str) -> Result<f32, String> {
         .ok_or_else(|| format!("cap {value:?} is not a number > 0"))
 }
 
-/// `preset` with the shift of its temporal pass replaced by the [`ShiftKind`] named `wanted`.
-fn with_temporal_shift(mut preset: Preset, wanted: &str) -> Result<Preset, String> {
-    let kind = ShiftKind::ALL
-        .into_iter()
-        .find(|k| k.name() == wanted)
-        .ok_or_else(|| {
-            let known: Vec<&str> = ShiftKind::ALL.iter().map(|k| k.name()).collect();
-            format!("unknown shift {wanted:?}; known: {}", known.join(", "))
-        })?;
+/// The registered [`ShiftKind`] named `wanted`.
+fn shift_named(wanted: &str) -> Result<ShiftKind, String> {
+    ShiftKind::named(wanted).ok_or_else(|| {
+        let known: Vec<&str> = ShiftKind::ALL.iter().map(|k| k.name()).collect();
+        format!("unknown shift {wanted:?}; known: {}", known.join(", "))
+    })
+}
+
+/// `preset` with the shift of its temporal pass replaced by `kind`.
+fn with_temporal_shift(mut preset: Preset, kind: ShiftKind) -> Preset {
     for pass in &mut preset.passes {
         if let PassSpec::Temporal { shift, .. } = pass {
             *shift = kind;
         }
     }
-    Ok(preset)
+    preset
 }
 
 /// Every registered preset as a method.
@@ -231,6 +236,15 @@ mod tests {
                 .with_temporal_cap(20.0)
                 .passes
         );
+        let far = preset(Some("hybrid/spatial=distant-reconnection")).unwrap();
+        assert_eq!(
+            far.passes,
+            Preset::named("hybrid")
+                .unwrap()
+                .with_spatial_shift(ShiftKind::DistantReconnection)
+                .unwrap()
+                .passes
+        );
         let both = preset(Some("sequential/temporal=delayed/cap=1.5")).unwrap();
         assert_eq!(both.passes, swapped.with_temporal_cap(1.5).passes);
         let shaded = preset(Some("hybrid/shade=all/cap=20")).unwrap();
@@ -293,6 +307,9 @@ mod tests {
             "restir:sequential/temporal=nope",
             "restir:nope/temporal=delayed",
             "restir:sequential/temporal=reconnection",
+            "restir:hybrid/spatial=nope",
+            "restir:sequential/spatial=delayed",
+            "restir:delayed/spatial=reconnection",
         ] {
             assert_eq!(Method::parse(bad).expect_err(bad).spec, bad);
         }

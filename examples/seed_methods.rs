@@ -22,9 +22,9 @@
 use std::path::PathBuf;
 
 use glam::{DVec3, Vec3};
+use methods::adaptive::cpu::{self as adaptive, AdaptiveParams, perceptual_luminance};
+use methods::image_space::cpu::{self as image_space, EntryCounts, ImageSpaceSettings};
 use restir::stats::{Summary, equivalence, student_t_quantile};
-use sss::integrator::adaptive::{self, AdaptiveParams, perceptual_luminance};
-use sss::integrator::image_space::{self, EntryCounts, ImageSpaceSettings};
 use sss::integrator::pt::{self, PtSettings};
 use sss::profile::ProfileKind;
 use sss::scene::{GBuffer, Scene, luminance};

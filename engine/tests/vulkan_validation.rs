@@ -1,7 +1,9 @@
-//! Every Vulkan method, every preset and so every pass kernel, and the SVGF denoiser, once, under the Khronos
+//! Every Vulkan method of the engine, every preset and so every pass kernel, and the SVGF
+//! denoiser, once, under the Khronos
 //! validation layer with synchronization validation: any error (an invalid use, a missing
 //! barrier) fails the test with the layer's message. The negative control (a frame recorded
-//! without one of its barriers is caught) is `renderer::tests` in the library.
+//! without one of its barriers is caught) is `renderer::tests` in the library; the kernels of the
+//! `methods` crate are validated in `methods/tests/vulkan_validation.rs`.
 //!
 //! Small on purpose: validation multiplies lavapipe's time, so the run is 32×24 pixels, 2
 //! frames. Skips without Vulkan or without the layer, unless `RESHIFT_REQUIRE_VULKAN=1`.
@@ -10,7 +12,6 @@ use engine::denoise::{Guide, svgf};
 use engine::vulkan::testing::validated_or_skip;
 use engine::vulkan::{Checks, Severity};
 use engine::{Preset, RunConfig, Shade};
-use sss::integrator::adaptive::AdaptiveParams;
 use sss::integrator::single_scatter::ChannelSelection;
 use sss::scene::Scene;
 
@@ -58,10 +59,7 @@ fn every_method_preset_and_pass_passes_sync_validation() {
             "single-scatter",
             renderer.single_scatter(&scene, frame, SEED, 1, ChannelSelection::Scattering),
         );
-        ok("image-space", renderer.image_space(&scene, frame, SEED, 1));
     }
-    let adaptive = renderer.adaptive(&scene, &AdaptiveParams::default(), SEED, FRAMES, |_| {});
-    ok("adaptive", adaptive);
     // The denoiser stage's device pass: SVGF over the frames of a path-traced trajectory.
     let guides = Guide::trajectory(&scene, FRAMES);
     let frames: Vec<_> = (0..FRAMES)

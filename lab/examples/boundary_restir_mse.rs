@@ -27,9 +27,9 @@ use sss::material::Material;
 use sss::random_walk::Medium;
 use sss::scene::{FRAMES, GBuffer, Scene};
 
-use lab::methods::single_scatter::exit_lighting;
 use lab::regions::{Region, Regions};
 use lab::uncertainty::Estimate;
+use methods::single_scatter::exit_lighting;
 
 /// Seeds of the references: far above every replica's.
 const REFERENCE_SEED: u64 = 1 << 40;

@@ -19,13 +19,13 @@ use sss::scene::{GBuffer, Scene};
 use crate::error::Error;
 use crate::images::write_comparison_images;
 use crate::method_result::{MethodResult, Replica};
-use crate::methods::pt::Pt;
-use crate::methods::{Method, MethodError, SampleCounts};
 use crate::progress::Progress;
 use crate::reference_cache::{self, FrameReference, Obtained, REFERENCE_SEED, ReferenceSource};
 use crate::regions::Regions;
 use crate::report::results::{FrameReferenceEntry, MethodEntry, ReferenceEntry, Results, RunEntry};
 use crate::report::{figure, html, output_dir, plots, tables, write_text};
+use methods::pt::Pt;
+use methods::{Method, MethodError, SampleCounts};
 
 /// The default method list: the path tracer, the four main presets [001 §5.1], and reshift's
 /// best measured configuration, reconnection with Rao-Blackwellised shading and 2 neighbours

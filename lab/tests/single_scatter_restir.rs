@@ -41,9 +41,9 @@ use std::sync::OnceLock;
 
 use glam::{DVec3, Vec3};
 use lab::bias::{BiasRow, Channel, Protocol, Table, bias_rows, summarize};
-use lab::methods::Method;
-use lab::methods::single_scatter::exit_lighting;
 use lab::regions::{Region, Regions};
+use methods::Method;
+use methods::single_scatter::exit_lighting;
 use restir::shift::Shift;
 use restir::stats::{EquivalencePlan, Verdict, family_power, replicas_for};
 use sss::integrator::boundary_reuse::{

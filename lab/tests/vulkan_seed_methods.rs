@@ -8,7 +8,7 @@
 
 use engine::Backend;
 use engine::vulkan::testing::{backend_or_skip, rel_mse_pixels};
-use lab::methods::{Method, Rendered};
+use methods::{Method, Rendered};
 use sss::scene::Scene;
 
 const WIDTH: u32 = 24;

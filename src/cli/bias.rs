@@ -9,9 +9,9 @@ use glam::DVec3;
 use lab::bias::{
     Protocol, Table, bias_rows, reference_images_with, replicas_needed, summarize, test_bytes,
 };
-use lab::methods::Method;
 use lab::reference_cache::REFERENCE_SEED;
 use lab::regions::Regions;
+use methods::Method;
 use sss::limits::{self, MAX_REPLICAS, MAX_SPP};
 use sss::scene::GBuffer;
 

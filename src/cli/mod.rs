@@ -10,7 +10,7 @@ pub mod reference;
 pub mod render;
 
 use clap::Args;
-use lab::methods::REGISTRY;
+use methods::REGISTRY;
 use serde_json::json;
 use sss::scene::Scene;
 

@@ -6,9 +6,9 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use lab::methods::Method;
 use lab::report::plots::false_colour_map;
 use lab::report::{file_stem, output_dir};
+use methods::Method;
 use serde_json::json;
 
 use sss::limits;

@@ -14,7 +14,6 @@ use crate::compare;
 use crate::error::Error;
 use crate::findings::{self, Quantity, all_above, all_below, mse_below};
 use crate::method_result::Measured;
-use crate::methods::restir;
 use crate::progress::Progress;
 use crate::reference_cache::REFERENCE_SEED;
 use crate::regions::{Region, Regions};
@@ -22,6 +21,7 @@ use crate::report::tables::with_ci;
 use crate::report::{file_stem, output_dir};
 use crate::scenes::{load_scene, with_resolution};
 use crate::uncertainty::Estimate;
+use methods::restir;
 
 use super::setup::{FRAMES, Report, Settings, equal_time_plan};
 

@@ -10,10 +10,10 @@ use sss::limits;
 
 use crate::compare::{DEFAULT_BASELINE, Outcome, Plan, frame_reference_spp, parse_methods};
 use crate::error::Error;
-use crate::methods::Method;
 use crate::reference_cache::ReferenceSource;
 use crate::report::write_text;
 use crate::scenes::{load_scene, with_resolution};
+use methods::Method;
 
 /// Frames of every experiment's camera trajectory.
 pub const FRAMES: u32 = 16;

@@ -19,7 +19,6 @@ use sss::scene::{GBuffer, Scene};
 use crate::compare::{self, DEFAULT_BASELINE, Plan, parse_methods};
 use crate::error::Error;
 use crate::method_result::{Measured, MethodResult};
-use crate::methods::restir;
 use crate::metrics::Area;
 use crate::progress::Progress;
 use crate::reference_cache::{REFERENCE_SEED, ReferenceSource};
@@ -29,6 +28,7 @@ use crate::report::{output_dir, write_text};
 use crate::scenes::{load_scene, with_resolution};
 use crate::telemetry::{self, RegionSummary};
 use crate::uncertainty::INTERVAL_METHOD;
+use methods::restir;
 
 use super::setup::{FRAMES, Report, Settings};
 use tables::{findings, markdown, row_json, telemetry_markdown};

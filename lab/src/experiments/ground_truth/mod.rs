@@ -28,12 +28,12 @@ pub use measure::{CONFIDENCE, Interval, Measure, RegionMeasure, noise};
 pub use truth::{TRUTH_SEED, TRUTH_VERSION, Truth, TruthKey};
 
 use crate::error::Error;
-use crate::methods::{Method, REGISTRY, restir};
 use crate::progress::Progress;
 use crate::reference_cache::REFERENCE_SEED;
 use crate::regions::Regions;
 use crate::report::{output_dir, write_text};
 use crate::scenes::{SPHERE_PREFIX, load_scene, with_resolution};
+use methods::{Method, REGISTRY, restir};
 use sss::material::MEASURED_NAMES;
 
 use super::setup::{FRAMES, Report, Settings};

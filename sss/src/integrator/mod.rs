@@ -4,7 +4,6 @@
 //! ([`single_scatter`]). The image-space method of seed 002 and the adaptive sampler of seed 004
 //! are estimators of the `methods` crate (`methods/src/image_space/`, `methods/src/adaptive/`).
 
-pub mod boundary_reuse;
 pub mod exact;
 pub mod pt;
 pub mod reference;

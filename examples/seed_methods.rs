@@ -3,10 +3,10 @@
 //! [σ0²] [κ] [out_dir]` (defaults: both, 16, 0.001, 0.2, `out/seed-methods`).
 //!
 //! On `bumpy` at 128×96, frame 15 (the end of the 16-frame trajectory):
-//! * **image-space** (`sss::integrator::image_space`, 4 passes): bias per region against the path
+//! * **image-space** (`methods::image_space::cpu`, 4 passes): bias per region against the path
 //!   tracer with the dipole profile (4096 spp in 16 batches), relative, with its 99% CI over the
 //!   replicas (equivalence test, δ = 1%), and the fraction of entry samples it cannot see;
-//! * **adaptive** (`sss::integrator::adaptive`, [004 Fig. 1] parameters unless σ0², κ are given,
+//! * **adaptive** (`methods::adaptive::cpu`, [004 Fig. 1] parameters unless σ0², κ are given,
 //!   16 frames): the mean sample
 //!   count per translucent pixel, and MSE against the Burley reference (4096 spp, its own variance
 //!   subtracted) compared with fixed-count path tracing with the same `g(ξ)` radii at the rounded

@@ -2,8 +2,9 @@
 //! `glslc` (docs/adding-a-method.md, docs/gpu-backend.md).
 //!
 //! Contracts: a method folder's `contract.rs` (one `twin::contract!`) is included here through
-//! its line in [`contracts!`], so the items rendered are the ones the crate compiles; each is
-//! written to `$OUT_DIR/glsl/contract/<folder>.glsl`, with one header per push-constant block.
+//! its line `<folder> with contract` in `src/registry.rs` (the list the crate reads too), so the
+//! items rendered are the ones the crate compiles; each is written to
+//! `$OUT_DIR/glsl/contract/<folder>.glsl`, with one header per push-constant block.
 //!
 //! Kernels: every `src/<folder>/method_*.glsl` is one compute entry point. It finds the GLSL of
 //! its folder beside it, the generated headers through `$OUT_DIR/glsl`, and the engine's GLSL
@@ -18,28 +19,39 @@ use std::path::PathBuf;
 
 use twin::glslc::Glslc;
 
-/// Includes each named method folder's `src/<folder>/contract.rs` as a module and lists its
-/// items: one line per method with a contract of its own.
-macro_rules! contracts {
-    ($($folder:ident),* $(,)?) => {
-        $(
+/// The build script's reading of `src/registry.rs`: each folder marked `with contract` has its
+/// `src/<folder>/contract.rs` included as a module, and [`contracts`] lists their items.
+macro_rules! registry {
+    ($($name:ident $(with $contract:ident)?),* $(,)?) => {
+        $($(
             #[allow(dead_code)]
-            mod $folder {
-                include!(concat!("src/", stringify!($folder), "/contract.rs"));
+            mod $name {
+                // From the manifest: a relative path would be read from src/registry.rs, where
+                // the macro is called.
+                include!(concat!(
+                    env!("CARGO_MANIFEST_DIR"),
+                    "/src/",
+                    stringify!($name),
+                    "/",
+                    stringify!($contract),
+                    ".rs"
+                ));
             }
-        )*
+        )?)*
         /// Each method folder with a contract, and its items.
         fn contracts() -> Vec<(&'static str, Vec<twin::Item>)> {
-            vec![$((stringify!($folder), $folder::glsl_items())),*]
+            vec![$($((stringify!($name), { let _ = stringify!($contract); $name::glsl_items() }),)?)*]
         }
     };
 }
 
-contracts!(image_space, adaptive);
+include!("src/registry.rs");
 
 fn main() {
     println!("cargo::rustc-check-cfg=cfg(reshift_glslc)");
-    println!("cargo::rerun-if-changed=src");
+    // A new method folder comes with its line in src/registry.rs; a folder is watched whole
+    // (its kernels, twins and contract).
+    println!("cargo::rerun-if-changed=src/registry.rs");
     let mut folders: Vec<PathBuf> = std::fs::read_dir("src")
         .expect("methods/src exists")
         .map(|entry| entry.expect("readable methods/src").path())
@@ -52,9 +64,6 @@ fn main() {
         for entry in std::fs::read_dir(folder).expect("a readable method folder") {
             let path = entry.expect("a readable method folder").path();
             let name = path.file_name().expect("a file name").to_string_lossy();
-            if name.ends_with(".glsl") || name == "contract.rs" {
-                println!("cargo::rerun-if-changed={}", path.display());
-            }
             if name.starts_with("method_") && name.ends_with(".glsl") {
                 kernels.push(path);
             }

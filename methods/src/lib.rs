@@ -4,13 +4,14 @@
 //!
 //! A method renders the final frame of a scene's camera trajectory (or every frame of it) for
 //! one replica seed on a backend. Each family implements [`Estimator`] with its [`Entry`]
-//! (family, usage, about, build); [`REGISTRY`] lists the entries, one line each. A method with a
-//! kernel of its own is one folder (`image_space/`, `adaptive/`): its entry and estimator
-//! (`mod.rs`), its CPU estimator (`cpu.rs`) and GLSL twin, its kernel (`method_*.glsl`, compiled by
-//! `build.rs`) with its Vulkan host code (`vulkan.rs`, on the engine's
-//! [`Renderer`](engine::vulkan::Renderer)), its contract (`contract.rs`) and its tests. Adding one
-//! is that folder, its `mod` line and its registry line here, and its line in `build.rs`'s
-//! `contracts!` if it has a contract (docs/adding-a-method.md).
+//! (family, usage, about, build); [`REGISTRY`] lists the entries. A method with a kernel of its
+//! own is one folder (`image_space/`, `adaptive/`): its entry and estimator (`mod.rs`), its CPU
+//! estimator (`cpu.rs`) and GLSL twin, its kernel (`method_*.glsl`, compiled by `build.rs`) with
+//! its Vulkan host code (`vulkan.rs`, on the engine's [`Renderer`](engine::vulkan::Renderer)), its
+//! contract (`contract.rs`) and its tests. Adding one is that folder, its `mod` line below and
+//! its line in `src/registry.rs`, which lists the entries in [`REGISTRY`] and tells `build.rs`
+//! which folders have a contract (docs/adding-a-method.md). The `mod` lines stay written out:
+//! `cargo fmt` and readers follow them.
 
 pub mod adaptive;
 mod estimator;
@@ -47,16 +48,17 @@ pub use estimator::{
     parse_spp,
 };
 
-/// Every method family the CLI knows, in the order `reshift methods` lists them.
-pub const REGISTRY: &[Entry] = &[
-    pt::ENTRY,
-    restir::ENTRY,
-    random_walk::ENTRY,
-    pt_one_hit::ENTRY,
-    single_scatter::ENTRY,
-    image_space::ENTRY,
-    adaptive::ENTRY,
-];
+/// The crate's reading of `src/registry.rs`: [`REGISTRY`] (build.rs has its own, for the
+/// contracts).
+macro_rules! registry {
+    ($($name:ident $(with $contract:ident)?),* $(,)?) => {
+        /// Every method family the CLI knows, in the order `reshift methods` lists them
+        /// (`src/registry.rs`).
+        pub const REGISTRY: &[Entry] = &[$($name::ENTRY),*];
+    };
+}
+
+include!("registry.rs");
 
 /// A method specification that could not be parsed.
 #[derive(Clone, Debug, PartialEq)]

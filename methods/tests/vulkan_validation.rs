@@ -6,8 +6,8 @@
 //! Small on purpose: validation multiplies lavapipe's time, so the run is 32×24 pixels, 2
 //! frames. Skips without Vulkan or without the layer, unless `RESHIFT_REQUIRE_VULKAN=1`.
 
-use engine::vulkan::testing::validated_or_skip;
-use engine::vulkan::{Checks, Severity};
+use engine::vulkan::Checks;
+use engine::vulkan::testing::{assert_no_unreported_errors, validated, validated_or_skip};
 use methods::adaptive::{self, cpu::AdaptiveParams};
 use methods::image_space;
 use sss::scene::Scene;
@@ -16,11 +16,6 @@ const WIDTH: u32 = 32;
 const HEIGHT: u32 = 24;
 const FRAMES: u32 = 2;
 const SEED: u64 = 5;
-
-/// `what` must have succeeded; a validation error names the method it came from.
-fn ok<T, E: std::fmt::Display>(what: &str, result: Result<T, E>) -> T {
-    result.unwrap_or_else(|e| panic!("{what}: {e}"))
-}
 
 #[test]
 fn every_method_kernel_passes_sync_validation() {
@@ -31,15 +26,10 @@ fn every_method_kernel_passes_sync_validation() {
     scene.camera = scene.camera.with_resolution(WIDTH, HEIGHT);
     for frame in 0..FRAMES {
         let image = image_space::vulkan::render(&mut renderer, &scene, frame, SEED, 1);
-        ok("image-space", image);
+        validated("image-space", image);
     }
     let params = AdaptiveParams::default();
     let last = adaptive::vulkan::run(&mut renderer, &scene, &params, SEED, FRAMES, |_| {});
-    ok("adaptive", last);
-    let messages = renderer.context().validation_messages();
-    let errors: Vec<_> = messages
-        .iter()
-        .filter(|m| m.severity == Severity::Error)
-        .collect();
-    assert!(errors.is_empty(), "unreported errors: {errors:#?}");
+    validated("adaptive", last);
+    assert_no_unreported_errors(&renderer);
 }

@@ -9,8 +9,8 @@
 //! frames. Skips without Vulkan or without the layer, unless `RESHIFT_REQUIRE_VULKAN=1`.
 
 use engine::denoise::{Guide, svgf};
+use engine::vulkan::Checks;
 use engine::vulkan::testing::{assert_no_unreported_errors, validated, validated_or_skip};
-use engine::vulkan::{Checks, Severity};
 use engine::{Preset, RunConfig, Shade};
 use sss::integrator::single_scatter::ChannelSelection;
 use sss::scene::Scene;

@@ -17,13 +17,14 @@
 //! `reshift_glslc` tells the crate to embed it. Without `glslc` the build still succeeds (with a warning) and the backend reports
 //! what to install; a shader that fails to compile fails the build.
 //!
-//! Freshness: the script watches the `glslc` it runs, or, when there is none, every directory it
-//! looked in (`$PATH`, or the parent of an absolute `$GLSLC`), so installing `glslc` after a
-//! build without it rebuilds the backend with shaders (`tests/newcomer_order.rs`).
+//! Its include path (the twins' directories and the generated headers) is published to crates
+//! with kernels of their own through the `links` metadata `DEP_RESHIFT_ENGINE_GLSL_INCLUDE`
+//! (`methods/build.rs`). Running `glslc` and checking layouts is `twin::glslc`, shared with them.
 
 use std::env;
 use std::path::{Path, PathBuf};
-use std::process::Command;
+
+use twin::glslc::Glslc;
 
 #[allow(dead_code)]
 mod restir_contract {
@@ -233,117 +234,8 @@ fn bindings(kernel: kernels::PassKernel) -> String {
     text
 }
 
-/// Fails the build unless `glslc` lays out every contract struct as Rust does: compiles probe
-/// shaders (without `-O`, so names stay) that declare an array of each struct and each
-/// push-constant block, and compares every member offset and each struct's array stride with
-/// the Rust `offset_of!` and `size_of` the items carry.
-fn check_layouts(glslc: &std::ffi::OsStr, include: &Path, out_dir: &Path, items: &[twin::Item]) {
-    let mut probes = vec![(
-        "layout_probe".to_string(),
-        String::from(
-            "#version 460\n#include \"contract/restir.glsl\"\n#include \"contract/geometry.glsl\"\n\
-             #include \"contract/sss.glsl\"\n\
-             #include \"contract/shifts.glsl\"\n#include \"contract/engine.glsl\"\n\
-             layout(local_size_x = 1) in;\n",
-        ),
-    )];
-    for (binding, item) in items.iter().enumerate() {
-        if let Some((file, _)) = twin::push_constant_header("", item) {
-            let text = format!(
-                "#version 460\n#include \"contract/{file}\"\nlayout(local_size_x = 1) in;\n\
-                 void main() {{}}\n"
-            );
-            probes.push((
-                format!("layout_probe_{}", file.trim_end_matches(".glsl")),
-                text,
-            ));
-        } else if let twin::Item::Struct { glsl, .. } = item {
-            probes[0].1 += &format!(
-                "layout(std430, binding = {binding}) readonly buffer Probe{binding} \
-                 {{ {glsl} probe{binding}[]; }};\n"
-            );
-        }
-    }
-    probes[0].1 += "void main() {}\n";
-    let mut found = std::collections::HashMap::new();
-    for (name, text) in probes {
-        let source = out_dir.join(format!("{name}.comp"));
-        let spirv = out_dir.join(format!("{name}.spv"));
-        std::fs::write(&source, text).expect("OUT_DIR is writable");
-        let result = Command::new(glslc)
-            .args(["--target-env=vulkan1.2", "-Werror"])
-            .arg(format!("-I{}", include.display()))
-            .arg(&source)
-            .arg("-o")
-            .arg(&spirv)
-            .output()
-            .expect("glslc ran once already");
-        assert!(
-            result.status.success(),
-            "glslc failed on the layout probe {}:\n{}",
-            source.display(),
-            String::from_utf8_lossy(&result.stderr)
-        );
-        let bytes = std::fs::read(&spirv).expect("glslc wrote the probe");
-        found.extend(twin::spirv::layouts(&bytes).expect("glslc writes SPIR-V"));
-    }
-    for item in items {
-        let twin::Item::Struct {
-            rust,
-            glsl,
-            fields,
-            size,
-            push_constant,
-            ..
-        } = item
-        else {
-            continue;
-        };
-        let layout = found
-            .get(*glsl)
-            .unwrap_or_else(|| panic!("the layout probe has no struct {glsl} (Rust {rust})"));
-        let rust_offsets: Vec<u32> = fields.iter().map(|f| f.offset as u32).collect();
-        assert_eq!(
-            layout.offsets, rust_offsets,
-            "glslc's member offsets of {glsl} differ from Rust's {rust}"
-        );
-        if push_constant.is_none() {
-            assert_eq!(
-                layout.array_stride,
-                Some(*size as u32),
-                "glslc's array stride of {glsl} differs from size_of::<{rust}>()"
-            );
-        }
-    }
-}
-
-/// Reruns this script when the `glslc` it would run changes, appears or disappears: watches the
-/// resolved executable when `found`, otherwise every existing directory it would be looked up in.
-fn watch_glslc(glslc: &Path, found: bool) {
-    println!("cargo::rerun-if-env-changed=PATH");
-    let candidates: Vec<PathBuf> = if glslc.components().count() > 1 {
-        vec![glslc.to_path_buf()]
-    } else {
-        env::split_paths(&env::var_os("PATH").unwrap_or_default())
-            .map(|dir| dir.join(glslc))
-            .collect()
-    };
-    let resolved = candidates.iter().find(|path| path.is_file());
-    match resolved {
-        Some(path) if found => println!("cargo::rerun-if-changed={}", path.display()),
-        _ => {
-            for dir in candidates.iter().filter_map(|path| path.parent()) {
-                if dir.is_dir() {
-                    println!("cargo::rerun-if-changed={}", dir.display());
-                }
-            }
-        }
-    }
-}
-
 fn main() {
     println!("cargo::rustc-check-cfg=cfg(reshift_glslc)");
-    println!("cargo::rerun-if-env-changed=GLSLC");
     println!("cargo::rerun-if-changed=glsl");
     for path in CONTRACTS.iter().chain(&INCLUDE_DIRS) {
         println!("cargo::rerun-if-changed={path}");
@@ -351,20 +243,32 @@ fn main() {
     let out_dir = PathBuf::from(env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
     let generated = out_dir.join("glsl");
     let items = write_contract(&generated);
-    let glslc = env::var_os("GLSLC").unwrap_or_else(|| "glslc".into());
-    let found = Command::new(&glslc)
-        .arg("--version")
-        .output()
-        .is_ok_and(|o| o.status.success());
-    watch_glslc(Path::new(&glslc), found);
-    if !found {
+    let manifest = PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").expect("cargo sets it"));
+    let mut includes: Vec<PathBuf> = INCLUDE_DIRS.iter().map(|dir| manifest.join(dir)).collect();
+    includes.push(generated.clone());
+    // The include path of the engine's GLSL, for crates whose kernels include it (`links =
+    // "reshift_engine"`: they read `DEP_RESHIFT_ENGINE_GLSL_INCLUDE`, e.g. methods/build.rs).
+    let path = env::join_paths(&includes).expect("include paths without the separator");
+    println!("cargo::metadata=glsl_include={}", path.to_string_lossy());
+    let Some(glslc) = Glslc::find() else {
         println!(
             "cargo::warning=glslc was not found; the Vulkan backend is disabled \
              (install it with `apt-get install glslc`; the next build picks it up)"
         );
         return;
-    }
-    check_layouts(&glslc, &generated, &out_dir, &items);
+    };
+    glslc.check_layouts(
+        &[
+            "contract/restir.glsl",
+            "contract/geometry.glsl",
+            "contract/sss.glsl",
+            "contract/shifts.glsl",
+            "contract/engine.glsl",
+        ],
+        &generated,
+        &out_dir,
+        &items,
+    );
     let mut sources: Vec<PathBuf> = std::fs::read_dir("glsl")
         .expect("engine/glsl exists")
         .map(|entry| entry.expect("readable engine/glsl").path())
@@ -378,29 +282,7 @@ fn main() {
     for source in &sources {
         let stem = source.file_stem().expect("a file name").to_string_lossy();
         let output = out_dir.join(format!("{stem}.spv"));
-        let mut command = Command::new(&glslc);
-        command.args([
-            "-fshader-stage=compute",
-            "--target-env=vulkan1.2",
-            "-O",
-            "-Werror",
-        ]);
-        for dir in INCLUDE_DIRS {
-            command.arg(format!("-I{dir}"));
-        }
-        command.arg(format!("-I{}", generated.display()));
-        let result = command
-            .arg(source)
-            .arg("-o")
-            .arg(&output)
-            .output()
-            .expect("glslc ran once already");
-        assert!(
-            result.status.success(),
-            "glslc failed on {}:\n{}",
-            source.display(),
-            String::from_utf8_lossy(&result.stderr)
-        );
+        glslc.compile(source, &includes, &output);
         table.push_str(&format!(
             "        {stem:?} => Some(include_bytes!({:?})),\n",
             output.display().to_string()

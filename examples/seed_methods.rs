@@ -3,10 +3,10 @@
 //! [σ0²] [κ] [out_dir]` (defaults: both, 16, 0.001, 0.2, `out/seed-methods`).
 //!
 //! On `bumpy` at 128×96, frame 15 (the end of the 16-frame trajectory):
-//! * **image-space** (`sss::integrator::image_space`, 4 passes): bias per region against the path
+//! * **image-space** (`methods::image_space::cpu`, 4 passes): bias per region against the path
 //!   tracer with the dipole profile (4096 spp in 16 batches), relative, with its 99% CI over the
 //!   replicas (equivalence test, δ = 1%), and the fraction of entry samples it cannot see;
-//! * **adaptive** (`sss::integrator::adaptive`, [004 Fig. 1] parameters unless σ0², κ are given,
+//! * **adaptive** (`methods::adaptive::cpu`, [004 Fig. 1] parameters unless σ0², κ are given,
 //!   16 frames): the mean sample
 //!   count per translucent pixel, and MSE against the Burley reference (4096 spp, its own variance
 //!   subtracted) compared with fixed-count path tracing with the same `g(ξ)` radii at the rounded
@@ -22,9 +22,9 @@
 use std::path::PathBuf;
 
 use glam::{DVec3, Vec3};
+use methods::adaptive::cpu::{self as adaptive, AdaptiveParams, perceptual_luminance};
+use methods::image_space::cpu::{self as image_space, EntryCounts, ImageSpaceSettings};
 use restir::stats::{Summary, equivalence, student_t_quantile};
-use sss::integrator::adaptive::{self, AdaptiveParams, perceptual_luminance};
-use sss::integrator::image_space::{self, EntryCounts, ImageSpaceSettings};
 use sss::integrator::pt::{self, PtSettings};
 use sss::profile::ProfileKind;
 use sss::scene::{GBuffer, Scene, luminance};

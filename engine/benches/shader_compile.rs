@@ -1,7 +1,8 @@
 //! What the GLSL twins cost to compile on the device. Lavapipe compiles a compute pipeline in
 //! two steps: SPIR-V → NIR at pipeline creation, NIR → LLVM → machine code at the first dispatch
 //! (llvmpipe builds shader variants lazily). So this bench measures, on a fresh device per
-//! repeat, the process CPU seconds of (1) creating every pass and method pipeline and (2) a first
+//! repeat, the process CPU seconds of (1) creating every pass pipeline and the engine's method
+//! pipelines (not those of the `methods` crate) and (2) a first
 //! one-frame run of the `sequential` and `hybrid` presets at 8×8 (every pass kernel's first
 //! dispatch) minus the same run repeated warm. It prints mean ± sd over
 //! `RESHIFT_BENCH_REPEATS` (default 3) and the SPIR-V sizes. Run it with Mesa's disk cache
@@ -13,8 +14,8 @@
 //! other processes share the machine. Without Vulkan it says why and exits cleanly.
 
 use engine::vulkan::{
-    ADAPTIVE, CANDIDATES, Context, GBUFFER, IMAGE_SPACE, Kernel, PT, RANDOM_WALK, Renderer, SHADE,
-    SPATIAL, Shader, TEMPORAL,
+    CANDIDATES, Context, GBUFFER, Kernel, PT, RANDOM_WALK, Renderer, SHADE, SPATIAL, Shader,
+    TEMPORAL,
 };
 use engine::{Preset, RunConfig};
 use sss::scene::Scene;
@@ -46,7 +47,7 @@ fn mean_sd(v: &[f64]) -> String {
     format!("{mean:.2} ± {:.2}", var.sqrt())
 }
 
-const SHADERS: [Shader; 9] = [
+const SHADERS: [Shader; 7] = [
     GBUFFER,
     CANDIDATES,
     TEMPORAL,
@@ -54,8 +55,6 @@ const SHADERS: [Shader; 9] = [
     SHADE,
     PT,
     RANDOM_WALK,
-    IMAGE_SPACE,
-    ADAPTIVE,
 ];
 const PRESETS: [&str; 2] = ["sequential", "hybrid"];
 

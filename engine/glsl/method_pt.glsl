@@ -1,6 +1,6 @@
 #version 460
 // The path-tracer method per pixel: the GLSL twin of sss::integrator::pt::render for one pixel
-// (the `pt[:spp]` method of lab/src/methods.rs uses the All hit policy). Sample s uses
+// (the `pt[:spp]` method of methods/src/pt.rs uses the All hit policy). Sample s uses
 // the stream StreamKey { pixel, frame, s, PURPOSE_PT }; finite samples are summed in f64 in sample order and
 // the mean (sum / spp in f64) is rounded to f32, as the CPU's DVec3 mean and `as_vec3`.
 // Samples left out of the sum (but not of the divisor), counted in w: NaN or infinite ones, as on

@@ -1,16 +1,17 @@
-//! Every Vulkan method, every preset and so every pass kernel, and the SVGF denoiser, once, under the Khronos
+//! Every Vulkan method of the engine, every preset and so every pass kernel, and the SVGF
+//! denoiser, once, under the Khronos
 //! validation layer with synchronization validation: any error (an invalid use, a missing
 //! barrier) fails the test with the layer's message. The negative control (a frame recorded
-//! without one of its barriers is caught) is `renderer::tests` in the library.
+//! without one of its barriers is caught) is `renderer::tests` in the library; the kernels of the
+//! `methods` crate are validated in `methods/tests/vulkan_validation.rs`.
 //!
 //! Small on purpose: validation multiplies lavapipe's time, so the run is 32×24 pixels, 2
 //! frames. Skips without Vulkan or without the layer, unless `RESHIFT_REQUIRE_VULKAN=1`.
 
 use engine::denoise::{Guide, svgf};
-use engine::vulkan::testing::validated_or_skip;
-use engine::vulkan::{Checks, Severity};
+use engine::vulkan::Checks;
+use engine::vulkan::testing::{assert_no_unreported_errors, validated, validated_or_skip};
 use engine::{Preset, RunConfig, Shade};
-use sss::integrator::adaptive::AdaptiveParams;
 use sss::integrator::single_scatter::ChannelSelection;
 use sss::scene::Scene;
 
@@ -23,11 +24,6 @@ fn scene() -> Scene {
     let mut scene = Scene::builtin("bumpy").expect("built-in scene");
     scene.camera = scene.camera.with_resolution(WIDTH, HEIGHT);
     scene
-}
-
-/// `what` must have succeeded; a validation error names the method it came from.
-fn ok<T, E: std::fmt::Display>(what: &str, result: Result<T, E>) -> T {
-    result.unwrap_or_else(|e| panic!("{what}: {e}"))
 }
 
 #[test]
@@ -48,39 +44,28 @@ fn every_method_preset_and_pass_passes_sync_validation() {
                 ..preset.clone()
             };
             let what = format!("restir:{} ({shade:?})", preset.name);
-            ok(&what, renderer.run(&scene, &preset, &config));
+            validated(&what, renderer.run(&scene, &preset, &config));
         }
     }
     for frame in 0..FRAMES {
-        ok("pt", renderer.pt(&scene, frame, SEED, 1));
-        ok("random-walk", renderer.random_walk(&scene, frame, SEED, 1));
-        ok(
+        validated("pt", renderer.pt(&scene, frame, SEED, 1));
+        validated("random-walk", renderer.random_walk(&scene, frame, SEED, 1));
+        validated(
             "single-scatter",
             renderer.single_scatter(&scene, frame, SEED, 1, ChannelSelection::Scattering),
         );
-        ok("image-space", renderer.image_space(&scene, frame, SEED, 1));
     }
-    let adaptive = renderer.adaptive(&scene, &AdaptiveParams::default(), SEED, FRAMES, |_| {});
-    ok("adaptive", adaptive);
     // The denoiser stage's device pass: SVGF over the frames of a path-traced trajectory.
     let guides = Guide::trajectory(&scene, FRAMES);
     let frames: Vec<_> = (0..FRAMES)
-        .map(|f| ok("pt", renderer.pt(&scene, f, SEED, 1)).0)
+        .map(|f| validated("pt", renderer.pt(&scene, f, SEED, 1)).0)
         .collect();
-    ok(
+    validated(
         "svgf",
         renderer.svgf(&guides, &frames, &svgf::Params::default()),
     );
-    // Errors were returned above; warnings (e.g. performance hints) are listed, not failed.
-    let messages = renderer.context().validation_messages();
-    let errors: Vec<_> = messages
-        .iter()
-        .filter(|m| m.severity == Severity::Error)
-        .collect();
-    assert!(errors.is_empty(), "unreported errors: {errors:#?}");
-    for m in &messages {
-        eprintln!("sync_validation: warning {}: {}", m.id, m.text);
-    }
+    // Errors were returned above.
+    assert_no_unreported_errors(&renderer);
 }
 
 /// Under best-practice validation, a `restir:sequential` run draws no warning about memory
@@ -97,7 +82,7 @@ fn restir_sequential_has_no_allocation_warnings() {
         frames: FRAMES,
         collect_diagnostics: false,
     };
-    ok(
+    validated(
         "restir:sequential",
         renderer.run(&scene(), &preset, &config),
     );

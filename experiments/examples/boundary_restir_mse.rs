@@ -1,5 +1,5 @@
 //! Equal-spp MSE of `single-scatter:1` with and without `/restir` (ReSTIR on seed 000's boundary
-//! term, `sss::integrator::boundary_reuse`) at frames 0 and 15 of a scene's trajectory: of the
+//! term, `methods::single_scatter::boundary_reuse`) at frames 0 and 15 of a scene's trajectory: of the
 //! boundary term alone and of the whole method, on the translucent pixels, against each term's
 //! own converged value (the plain estimator at many samples per pixel, so the model error of
 //! `R − R1` is not part of the error).
@@ -17,19 +17,19 @@
 //! material's `scale`).
 
 use glam::{DVec3, Vec3};
-use rayon::prelude::*;
-use sss::integrator::boundary_reuse::{
+use methods::single_scatter::boundary_reuse::{
     self, BoundaryDomain, DEFAULT_CAP, ReuseSettings, SameVertices,
 };
+use rayon::prelude::*;
 use sss::integrator::pt;
 use sss::integrator::single_scatter::{self, Shading, SingleScatterSettings, sample_stream};
 use sss::material::Material;
 use sss::random_walk::Medium;
 use sss::scene::{FRAMES, GBuffer, Scene};
 
-use lab::methods::single_scatter::exit_lighting;
 use lab::regions::{Region, Regions};
 use lab::uncertainty::Estimate;
+use methods::single_scatter::exit_lighting;
 
 /// Seeds of the references: far above every replica's.
 const REFERENCE_SEED: u64 = 1 << 40;

@@ -18,12 +18,12 @@
 use std::path::PathBuf;
 
 use engine::Backend;
-use lab::methods::{Method, Rendered};
 use lab::metrics::{Area, area_metrics};
 use lab::progress::Silent;
 use lab::reference_cache::{self, FrameReference, REFERENCE_SEED, ReferenceSource};
 use lab::regions::{Region, Regions};
 use lab::scenes::{load_scene, with_resolution};
+use methods::{Method, Rendered};
 use restir::rng::StreamKey;
 use sss::scene::GBuffer;
 

@@ -15,8 +15,8 @@ use sss::random_walk::{Medium, WalkEnd, WalkSettings, estimate_exitant_with};
 use sss::scene::{GBuffer, Scene};
 
 use engine::random_walk_method::PixelWalk;
-use lab::methods::single_scatter::exit_lighting;
 use lab::regions::{Region, Regions};
+use methods::single_scatter::exit_lighting;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();

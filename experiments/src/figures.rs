@@ -12,7 +12,7 @@ use sss::scene::{GBuffer, Scene};
 
 use lab::error::Error;
 use lab::method_result::Measured;
-use lab::methods::restir;
+use methods::restir;
 use lab::output::{file_stem, output_dir};
 use lab::progress::Progress;
 use lab::reference_cache::REFERENCE_SEED;

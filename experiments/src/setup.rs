@@ -12,7 +12,7 @@ use lab::compare::{
     self, Comparison, DEFAULT_BASELINE, Outcome, frame_reference_spp, parse_methods,
 };
 use lab::error::Error;
-use lab::methods::Method;
+use methods::Method;
 use lab::output::write_text;
 use lab::progress::Progress;
 use lab::reference_cache::ReferenceSource;
@@ -64,7 +64,7 @@ impl Settings {
     pub fn check(&self) -> Result<(), InputError> {
         let origin = Path::new("(experiment settings)");
         let (width, height) = self.resolution;
-        crate::limits::replicas(origin, "replicas", self.replicas)?;
+        lab::limits::replicas(origin, "replicas", self.replicas)?;
         limits::resolution(origin, "resolution", width, height)
     }
 

@@ -7,7 +7,7 @@ use engine::PipelineError;
 use engine::image::WriteError;
 use sss::InputError;
 
-use crate::methods::MethodError;
+use methods::MethodError;
 
 #[derive(Debug)]
 pub enum Error {

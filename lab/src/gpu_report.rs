@@ -21,17 +21,17 @@ use std::time::Instant;
 use engine::vulkan::testing::rel_mse;
 use engine::vulkan::{DeviceDetails, VulkanError};
 use engine::{Backend, PipelineError, Preset, Run, RunConfig};
-use sss::integrator::adaptive::AdaptiveParams;
+use methods::adaptive::cpu::AdaptiveParams;
 use sss::integrator::single_scatter::ChannelSelection;
 use sss::scene::Scene;
 
 use crate::compare::{self, Comparison, DEFAULT_BASELINE};
 use crate::error::Error;
-use crate::methods::Method;
 use crate::progress::Progress;
 use crate::reference_cache::ReferenceSource;
 use crate::report;
 use crate::scenes::{LoadedScene, load_scene};
+use methods::Method;
 
 /// The parity bound on `R` (see the module comment).
 pub const PARITY_BOUND: f64 = 0.1;
@@ -353,7 +353,7 @@ fn time_methods(
         ),
         (
             "image-space:1",
-            Box::new(|r, f| frame(r.image_space(scene, f, 0, 1))),
+            Box::new(|r, f| frame(methods::image_space::vulkan::render(r, scene, f, 0, 1))),
         ),
     ];
     for (name, mut frame) in methods {
@@ -387,10 +387,17 @@ fn time_methods(
     }
     let mut seconds = Vec::new();
     let mut start = Instant::now();
-    let adaptive = renderer.adaptive(scene, &AdaptiveParams::default(), 0, frames, |_| {
-        seconds.push(start.elapsed().as_secs_f64());
-        start = Instant::now();
-    });
+    let adaptive = methods::adaptive::vulkan::run(
+        &mut renderer,
+        scene,
+        &AdaptiveParams::default(),
+        0,
+        frames,
+        |_| {
+            seconds.push(start.elapsed().as_secs_f64());
+            start = Instant::now();
+        },
+    );
     match adaptive {
         Ok(_) => row(
             md,

@@ -1,5 +1,5 @@
-//! `lab`: the reshift lab (DESIGN §7), the library behind the `reshift` CLI. It names methods
-//! ([`methods`]), obtains references ([`reference_cache`]), measures methods against them per
+//! `lab`: the reshift lab (DESIGN §7), the library behind the `reshift` CLI. It runs the methods
+//! of the `methods` crate, obtains references ([`reference_cache`]), measures methods against them per
 //! region ([`regions`], [`metrics`], [`flip`], [`low_frequency`], [`perceptual`],
 //! [`method_result`]), runs
 //! comparisons ([`compare`]) and the replica bias protocol ([`bias`]), and writes tables,
@@ -18,7 +18,6 @@ pub mod gpu_report;
 pub mod limits;
 pub mod low_frequency;
 pub mod method_result;
-pub mod methods;
 pub mod metrics;
 pub mod output;
 pub mod perceptual;

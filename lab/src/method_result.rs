@@ -23,7 +23,7 @@ pub struct Replica {
     pub denoiser_seconds_per_frame: f64,
     pub frames_rendered: u32,
     pub nonfinite: u64,
-    /// Mean samples per pixel of the last frame ([`Rendered::spp`](crate::methods::Rendered)).
+    /// Mean samples per pixel of the last frame ([`Rendered::spp`](methods::Rendered)).
     pub spp: f64,
 }
 

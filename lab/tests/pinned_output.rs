@@ -10,7 +10,7 @@
 
 use engine::hash::Fnv1a;
 use engine::{Preset, RunConfig};
-use lab::methods::{Method, restir};
+use methods::{Method, restir};
 use sss::scene::{FRAMES, Scene};
 
 const SIDE: [u32; 2] = [24, 18];

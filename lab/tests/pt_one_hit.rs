@@ -7,7 +7,7 @@
 
 use engine::Image;
 use engine::vulkan::testing::backend_or_skip;
-use lab::methods::{Method, REGISTRY};
+use methods::{Method, REGISTRY};
 use sss::integrator::pt::{self, HitPolicy, PtSettings};
 use sss::scene::{GBuffer, Scene};
 

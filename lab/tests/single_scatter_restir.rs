@@ -1,4 +1,4 @@
-//! `single-scatter/restir` (ReSTIR on seed 000's boundary term, `sss::integrator::boundary_reuse`)
+//! `single-scatter/restir` (ReSTIR on seed 000's boundary term, `methods::single_scatter::boundary_reuse`)
 //! is unbiased: its boundary term after several frames of a moving camera is equivalent, per
 //! region and colour channel, to the plain estimator's boundary term, with the protocol of
 //! `lab::bias` (as `unbiased.rs`), and a deliberately wrong Jacobian is caught.
@@ -41,15 +41,15 @@ use std::sync::OnceLock;
 
 use glam::{DVec3, Vec3};
 use lab::bias::{BiasRow, Channel, Protocol, Table, bias_rows, summarize};
-use lab::methods::Method;
-use lab::methods::single_scatter::exit_lighting;
 use lab::regions::{Region, Regions};
-use restir::shift::Shift;
-use restir::stats::{EquivalencePlan, Verdict, family_power, replicas_for};
-use sss::integrator::boundary_reuse::{
+use methods::Method;
+use methods::single_scatter::boundary_reuse::{
     self, BoundaryDomain, DEFAULT_CAP, ReuseSettings, SameVertices, ScaledJacobian,
     check_materials, shade_boundary,
 };
+use methods::single_scatter::exit_lighting;
+use restir::shift::Shift;
+use restir::stats::{EquivalencePlan, Verdict, family_power, replicas_for};
 use sss::integrator::pt;
 use sss::integrator::single_scatter::{self, SingleScatterSettings, sample_stream};
 use sss::material::Material;

@@ -9,7 +9,7 @@
 use engine::vulkan::VulkanError;
 use engine::vulkan::testing::backend_or_skip;
 use engine::{Backend, Image, PixelReservoir, Preset, Run, RunConfig};
-use lab::methods::{Method, restir};
+use methods::{Method, restir};
 use sss::scene::Scene;
 
 fn scene(name: &str, width: u32, height: u32) -> Scene {

@@ -1,14 +1,14 @@
 //! The seed methods `image-space` [002], `adaptive` [004] and `single-scatter` [000] render every
 //! built-in scene on both backends, and the Vulkan images agree with the CPU's of the same seed.
-//! Per-pixel parity on small scenes, with negative controls, is `engine/tests/vulkan_image_space.rs`,
-//! `engine/tests/vulkan_adaptive.rs` and `engine/tests/vulkan_single_scatter.rs`.
+//! Per-pixel parity on small scenes, with negative controls, is `methods/src/image_space/parity.rs`,
+//! `methods/src/adaptive/parity.rs` and `engine/tests/vulkan_single_scatter.rs`.
 //!
 //! Without Vulkan the test says why it is skipped and passes, unless `RESHIFT_REQUIRE_VULKAN=1`,
 //! which makes it fail.
 
 use engine::Backend;
 use engine::vulkan::testing::{backend_or_skip, rel_mse_pixels};
-use lab::methods::{Method, Rendered};
+use methods::{Method, Rendered};
 use sss::scene::Scene;
 
 const WIDTH: u32 = 24;

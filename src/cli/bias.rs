@@ -12,7 +12,7 @@ use lab::bias::{
     summarize, test_bytes,
 };
 use lab::limits::MAX_REPLICAS;
-use lab::methods::Method;
+use methods::Method;
 use lab::reference_cache::REFERENCE_SEED;
 use lab::regions::Regions;
 use restir::stats::Verdict;

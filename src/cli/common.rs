@@ -39,7 +39,7 @@ macro_rules! from_error {
 from_error!(
     InputError,
     engine::PipelineError,
-    lab::methods::MethodError,
+    methods::MethodError,
     lab::Error,
     engine::image::WriteError,
     engine::vulkan::VulkanError,

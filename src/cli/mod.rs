@@ -9,7 +9,7 @@ pub mod reference;
 pub mod render;
 
 use clap::Args;
-use lab::methods::{REGISTRY, restir as restir_method};
+use methods::{REGISTRY, restir as restir_method};
 use restir::mis::MisKind;
 use serde_json::{Value, json};
 use shifts::ShiftKind;

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 use lab::draw::false_colour_map;
-use lab::methods::Method;
+use methods::Method;
 use lab::output::{file_stem, output_dir};
 use serde_json::json;
 

@@ -16,7 +16,6 @@ pub fn glsl_items() -> Vec<twin::Item> {
         pt::glsl_items(),
         random_walk::glsl_items(),
         single_scatter::glsl_items(),
-        image_space::glsl_items(),
     ]
     .concat()
 }
@@ -221,30 +220,6 @@ pub mod single_scatter {
             /// `P_c = σs,c / Σ σs = σt,c α_c / Σ σt α` [000 "RGB variation in σt"] (uniform when
             /// the medium does not scatter).
             Scattering,
-        }
-    }
-}
-
-/// `image_space.glsl`.
-pub mod image_space {
-    twin::contract! {
-        glsl_prefix = IMAGE_SPACE;
-
-        /// `purpose` of the irradiance streams (ASCII "ISIR").
-        pub const PURPOSE_IRRADIANCE: u32 = 0x4953_4952;
-        /// `purpose` of the gather streams (ASCII "ISGA").
-        pub const PURPOSE_GATHER: u32 = 0x4953_4741;
-
-        /// What the image shows under a tangent-plane point
-        /// ([`crate::integrator::image_space::Lookup::kind`]); on the GPU the lookup returns
-        /// its code.
-        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-        pub enum LookupKind in IMAGE_SPACE {
-            /// An entry point with its normal and irradiance.
-            Entry,
-            OffScreen,
-            /// Another object or no hit.
-            Occluded,
         }
     }
 }

@@ -32,6 +32,7 @@
 //! }
 //! ```
 
+pub mod glslc;
 mod render;
 pub mod spirv;
 

@@ -2,20 +2,21 @@
 //! device-local storage buffers with staging ([`Buffer`]), compute kernels ([`Kernel`]), timed
 //! dispatches, the scene on the device ([`GpuScene`], [`GpuBvh`]), the frame pipeline with
 //! persistent command buffers and per-pass timestamps ([`Renderer`]), and the embedded SPIR-V
-//! of `engine/glsl/` ([`Shader`]).
+//! of `engine/glsl/` or of another crate's kernels ([`Shader`]). A method brings its own kernel as a
+//! [`Shader::compiled`] constant and drives it through [`Renderer::gbuffer`], [`Renderer::parts`],
+//! [`FrameInput::bindings`], [`Context::dispatch`] and [`FrameInput::read_image`]
+//! (`methods/src/image_space/vulkan.rs`).
 //!
 //! A machine without libvulkan, without a driver, or a build without `glslc` gets a
 //! [`VulkanError`] that says in one line what to install; nothing here panics for that.
 //! The buffer structs below are `#[repr(C)]` + `bytemuck` twins of std430 structs of the GLSL.
 
-mod adaptive;
 mod bvh;
 mod compute;
 mod decode;
 mod device;
 mod error;
 mod frame;
-mod image_space;
 mod memory;
 mod pass_params;
 mod pt;
@@ -31,17 +32,12 @@ mod validation;
 
 use bytemuck::{Pod, Zeroable};
 
-pub use adaptive::{ADAPTIVE, AdaptiveImage, GpuHistory, render_adaptive_frame};
 pub use bvh::{BVH_MAX_HITS, BvhRayInput, BvhRayOutput, GpuBvh};
 pub use compute::{Dispatch, Kernel, groups_for};
 pub use decode::decode_error;
 pub use device::{Context, DEVICE_ENV, DeviceDetails, DeviceInfo, DeviceKind, choose_device};
 pub use error::VulkanError;
 pub use frame::{CANDIDATES, SPATIAL, TEMPORAL};
-pub use image_space::{
-    GpuDipole, GpuGatherProfile, IMAGE_SPACE, ImageSpaceImage, render_image_space,
-    scene_gather_profiles,
-};
 pub use memory::Buffer;
 pub use pt::{DeviceImage, FrameInput, PT, SHADE, render_pt, render_pt_hits, shade};
 pub use random_walk::{
@@ -59,7 +55,7 @@ pub use crate::contract::{
     FrameParams, GpuCamera, GpuLight, GpuMaterial, GpuPixel, GpuTriangle, MethodParams, PassParams,
     PtParams,
 };
-pub use shaders::Shader;
+pub use shaders::{Code, Shader};
 pub use validation::{Checks, Message, Severity, VALIDATION_ENV};
 
 /// The environment variable that turns "Vulkan unavailable, skipped" into a failure in tests.

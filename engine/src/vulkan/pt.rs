@@ -60,40 +60,41 @@ pub struct DeviceImage {
     pub left_out: u64,
 }
 
-/// The frame's bindings (scene, `FrameParams`, G-buffer) followed by `extra`, after checking
-/// that the G-buffer covers the frame.
-pub(super) fn bindings<'a>(
-    frame: &FrameInput<'a>,
-    extra: &[&'a Buffer],
-) -> Result<Vec<&'a Buffer>, VulkanError> {
-    let count = frame.width as usize * frame.height as usize;
-    let pixel_bytes = size_of::<GpuPixel>();
-    if frame.gbuffer.bytes() < count * pixel_bytes {
-        return Err(VulkanError::Binding(format!(
-            "G-buffer of {} bytes for {}×{} pixels of {pixel_bytes} bytes",
-            frame.gbuffer.bytes(),
-            frame.width,
-            frame.height
-        )));
+impl<'a> FrameInput<'a> {
+    /// The frame's bindings (scene, `FrameParams`, G-buffer) followed by `extra`, after checking
+    /// that the G-buffer covers the frame: the buffers of a per-pixel kernel's dispatch.
+    pub fn bindings(&self, extra: &[&'a Buffer]) -> Result<Vec<&'a Buffer>, VulkanError> {
+        let frame = self;
+        let count = frame.width as usize * frame.height as usize;
+        let pixel_bytes = size_of::<GpuPixel>();
+        if frame.gbuffer.bytes() < count * pixel_bytes {
+            return Err(VulkanError::Binding(format!(
+                "G-buffer of {} bytes for {}×{} pixels of {pixel_bytes} bytes",
+                frame.gbuffer.bytes(),
+                frame.width,
+                frame.height
+            )));
+        }
+        let mut buffers: Vec<&Buffer> = frame.scene.buffers().to_vec();
+        buffers.push(frame.params);
+        buffers.push(frame.gbuffer);
+        buffers.extend_from_slice(extra);
+        Ok(buffers)
     }
-    let mut buffers: Vec<&Buffer> = frame.scene.buffers().to_vec();
-    buffers.push(frame.params);
-    buffers.push(frame.gbuffer);
-    buffers.extend_from_slice(extra);
-    Ok(buffers)
-}
 
-/// Reads a `vec4` output back as an image and the count of its texels with `w ≠ 0` summed.
-pub(super) fn read_image(frame: &FrameInput, output: &Buffer) -> Result<DeviceImage, VulkanError> {
-    let texels = output.read::<[f32; 4]>()?;
-    Ok(DeviceImage {
-        image: Image {
-            width: frame.width,
-            height: frame.height,
-            pixels: texels.iter().map(|t| Vec3::new(t[0], t[1], t[2])).collect(),
-        },
-        left_out: texels.iter().map(|t| t[3] as u64).sum(),
-    })
+    /// Reads a per-pixel `vec4` output back as the frame's image and the count of its texels with
+    /// `w ≠ 0` summed.
+    pub fn read_image(&self, output: &Buffer) -> Result<DeviceImage, VulkanError> {
+        let texels = output.read::<[f32; 4]>()?;
+        Ok(DeviceImage {
+            image: Image {
+                width: self.width,
+                height: self.height,
+                pixels: texels.iter().map(|t| Vec3::new(t[0], t[1], t[2])).collect(),
+            },
+            left_out: texels.iter().map(|t| t[3] as u64).sum(),
+        })
+    }
 }
 
 /// The `pt:spp` method on one frame: per pixel the mean of samples `0..spp` with every probe hit
@@ -123,7 +124,7 @@ pub fn render_pt_hits(
     let count = frame.width * frame.height;
     let output = Buffer::zeroed(context, count as usize * 16)?;
     let state = Buffer::zeroed(context, count as usize * size_of::<PtState>())?;
-    let buffers = bindings(frame, &[&output, &state])?;
+    let buffers = frame.bindings(&[&output, &state])?;
     for sample_index in 0..spp {
         let params = PtParams {
             spp,
@@ -149,7 +150,7 @@ pub fn render_pt_hits(
             count: cut,
         });
     }
-    read_image(frame, &output)
+    frame.read_image(&output)
 }
 /// The shade pass on one frame with selected shading: `f(Y)·W` of `reservoirs`
 /// (`PixelReservoir`s) on translucent pixels, one path-traced sample elsewhere, keyed by `pass`
@@ -165,7 +166,7 @@ pub fn shade(
     let output = Buffer::zeroed(context, count as usize * 16)?;
     // Selected shading reads no Rao-Blackwellised value: one texel stands in for the buffer.
     let unread = Buffer::zeroed(context, 16)?;
-    let buffers = bindings(frame, &[reservoirs, &output, &unread])?;
+    let buffers = frame.bindings(&[reservoirs, &output, &unread])?;
     let params = PassParams::new(pass, None, false);
     context.dispatch(
         kernel,
@@ -173,7 +174,7 @@ pub fn shade(
         bytemuck::bytes_of(&params),
         [groups_for(count, SHADE.local_size), 1, 1],
     )?;
-    read_image(frame, &output)
+    frame.read_image(&output)
 }
 #[cfg(test)]
 mod tests {

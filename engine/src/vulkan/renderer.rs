@@ -1,22 +1,19 @@
 //! The front of the Vulkan backend (DESIGN §6): a [`Renderer`] holds the [`Context`], the
 //! compiled kernels and the uploaded [`GpuScene`] across runs (creating a pipeline on lavapipe
 //! compiles LLVM code, so it is done once per shader) and runs the methods on them: a preset's
-//! frames ([`FrameRun`]) and the memoryless methods (path tracer, random walk, single scattering,
-//! image space, adaptive) and the spatiotemporal denoiser.
+//! frames ([`FrameRun`]), the memoryless methods (path tracer, random walk, single scattering)
+//! and the spatiotemporal denoiser. A method with a kernel of its own drives it through
+//! [`Renderer::gbuffer`] and [`Renderer::parts`] (the `methods` crate).
 
 use std::collections::HashMap;
 use std::collections::hash_map::Entry;
 
-use sss::integrator::adaptive::AdaptiveParams;
-use sss::integrator::image_space::ImageSpaceSettings;
 use sss::integrator::single_scatter::{ChannelSelection, SingleScatterSettings};
 use sss::scene::Scene;
 
-use super::adaptive::{ADAPTIVE, AdaptiveImage, render_adaptive_frame};
 use super::device::Context;
 use super::error::VulkanError;
 use super::frame::FrameRun;
-use super::image_space::{IMAGE_SPACE, render_image_space, scene_gather_profiles};
 use super::memory::Buffer;
 use super::random_walk::{RANDOM_WALK, render_random_walk, scene_media};
 use super::scene::{GBUFFER, GpuScene};
@@ -86,7 +83,8 @@ impl Renderer {
             .ok_or_else(|| VulkanError::Binding("no scene was uploaded".into()))
     }
 
-    /// The context, a built kernel and the uploaded scene, borrowed together.
+    /// The context, the kernel of `shader` (built on first use) and the uploaded scene, borrowed
+    /// together: what a method's host code needs to dispatch its kernel on a frame.
     pub fn parts(
         &mut self,
         shader: Shader,
@@ -189,63 +187,6 @@ impl Renderer {
             }));
         }
         Ok((out.image.image, out.image.left_out))
-    }
-
-    /// The `image-space:spp` method at `frame` with the default sample counts
-    /// ([`ImageSpaceSettings::default`]): the image and the pass values left out.
-    pub fn image_space(
-        &mut self,
-        scene: &Scene,
-        frame: u32,
-        seed: u64,
-        spp: u32,
-    ) -> Result<(Image, u64), VulkanError> {
-        let settings = ImageSpaceSettings::default();
-        let profiles = scene_gather_profiles(scene, &settings);
-        let (gbuffer, params) = self.gbuffer(scene, frame, seed)?;
-        let (context, kernel, gpu) = self.parts(IMAGE_SPACE)?;
-        let input = FrameInput::new(scene, gpu, &params, &gbuffer);
-        let out = render_image_space(context, kernel, &input, &profiles, &settings, spp)?;
-        if out.cut > 0 {
-            return Err(VulkanError::LoopsCut {
-                shader: IMAGE_SPACE.name,
-                count: out.cut,
-            });
-        }
-        Ok((out.image.image, out.image.left_out))
-    }
-
-    /// The `adaptive` method with controller `params` (validated) over frames `0..frames` of
-    /// `scene`'s trajectory, each handed to `each` as it is done (the twin of
-    /// `sss::integrator::adaptive::run`); returns the last (`None` for no frames). A frame whose
-    /// loops the device cut short is an error.
-    pub fn adaptive(
-        &mut self,
-        scene: &Scene,
-        params: &AdaptiveParams,
-        seed: u64,
-        frames: u32,
-        mut each: impl FnMut(&AdaptiveImage),
-    ) -> Result<Option<AdaptiveImage>, VulkanError> {
-        let mut previous: Option<(Buffer, Buffer)> = None;
-        let mut last = None;
-        for frame in 0..frames {
-            let (gbuffer, frame_params) = self.gbuffer(scene, frame, seed)?;
-            let (context, kernel, gpu) = self.parts(ADAPTIVE)?;
-            let input = FrameInput::new(scene, gpu, &frame_params, &gbuffer);
-            let carried = previous.as_ref().map(|(g, h)| (g, h));
-            let (out, history) = render_adaptive_frame(context, kernel, &input, carried, params)?;
-            if out.cut > 0 {
-                return Err(VulkanError::LoopsCut {
-                    shader: ADAPTIVE.name,
-                    count: out.cut,
-                });
-            }
-            each(&out);
-            previous = Some((gbuffer, history));
-            last = Some(out);
-        }
-        Ok(last)
     }
 
     /// The spatiotemporal variance-guided filter's twin over `frames` with their `guides`

@@ -1,13 +1,15 @@
-//! The compute shaders compiled by `build.rs` (one per `engine/glsl/*.glsl`), embedded as
-//! SPIR-V when `glslc` was found at build time. A shader is named by its file stem; the module
-//! that dispatches it declares its binding interface as a [`Shader`] constant next to the code
-//! that fills the buffers.
+//! The compute shaders: the engine's, compiled by `build.rs` (one per `engine/glsl/*.glsl`) and
+//! embedded as SPIR-V when `glslc` was found at build time, and those another crate compiles
+//! and hands over with [`Shader::compiled`] (a method's kernel, `methods/build.rs`). A shader is
+//! named by its file stem; the module that dispatches it declares its binding interface as a
+//! [`Shader`] constant next to the code that fills the buffers.
 
 use super::error::VulkanError;
 use crate::plan::{PassKernel, SCENE_BINDINGS};
 
-/// A compute shader of `engine/glsl/` and its binding interface: storage buffers at
-/// bindings `0..buffers`, `push_bytes` of push constants, `local_size` invocations per group.
+/// A compute shader and its binding interface: storage buffers at bindings `0..buffers`,
+/// `push_bytes` of push constants, `local_size` invocations per group. Kernels are built and
+/// cached by name ([`Renderer::prepare`](super::Renderer::prepare)), so names are unique.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Shader {
     /// The GLSL file stem.
@@ -16,6 +18,16 @@ pub struct Shader {
     pub push_bytes: u32,
     /// `local_size_x` in the GLSL.
     pub local_size: u32,
+    pub code: Code,
+}
+
+/// Where a [`Shader`]'s SPIR-V comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Code {
+    /// `engine/glsl/<name>.glsl`, compiled by the engine's build script.
+    Engine,
+    /// Compiled by another crate's build script; `None` when it was built without `glslc`.
+    Compiled(Option<&'static [u8]>),
 }
 
 impl Shader {
@@ -42,19 +54,37 @@ impl Shader {
         )
     }
 
-    /// A shader with 64 invocations per group.
+    /// A shader of `engine/glsl/` with 64 invocations per group.
     pub const fn new(name: &'static str, buffers: u32, push_bytes: u32) -> Shader {
         Shader {
             name,
             buffers,
             push_bytes,
             local_size: 64,
+            code: Code::Engine,
         }
     }
 
-    /// The SPIR-V, or [`VulkanError::NoGlslc`] when the crate was built without `glslc`.
+    /// A shader with 64 invocations per group whose SPIR-V another crate compiled (`None`: it
+    /// was built without `glslc`): how a method brings its own kernel.
+    pub const fn compiled(
+        name: &'static str,
+        spirv: Option<&'static [u8]>,
+        buffers: u32,
+        push_bytes: u32,
+    ) -> Shader {
+        Shader {
+            code: Code::Compiled(spirv),
+            ..Shader::new(name, buffers, push_bytes)
+        }
+    }
+
+    /// The SPIR-V, or [`VulkanError::NoGlslc`] when its crate was built without `glslc`.
     pub fn spirv(self) -> Result<&'static [u8], VulkanError> {
-        embedded(self.name)
+        match self.code {
+            Code::Engine => embedded(self.name),
+            Code::Compiled(spirv) => spirv.ok_or(VulkanError::NoGlslc),
+        }
     }
 }
 

@@ -22,7 +22,6 @@ use sss::integrator::single_scatter::{MultipleScattering, SingleScatterSettings}
 use sss::random_walk::Medium;
 use sss::scene::Scene;
 
-use super::pt::{bindings, read_image};
 use super::{
     Buffer, Context, DeviceImage, FrameInput, GpuMedium, Kernel, Shader, VulkanError, groups_for,
 };
@@ -137,7 +136,7 @@ pub fn render_single_scatter(
         context,
         count as usize * size_of::<SingleScatterPixelState>(),
     )?;
-    let buffers = bindings(frame, &[&output, &media, &states, &profiles])?;
+    let buffers = frame.bindings(&[&output, &media, &states, &profiles])?;
     for sample_index in 0..spp {
         let params = SingleScatterParams {
             spp,
@@ -156,7 +155,7 @@ pub fn render_single_scatter(
     }
     let states = states.read::<SingleScatterPixelState>()?;
     Ok(SingleScatterImage {
-        image: read_image(frame, &output)?,
+        image: frame.read_image(&output)?,
         truncated: states.iter().map(|s| u64::from(s.truncated)).sum(),
         cut: states.iter().map(|s| u64::from(s.cut)).sum(),
     })

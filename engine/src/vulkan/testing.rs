@@ -52,6 +52,25 @@ pub fn validated_or_skip(test: &str, checks: Checks) -> Option<Renderer> {
     Some(Renderer::new(context))
 }
 
+/// `result`'s value; under validation an error names the call `what` it came from.
+pub fn validated<T, E: std::fmt::Display>(what: &str, result: Result<T, E>) -> T {
+    result.unwrap_or_else(|e| panic!("{what}: {e}"))
+}
+
+/// Fails with the layer's messages when validation reported an error that no call returned;
+/// warnings (e.g. performance hints) are listed, not failed.
+pub fn assert_no_unreported_errors(renderer: &Renderer) {
+    let messages = renderer.context().validation_messages();
+    let errors: Vec<_> = messages
+        .iter()
+        .filter(|m| m.severity == super::Severity::Error)
+        .collect();
+    assert!(errors.is_empty(), "unreported errors: {errors:#?}");
+    for m in &messages {
+        eprintln!("validation: warning {}: {}", m.id, m.text);
+    }
+}
+
 /// The Vulkan backend shared by every test of one test binary (pipelines are created once per
 /// renderer; on lavapipe that compiles LLVM code), or `None` when Vulkan is unavailable.
 pub fn backend_or_skip(test: &str) -> Option<Backend> {

@@ -20,7 +20,7 @@ use sss::scene::{GBuffer, Scene};
 use lab::compare::{Comparison, DEFAULT_BASELINE, parse_methods};
 use lab::error::Error;
 use lab::method_result::{Measured, MethodResult};
-use lab::methods::restir;
+use methods::restir;
 use lab::metrics::Area;
 use lab::output::{output_dir, write_text};
 use lab::progress::Progress;

@@ -109,7 +109,7 @@ pub fn variations(base: &str, resolution: (u32, u32)) -> Vec<Variation> {
 mod tests {
     use super::super::FRAMES;
     use super::*;
-    use lab::methods::Method;
+    use methods::Method;
 
     /// The rows: the default first, every knob of issue 10 that exists once, each method spec
     /// parses, framings and resolutions differ from the default only where the label says so,

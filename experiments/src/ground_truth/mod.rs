@@ -28,7 +28,7 @@ pub use measure::{CONFIDENCE, Interval, Measure, RegionMeasure, noise};
 pub use truth::{TRUTH_SEED, TRUTH_VERSION, Truth, TruthKey};
 
 use lab::error::Error;
-use lab::methods::{Method, REGISTRY, restir};
+use methods::{Method, REGISTRY, restir};
 use lab::output::{output_dir, write_text};
 use lab::progress::Progress;
 use lab::reference_cache::REFERENCE_SEED;

@@ -16,7 +16,7 @@ use glam::Vec3;
 use sss::scene::Scene;
 
 use lab::error::Error;
-use lab::methods::Method;
+use methods::Method;
 use lab::output::{file_stem, output_dir};
 use lab::progress::Progress;
 

@@ -89,7 +89,7 @@ pub fn reference_images(
 }
 
 /// [`reference_images`] of the path tracer with `settings`: a method's own reference
-/// (`lab::methods::Method::reference`, e.g. the dipole profile of `image-space`).
+/// (`methods::Method::reference`, e.g. the dipole profile of `image-space`).
 pub fn reference_images_with(
     settings: &PtSettings,
     scene: &Scene,

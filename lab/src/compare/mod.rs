@@ -21,7 +21,7 @@ use sss::scene::{GBuffer, Scene};
 
 use crate::error::Error;
 use crate::method_result::{MethodResult, Replica};
-use crate::methods::{Method, MethodError};
+use methods::{Method, MethodError};
 use crate::output::output_dir;
 use crate::progress::Progress;
 use crate::reference_cache::{

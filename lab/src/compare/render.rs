@@ -9,8 +9,8 @@ use sss::scene::Scene;
 use super::{Comparison, EQUAL_TIME_SPEC};
 use crate::error::Error;
 use crate::method_result::Replica;
-use crate::methods::pt::Pt;
-use crate::methods::{Method, SampleCounts};
+use methods::pt::Pt;
+use methods::{Method, SampleCounts};
 use crate::progress::Progress;
 
 /// One method's replicas as rendered.

@@ -1,7 +1,7 @@
 #version 460
 // The adaptive method of seed 004 per pixel and frame: the GLSL twin of
-// sss::integrator::adaptive::render_frame (read the two side by side; the controller is
-// sss/glsl/adaptive.glsl). Per translucent pixel: the history carried from the previous frame by
+// methods/src/adaptive/cpu.rs render_frame (read the two side by side; the controller is
+// adaptive.glsl beside it). Per translucent pixel: the history carried from the previous frame by
 // gbuffer_reproject (none on frame 0 or a disocclusion), the count n = adaptive_sample_count,
 // n samples of pt_estimate_with with the parameters' radius sampling, the mean, then
 // adaptive_update with its perceptual luminance; other pixels take b_min samples and keep no
@@ -28,6 +28,7 @@ layout(local_size_x = 64) in;
 
 #define SCENE_BINDING 0
 #include "contract/engine.glsl"
+#include "contract/adaptive.glsl"
 #define BVH_MAX_HITS KEPT_HITS
 #include "scene.glsl"
 #include "pt.glsl"

@@ -1,10 +1,14 @@
 //! `adaptive[:option=value[/option=value…]]`: seed 004 (Xie et al. 2020) — path tracing with
 //! Xie's radius sampling `g(ξ)` weighted by its own density (unbiased against the Burley
 //! reference) and the single-pass variance-guided sample count per pixel and frame
-//! (`sss::integrator::adaptive`, [004 Eq. 6–17]). Every frame of the trajectory is rendered (the
+//! ([`cpu`], [004 Eq. 6–17]). Every frame of the trajectory is rendered (the
 //! per-pixel history is carried by reprojection) and the last one is kept, with its sample-count
-//! map ([`SampleCounts`]). On Vulkan its twin `method_adaptive.glsl`
-//! (`engine::vulkan::Renderer::adaptive`).
+//! map ([`SampleCounts`]). On Vulkan its twin `method_adaptive.glsl` ([`vulkan`]).
+//!
+//! The folder is the whole method: this file (its registry entry, option parsing and
+//! [`Estimator`]), the CPU estimator [`cpu`] and its GLSL twin `adaptive.glsl` (the controller),
+//! the kernel `method_adaptive.glsl` with its host code [`vulkan`], what the two languages share
+//! ([`contract`]) and the parity tests of the kernel against the CPU (`parity.rs`).
 //!
 //! Options, each at most once, the paper's defaults otherwise [004 Fig. 1]: `kappa` (κ ∈ [0, 1],
 //! 0.2), `target_variance` (σ0² > 0, 0.001), `b_min` and `b_max` (1 ≤ b_min ≤ b_max ≤ `MAX_SPP`,
@@ -12,13 +16,19 @@
 //! `b_min = b_max = n` every pixel takes `n` samples: the fixed-count baseline of the same
 //! estimator (`pt` with `g(ξ)` radii at `n` spp, bit for bit).
 
+pub mod contract;
+pub mod cpu;
+#[cfg(test)]
+mod parity;
+pub mod vulkan;
+
 use engine::{Backend, PipelineError};
-use sss::integrator::adaptive::{self, AdaptiveParams};
 use sss::limits::MAX_SPP;
 use sss::scene::Scene;
 
-use super::estimator::{Entry, Estimator, Frame, Method, SampleCounts};
-use super::pt::to_image;
+use self::cpu::AdaptiveParams;
+use crate::estimator::{Entry, Estimator, Frame, Method, SampleCounts};
+use crate::pt::to_image;
 
 pub const ENTRY: Entry = Entry {
     family: "adaptive",
@@ -94,7 +104,7 @@ impl Estimator for Adaptive {
     }
 
     /// `b_max`, the most samples a pixel may take in a frame; the mean a frame took is
-    /// measured ([`Rendered::spp`](super::Rendered::spp)).
+    /// measured ([`Rendered::spp`](crate::Rendered::spp)).
     fn spp(&self) -> u32 {
         self.0.b_max
     }
@@ -124,15 +134,14 @@ impl Estimator for Adaptive {
         let mut nonfinite = 0;
         let (image, counts) = match backend.renderer() {
             Some(mut renderer) => {
-                let last = renderer
-                    .adaptive(scene, &self.0, seed, frames, |f| {
-                        nonfinite += f.image.left_out
-                    })?
-                    .ok_or_else(|| PipelineError::Config("adaptive rendered no frame".into()))?;
+                let last = vulkan::run(&mut renderer, scene, &self.0, seed, frames, |f| {
+                    nonfinite += f.image.left_out
+                })?
+                .ok_or_else(|| PipelineError::Config("adaptive rendered no frame".into()))?;
                 (last.image.image, last.counts)
             }
             None => {
-                let last = adaptive::run(scene, &self.0, seed, frames, |f| {
+                let last = cpu::run(scene, &self.0, seed, frames, |f| {
                     nonfinite += f.image.nonfinite
                 })
                 .ok_or_else(|| PipelineError::Config("adaptive rendered no frame".into()))?;
@@ -247,7 +256,7 @@ mod tests {
 
     /// On Vulkan the method renders `bumpy` through its kernel: no non-finite pixel, counts in
     /// `[b_min, b_max]` (0 without a hit) and above `b_min` somewhere (per-pixel parity with the
-    /// CPU is `engine/tests/vulkan_adaptive.rs`).
+    /// CPU is `parity.rs`).
     #[test]
     fn renders_on_vulkan() {
         let Some(backend) = backend_or_skip("adaptive::renders_on_vulkan") else {

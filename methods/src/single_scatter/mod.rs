@@ -16,24 +16,26 @@
 //! one dispatch per sample.
 //!
 //! `/restir` replaces the boundary (zero-scattering) term by ReSTIR over the entry direction and
-//! the exit's light vertex [000 "ReSTIR Sample"] (`sss::integrator::boundary_reuse`: `spp`
+//! the exit's light vertex [000 "ReSTIR Sample"] ([`boundary_reuse`]: `spp`
 //! candidates per frame, temporal reuse with confidence cap `/cap=<κ>`, default 3, and 3 × 3
 //! spatial reuse): every frame of the trajectory is rendered and the last one kept. Diffuse
 //! boundaries only (other materials are refused); CPU only (refused on Vulkan in one line).
+
+pub mod boundary_reuse;
 
 use std::cell::RefCell;
 
 use engine::random_walk_method::SceneLighting;
 use engine::{Backend, PipelineError};
 use restir::rng::StreamKey;
-use sss::integrator::boundary_reuse::{self, DEFAULT_CAP, ReuseSettings, SameVertices};
 use sss::integrator::single_scatter::{self, ChannelSelection, SingleScatterSettings};
 use sss::scene::{GBuffer, Scene};
 
-use super::estimator::{
+use self::boundary_reuse::{DEFAULT_CAP, ReuseSettings, SameVertices};
+use crate::estimator::{
     Entry, Estimator, Frame, Method, Trajectory, memoryless_trajectory, parse_spp,
 };
-use super::pt::to_image;
+use crate::pt::to_image;
 
 /// `purpose` of the exits' light-selection streams (the kernel's `PURPOSE_SINGLE_SCATTER_LIGHT`).
 pub use engine::purpose::SINGLE_SCATTER_LIGHT as PURPOSE_SINGLE_SCATTER_LIGHT;

@@ -1,5 +1,5 @@
 //! The adaptive method of seed 004 on the device (`method_adaptive.glsl`, twin of
-//! [`sss::integrator::adaptive::render_frame`] and [`run`](sss::integrator::adaptive::run)):
+//! [`cpu::render_frame`](super::cpu::render_frame) and [`cpu::run`](super::cpu::run), driven through the engine's [`Renderer`] ([`run`])):
 //! per frame of the trajectory its G-buffer, then `b_max` dispatches (one per sample index) that
 //! reproject the previous frame's histories, take each pixel's count of samples and write the
 //! mean, the count and the next histories.
@@ -9,17 +9,24 @@
 //! dispatches of one frame ([`AdaptiveState`]).
 
 use bytemuck::{Pod, Zeroable};
-use sss::integrator::adaptive::{AdaptiveParams, History};
+use engine::vulkan::{
+    Buffer, Context, DeviceImage, FrameInput, Kernel, Renderer, Shader, VulkanError, groups_for,
+};
+use sss::scene::Scene;
 
-use super::pt::{bindings, read_image};
-use super::{Buffer, Context, DeviceImage, FrameInput, Kernel, Shader, VulkanError, groups_for};
-use crate::contract::{AdaptiveMethodParams, AdaptiveState};
+use super::contract::{AdaptiveMethodParams, AdaptiveState};
+use super::cpu::{AdaptiveParams, History};
 
 /// `method_adaptive.glsl`: scene bindings 0–8, 9 G-buffer (`GpuPixel`), 10 `vec4` out (mean,
 /// `w` = samples left out), 11 the previous frame's G-buffer, 12 the previous frame's
 /// [`GpuHistory`] per pixel, 13 this frame's, 14 [`AdaptiveState`] per pixel. Push constants:
 /// [`AdaptiveMethodParams`].
-pub const ADAPTIVE: Shader = Shader::new("method_adaptive", 15, 32);
+pub const ADAPTIVE: Shader = Shader::compiled(
+    "method_adaptive",
+    crate::spirv!("method_adaptive"),
+    15,
+    size_of::<AdaptiveMethodParams>() as u32,
+);
 
 /// `adaptive.glsl`'s `History` (std430, 16 bytes): `Option<History>`, `valid = 0` for `None`.
 #[repr(C)]
@@ -77,10 +84,7 @@ pub fn render_adaptive_frame(
             (frame.gbuffer, &stand_in)
         }
     };
-    let buffers = bindings(
-        frame,
-        &[&output, previous_gbuffer, previous_history, &next, &state],
-    )?;
+    let buffers = frame.bindings(&[&output, previous_gbuffer, previous_history, &next, &state])?;
     for sample_index in 0..params.b_max {
         let push = AdaptiveMethodParams {
             alpha: params.alpha,
@@ -101,11 +105,43 @@ pub fn render_adaptive_frame(
     }
     let states = state.read::<AdaptiveState>()?;
     let image = AdaptiveImage {
-        image: read_image(frame, &output)?,
+        image: frame.read_image(&output)?,
         counts: states.iter().map(|s| s.count).collect(),
         cut: states.iter().map(|s| u64::from(s.cut)).sum(),
     };
     Ok((image, next))
+}
+
+/// The `adaptive` method with controller `params` (validated) over frames `0..frames` of
+/// `scene`'s trajectory, each handed to `each` as it is done (the twin of [`cpu::run`](super::cpu::run)); returns
+/// the last (`None` for no frames). A frame whose loops the device cut short is an error.
+pub fn run(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    params: &AdaptiveParams,
+    seed: u64,
+    frames: u32,
+    mut each: impl FnMut(&AdaptiveImage),
+) -> Result<Option<AdaptiveImage>, VulkanError> {
+    let mut previous: Option<(Buffer, Buffer)> = None;
+    let mut last = None;
+    for frame in 0..frames {
+        let (gbuffer, frame_params) = renderer.gbuffer(scene, frame, seed)?;
+        let (context, kernel, gpu) = renderer.parts(ADAPTIVE)?;
+        let input = FrameInput::new(scene, gpu, &frame_params, &gbuffer);
+        let carried = previous.as_ref().map(|(g, h)| (g, h));
+        let (out, history) = render_adaptive_frame(context, kernel, &input, carried, params)?;
+        if out.cut > 0 {
+            return Err(VulkanError::LoopsCut {
+                shader: ADAPTIVE.name,
+                count: out.cut,
+            });
+        }
+        each(&out);
+        previous = Some((gbuffer, history));
+        last = Some(out);
+    }
+    Ok(last)
 }
 
 #[cfg(test)]
@@ -117,10 +153,7 @@ mod tests {
     fn buffer_structs_match_std430() {
         assert_eq!((size_of::<GpuHistory>(), align_of::<GpuHistory>()), (16, 4));
         assert_eq!(offset_of!(GpuHistory, valid), 12);
-        assert_eq!(
-            size_of::<AdaptiveMethodParams>() as u32,
-            ADAPTIVE.push_bytes
-        );
+        assert_eq!(size_of::<AdaptiveMethodParams>(), 32);
         assert_eq!(size_of::<AdaptiveState>(), 56);
         assert_eq!(
             GpuHistory {

@@ -1,5 +1,5 @@
 // Image-space subsurface scattering of seed 002: the GLSL twin of
-// sss/src/integrator/image_space.rs (read the two side by side; same functions, same random
+// methods/src/image_space/cpu.rs (read the two side by side; same functions, same random
 // numbers in the same order, same operation order). Per pass: an irradiance kernel writes
 // image_space_irradiance_at for every translucent pixel, then a gather kernel computes
 // image_space_gather_pixel and image_space_exit_radiance per translucent pixel (Lambert pixels:
@@ -26,8 +26,8 @@
 #include "pt.glsl"
 
 // IMAGE_SPACE_PURPOSE_IRRADIANCE, IMAGE_SPACE_PURPOSE_GATHER and the lookups IMAGE_SPACE_ENTRY,
-// IMAGE_SPACE_OFF_SCREEN, IMAGE_SPACE_OCCLUDED (sss/src/contract.rs).
-#include "contract/sss.glsl"
+// IMAGE_SPACE_OFF_SCREEN, IMAGE_SPACE_OCCLUDED (contract.rs beside this file).
+#include "contract/image_space.glsl"
 // std::f32::consts::PI and TAU.
 const float IMAGE_SPACE_PI = 3.14159274101257324;
 const float IMAGE_SPACE_TAU = 6.28318548202514648;

@@ -14,7 +14,7 @@ use restir::rng::StreamKey;
 use restir::shift::LocalCoords;
 
 use super::*;
-use crate::scene::Lights;
+use sss::scene::Lights;
 
 /// `slab` at 32 × 24 lit by its quad light alone (the local coordinates below parametrise it).
 fn slab() -> Scene {

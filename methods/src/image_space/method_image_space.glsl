@@ -1,6 +1,6 @@
 #version 460
-// The image-space method per pixel: the GLSL twin of sss::integrator::image_space::render (read
-// the two side by side; the math is sss/glsl/image_space.glsl). Each pass `pass` is two
+// The image-space method per pixel: the GLSL twin of methods/src/image_space/cpu.rs render (read
+// the two side by side; the math is image_space.glsl beside it). Each pass `pass` is two
 // dispatches over the frame's G-buffer:
 //   stage IMAGE_SPACE_STAGE_IRRADIANCE: E(x_q) of every translucent pixel into binding 11
 //     (image_space_irradiance_at, stream { q, frame, pass, IMAGE_SPACE_PURPOSE_IRRADIANCE });
@@ -26,6 +26,7 @@ layout(local_size_x = 64) in;
 
 #define SCENE_BINDING 0
 #include "contract/engine.glsl"
+#include "contract/image_space.glsl"
 #define BVH_MAX_HITS KEPT_HITS
 #include "scene.glsl"
 #include "image_space.glsl"

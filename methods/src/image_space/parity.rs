@@ -1,13 +1,13 @@
 //! The image-space method of seed 002 on the device (`method_image_space.glsl`,
-//! `sss/glsl/image_space.glsl`) against its CPU twin `sss::integrator::image_space::render`.
+//! `image_space.glsl`) against its CPU twin [`render`].
 //!
 //! Without Vulkan each test prints why it is skipped and passes, unless
 //! `RESHIFT_REQUIRE_VULKAN=1`, which makes it fail.
 
+use super::cpu::{EntryCounts, ImageSpaceSettings, render};
+use super::vulkan::{IMAGE_SPACE, render_image_space, scene_gather_profiles};
 use engine::vulkan::testing::{UploadedFrame, kernel_or_skip, pixel_error, rel_mse_pixels};
-use engine::vulkan::{IMAGE_SPACE, render_image_space, scene_gather_profiles};
 use glam::Vec3;
-use sss::integrator::image_space::{EntryCounts, ImageSpaceSettings, render};
 use sss::material::Material;
 use sss::scene::{GBuffer, Scene};
 

@@ -1,5 +1,5 @@
 //! ReSTIR on seed 000's boundary (zero-scattering) term [000 "ReSTIR Sample"]: the option
-//! `/restir` of [`single_scatter`](super::single_scatter). Single scattering and the `R − R1` diffusion part are the
+//! `/restir` of [`single_scatter`](sss::integrator::single_scatter). Single scattering and the `R − R1` diffusion part are the
 //! plain estimator's; only the boundary term `e^{−σt d0} f0 L0` [000 slide 60] is replaced by
 //! the estimate `f(Y) · W_Y` of a per-pixel reservoir, reused over frames and pixels.
 //!
@@ -16,7 +16,7 @@
 //! shaded with `f(Y) · W_Y`. The plain estimator reaches the same integral with next-event
 //! estimation and an escape direction (balance heuristic); the reservoir's candidates use light
 //! sampling alone ([`Candidates`]: `ω` cosine-distributed, `y` from
-//! [`Lights::sample`](crate::scene::Lights::sample) at `x_e`), whose density is positive wherever
+//! [`Lights::sample`](sss::scene::Lights::sample) at `x_e`), whose density is positive wherever
 //! `f` is. `V` tests the scene's geometry only: lights do not occlude one another, as in
 //! next-event estimation.
 //!
@@ -51,13 +51,13 @@ use restir::reservoir::{Reservoir, cap_confidence};
 use restir::rng::{Stream, StreamKey};
 use restir::shift::{CandidateSampler, Domain, Fail, Shift, Shifted};
 
-use super::pt::{self, Image};
-use super::single_scatter::{Shading, SingleScatterSettings, estimate, sample_stream};
-use crate::InputError;
-use crate::material::{BoundaryKind, Material};
-use crate::random_walk::interface::{cosine_pdf, sample_cosine};
-use crate::random_walk::{Boundary, ExitLighting, Medium, MeshBoundary};
-use crate::scene::{
+use sss::InputError;
+use sss::integrator::pt::{self, Image};
+use sss::integrator::single_scatter::{Shading, SingleScatterSettings, estimate, sample_stream};
+use sss::material::{BoundaryKind, Material};
+use sss::random_walk::interface::{cosine_pdf, sample_cosine};
+use sss::random_walk::{Boundary, ExitLighting, Medium, MeshBoundary};
+use sss::scene::{
     DIRECTIONAL_DISTANCE, GBuffer, GPixel, Light, REPROJECTION_NORMAL_COSINE, Scene, luminance,
 };
 
@@ -209,7 +209,7 @@ impl Domain for BoundaryDomain<'_> {
 }
 
 /// Candidates of the boundary term: `ω` cosine-distributed about `−n1`, then a light vertex
-/// from [`Lights::sample`](crate::scene::Lights::sample) at the exit. Density
+/// from [`Lights::sample`](sss::scene::Lights::sample) at the exit. Density
 /// `cos θ_ω/π · p_y`, with `p_y` the selection probability times the area density (area lights)
 /// or the selection probability alone (delta lights). Draws five numbers.
 #[derive(Clone, Copy, Debug, Default)]
@@ -566,7 +566,7 @@ pub struct Rendered {
     pub truncated: u64,
 }
 
-/// [`single_scatter::render`](super::single_scatter::render) of frames `first_shaded..frames`
+/// [`single_scatter::render`](sss::integrator::single_scatter::render) of frames `first_shaded..frames`
 /// with the boundary term of every diffuse translucent pixel replaced by the reservoir's
 /// ([`run`], `reuse.candidates` candidates per frame); `lighting_for(pixel, frame)` lights the
 /// exits of the plain part, which draws the same streams as the plain method.

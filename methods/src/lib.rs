@@ -1,10 +1,17 @@
-//! Rendering methods by name (DESIGN §7): `pt[:spp]`, `restir:<preset>`, `random-walk[:spp]`,
-//! `pt-one-hit[:spp]`, `single-scatter[:spp]`, `image-space[:spp]`, `adaptive[:options]`.
+//! `methods`: the rendering methods by name (DESIGN §7): `pt[:spp]`, `restir:<preset>`,
+//! `random-walk[:spp]`, `pt-one-hit[:spp]`, `single-scatter[:spp]`, `image-space[:spp]`,
+//! `adaptive[:options]`.
 //!
 //! A method renders the final frame of a scene's camera trajectory (or every frame of it) for
-//! one replica seed on a backend. Each family is one file implementing [`Estimator`] with its [`Entry`] (family,
-//! usage, about, build); [`REGISTRY`] lists the entries, one line each. Adding a method is that
-//! file plus its `mod` line and its registry line (docs/adding-a-method.md).
+//! one replica seed on a backend. Each family implements [`Estimator`] with its [`Entry`]
+//! (family, usage, about, build); [`REGISTRY`] lists the entries. A method with a kernel of its
+//! own is one folder (`image_space/`, `adaptive/`): its entry and estimator (`mod.rs`), its CPU
+//! estimator (`cpu.rs`) and GLSL twin, its kernel (`method_*.glsl`, compiled by `build.rs`) with
+//! its Vulkan host code (`vulkan.rs`, on the engine's [`Renderer`](engine::vulkan::Renderer)), its
+//! contract (`contract.rs`) and its tests. Adding one is that folder, its `mod` line below and
+//! its line in `src/registry.rs`, which lists the entries in [`REGISTRY`] and tells `build.rs`
+//! which folders have a contract (docs/adding-a-method.md). The `mod` lines stay written out:
+//! `cargo fmt` and readers follow them.
 
 pub mod adaptive;
 mod estimator;
@@ -17,21 +24,41 @@ pub mod single_scatter;
 
 use std::fmt;
 
+/// The SPIR-V that `build.rs` compiled from a kernel `src/<folder>/<name>.glsl`, `None` in a
+/// build without `glslc` (for [`Shader::compiled`](engine::vulkan::Shader::compiled)).
+#[cfg(reshift_glslc)]
+macro_rules! spirv {
+    ($name:literal) => {
+        Some(include_bytes!(concat!(env!("OUT_DIR"), "/", $name, ".spv")) as &[u8])
+    };
+}
+
+/// The SPIR-V that `build.rs` compiled from a kernel `src/<folder>/<name>.glsl`, `None` in a
+/// build without `glslc` (for [`Shader::compiled`](engine::vulkan::Shader::compiled)).
+#[cfg(not(reshift_glslc))]
+macro_rules! spirv {
+    ($name:literal) => {
+        None
+    };
+}
+pub(crate) use spirv;
+
 pub use estimator::{
     Entry, Estimator, Frame, Method, Rendered, SampleCounts, Trajectory, memoryless_trajectory,
     parse_spp,
 };
 
-/// Every method family the CLI knows, in the order `reshift methods` lists them.
-pub const REGISTRY: &[Entry] = &[
-    pt::ENTRY,
-    restir::ENTRY,
-    random_walk::ENTRY,
-    pt_one_hit::ENTRY,
-    single_scatter::ENTRY,
-    image_space::ENTRY,
-    adaptive::ENTRY,
-];
+/// The crate's reading of `src/registry.rs`: [`REGISTRY`] (build.rs has its own, for the
+/// contracts).
+macro_rules! registry {
+    ($($name:ident $(with $contract:ident)?),* $(,)?) => {
+        /// Every method family the CLI knows, in the order `reshift methods` lists them
+        /// (`src/registry.rs`).
+        pub const REGISTRY: &[Entry] = &[$($name::ENTRY),*];
+    };
+}
+
+include!("registry.rs");
 
 /// A method specification that could not be parsed.
 #[derive(Clone, Debug, PartialEq)]

@@ -1,6 +1,6 @@
 //! The image-space method of seed 002 on the device (`method_image_space.glsl`, twin of
-//! [`sss::integrator::image_space::render`]): per pass an irradiance dispatch and a gather
-//! dispatch over one frame's G-buffer.
+//! [`cpu::render`](super::cpu::render)): per pass an irradiance dispatch and a gather dispatch over one frame's
+//! G-buffer, driven through the engine's [`Renderer`] ([`render`]).
 //!
 //! The gather needs per-material values that `GpuMaterial` lacks (the three dipoles, `ρ_c`, the
 //! renormalised `P(c)`): they live in this method's own buffer, binding 12 ([`GpuGatherProfile`]),
@@ -10,21 +10,51 @@
 //! dispatches ([`ImageSpaceState`]).
 
 use bytemuck::{Pod, Zeroable};
-use sss::integrator::image_space::{
-    EntryCounts, GatherProfile, ImageSpaceSettings, gather_profiles,
+use engine::image::Image;
+use engine::vulkan::{
+    Buffer, Context, DeviceImage, FrameInput, Kernel, Renderer, Shader, VulkanError, groups_for,
 };
 use sss::material::FresnelTransmission;
 use sss::profile::{Dipole, Pole};
 use sss::scene::Scene;
 
-use super::pt::{bindings, read_image};
-use super::{Buffer, Context, DeviceImage, FrameInput, Kernel, Shader, VulkanError, groups_for};
-use crate::contract::{ImageSpaceParams, ImageSpaceStage, ImageSpaceState};
+use super::contract::{ImageSpaceParams, ImageSpaceStage, ImageSpaceState};
+use super::cpu::{EntryCounts, GatherProfile, ImageSpaceSettings, gather_profiles};
 
 /// `method_image_space.glsl`: scene bindings 0–8, 9 G-buffer (`GpuPixel`), 10 `vec4` out (mean,
 /// `w` = pass values left out), 11 `vec4` irradiance per pixel, 12 [`GpuGatherProfile`] per
 /// material, 13 [`ImageSpaceState`] per pixel. Push constants: [`ImageSpaceParams`].
-pub const IMAGE_SPACE: Shader = Shader::new("method_image_space", 14, 32);
+pub const IMAGE_SPACE: Shader = Shader::compiled(
+    "method_image_space",
+    crate::spirv!("method_image_space"),
+    14,
+    size_of::<ImageSpaceParams>() as u32,
+);
+
+/// The `image-space:spp` method at `frame` with the default sample counts
+/// ([`ImageSpaceSettings::default`]): the image and the pass values left out; a dispatch whose
+/// loops the device cut short is an error.
+pub fn render(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    frame: u32,
+    seed: u64,
+    spp: u32,
+) -> Result<(Image, u64), VulkanError> {
+    let settings = ImageSpaceSettings::default();
+    let profiles = scene_gather_profiles(scene, &settings);
+    let (gbuffer, params) = renderer.gbuffer(scene, frame, seed)?;
+    let (context, kernel, gpu) = renderer.parts(IMAGE_SPACE)?;
+    let input = FrameInput::new(scene, gpu, &params, &gbuffer);
+    let out = render_image_space(context, kernel, &input, &profiles, &settings, spp)?;
+    if out.cut > 0 {
+        return Err(VulkanError::LoopsCut {
+            shader: IMAGE_SPACE.name,
+            count: out.cut,
+        });
+    }
+    Ok((out.image.image, out.image.left_out))
+}
 
 /// `dipole.glsl`'s `GpuDipole` (std430, 24 bytes): a [`Dipole`]'s constants with its real pole's
 /// probability and `ρ`, computed on the host.
@@ -127,7 +157,7 @@ pub fn render_image_space(
     let output = Buffer::zeroed(context, count as usize * 16)?;
     let irradiance = Buffer::zeroed(context, count as usize * 16)?;
     let state = Buffer::zeroed(context, count as usize * size_of::<ImageSpaceState>())?;
-    let buffers = bindings(frame, &[&output, &irradiance, &profiles, &state])?;
+    let buffers = frame.bindings(&[&output, &irradiance, &profiles, &state])?;
     for pass in 0..spp {
         for stage in [ImageSpaceStage::Irradiance, ImageSpaceStage::Gather] {
             let params = ImageSpaceParams {
@@ -157,7 +187,7 @@ pub fn render_image_space(
         entries.edge_on += u64::from(s.edge_on);
     }
     Ok(ImageSpaceImage {
-        image: read_image(frame, &output)?,
+        image: frame.read_image(&output)?,
         entries,
         cut: states.iter().map(|s| u64::from(s.cut)).sum(),
     })
@@ -184,7 +214,7 @@ mod tests {
         assert_eq!(offset_of!(GpuGatherProfile, fresnel), 76);
         assert_eq!(offset_of!(GpuGatherProfile, reflectance), 84);
         assert_eq!(offset_of!(GpuGatherProfile, channel), 96);
-        assert_eq!(size_of::<ImageSpaceParams>() as u32, IMAGE_SPACE.push_bytes);
+        assert_eq!(size_of::<ImageSpaceParams>(), 32);
         assert_eq!(size_of::<ImageSpaceState>(), 56);
     }
 

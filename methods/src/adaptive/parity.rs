@@ -1,13 +1,14 @@
-//! The adaptive method of seed 004 on the device (`method_adaptive.glsl`,
-//! `sss/glsl/adaptive.glsl`) against its CPU twin `sss::integrator::adaptive::run`, frame by
+//! The adaptive method of seed 004 on the device (`method_adaptive.glsl`, `adaptive.glsl`)
+//! against its CPU twin [`run`], frame by
 //! frame over a trajectory: the per-pixel sample counts and the images.
 //!
 //! Without Vulkan each test prints why it is skipped and passes, unless
 //! `RESHIFT_REQUIRE_VULKAN=1`, which makes it fail.
 
+use super::cpu::{AdaptiveParams, run};
+use super::vulkan;
 use engine::vulkan::testing::{backend_or_skip, pixel_error, rel_mse_pixels};
 use glam::Vec3;
-use sss::integrator::adaptive::{AdaptiveParams, run};
 use sss::scene::Scene;
 
 const WIDTH: u32 = 32;
@@ -49,12 +50,11 @@ fn cpu(scene: &Scene, params: &AdaptiveParams, seed: u64) -> Frames {
 fn gpu(backend: &engine::Backend, scene: &Scene, params: &AdaptiveParams, seed: u64) -> Frames {
     let mut renderer = backend.renderer().expect("a Vulkan backend");
     let mut frames = Vec::new();
-    renderer
-        .adaptive(scene, params, seed, FRAMES, |f| {
-            assert_eq!(f.image.left_out, 0, "samples left out");
-            frames.push((f.image.image.pixels.clone(), f.counts.clone()));
-        })
-        .unwrap();
+    vulkan::run(&mut renderer, scene, params, seed, FRAMES, |f| {
+        assert_eq!(f.image.left_out, 0, "samples left out");
+        frames.push((f.image.image.pixels.clone(), f.counts.clone()));
+    })
+    .unwrap();
     frames
 }
 

@@ -1,9 +1,14 @@
 //! `image-space[:spp]`: image-space subsurface scattering of seed 002 (Mertens et al. 2003) with
-//! the Jensen dipole (`sss::integrator::image_space`): per pass, the irradiance of every
+//! the Jensen dipole ([`cpu`]): per pass, the irradiance of every
 //! translucent pixel from the eye [002 Eq. 5], then a gather of `R_d · E` over the image on each
 //! pixel's tangent plane [002 Eq. 4, 8–9]; `spp` passes are averaged. Lambert pixels take the
 //! path tracer's samples. Memoryless: only the final frame is rendered. On Vulkan its twin
-//! `method_image_space.glsl` (`engine::vulkan::render_image_space`).
+//! `method_image_space.glsl` ([`vulkan`]).
+//!
+//! The folder is the whole method: this file (its registry entry and [`Estimator`]), the CPU
+//! estimator [`cpu`] and its GLSL twin `image_space.glsl`, the kernel `method_image_space.glsl`
+//! with its host code [`vulkan`], what the two languages share ([`contract`]) and the parity
+//! tests of the kernel against the CPU (`parity.rs`).
 //!
 //! Its reference is the path tracer with the dipole profile of the same materials
 //! (`ProfileKind::Dipole`, [`Estimator::reference`]): `reshift bias` measures it against that, so
@@ -11,14 +16,20 @@
 //! discretisation, the tangent-plane disk). `compare` measures every method against the default
 //! (Burley) reference, so there it also carries the dipole–Burley profile difference.
 
+pub mod contract;
+pub mod cpu;
+#[cfg(test)]
+mod parity;
+pub mod vulkan;
+
 use engine::{Backend, PipelineError};
-use sss::integrator::image_space::{self, ImageSpaceSettings};
 use sss::integrator::pt::PtSettings;
 use sss::profile::ProfileKind;
 use sss::scene::{GBuffer, Scene};
 
-use super::estimator::{Entry, Estimator, Frame, Method, parse_spp};
-use super::pt::to_image;
+use self::cpu::ImageSpaceSettings;
+use crate::estimator::{Entry, Estimator, Frame, Method, parse_spp};
+use crate::pt::to_image;
 
 pub const ENTRY: Entry = Entry {
     family: "image-space",
@@ -62,11 +73,11 @@ impl Estimator for ImageSpace {
     ) -> Result<Frame, PipelineError> {
         let last = frames - 1;
         let (image, nonfinite) = match backend.renderer() {
-            Some(mut renderer) => renderer.image_space(scene, last, seed, self.spp)?,
+            Some(mut renderer) => vulkan::render(&mut renderer, scene, last, seed, self.spp)?,
             None => {
                 let gbuffer = GBuffer::render(scene, last);
                 let settings = ImageSpaceSettings::default();
-                let frame = image_space::render(scene, &gbuffer, &settings, seed, self.spp);
+                let frame = cpu::render(scene, &gbuffer, &settings, seed, self.spp);
                 (to_image(&frame.image), frame.image.nonfinite)
             }
         };
@@ -114,7 +125,7 @@ mod tests {
         );
     }
 
-    /// Through the registry the method is `sss::integrator::image_space::render` on the last
+    /// Through the registry the method is [`cpu::render`] on the last
     /// frame, bit for bit and deterministic; negative control: another seed gives other bits.
     #[test]
     fn renders_the_integrator_on_the_last_frame() {
@@ -123,7 +134,7 @@ mod tests {
         let a = method.render(&scene, 3, 5).unwrap();
         let again = method.render(&scene, 3, 5).unwrap();
         let other = method.render(&scene, 3, 6).unwrap();
-        let direct = image_space::render(
+        let direct = cpu::render(
             &scene,
             &GBuffer::render(&scene, 2),
             &ImageSpaceSettings::default(),
@@ -141,7 +152,7 @@ mod tests {
 
     /// On Vulkan the method renders `bumpy` through its kernel: no non-finite pixel, lit
     /// translucent pixels, and not the CPU's image of another seed (per-pixel parity with the
-    /// CPU is `engine/tests/vulkan_image_space.rs`).
+    /// CPU is `parity.rs`).
     #[test]
     fn renders_on_vulkan() {
         let Some(backend) = backend_or_skip("image_space::renders_on_vulkan") else {

@@ -332,7 +332,7 @@ fn degenerate_mesh_triangles_are_dropped_and_counted() {
 /// The example of `docs/scene-format.md` loads (with a stand-in PLY for its mesh).
 #[test]
 fn documented_example_loads() {
-    let doc = include_str!("../../../docs/scene-format.md");
+    let doc = include_str!("../../../../docs/scene-format.md");
     let start = doc.find("```toml\n").expect("an example") + "```toml\n".len();
     let example = &doc[start..start + doc[start..].find("```").unwrap()];
     let dir = scratch("doc-example");

@@ -23,11 +23,12 @@ use std::path::PathBuf;
 
 use glam::{DVec3, Vec3};
 use restir::stats::{Summary, equivalence, student_t_quantile};
+use sss::color::luminance;
 use sss::integrator::adaptive::{self, AdaptiveParams, perceptual_luminance};
 use sss::integrator::image_space::{self, EntryCounts, ImageSpaceSettings};
 use sss::integrator::pt::{self, PtSettings};
 use sss::profile::ProfileKind;
-use sss::scene::{GBuffer, Scene, luminance};
+use sss::scene::{GBuffer, Scene};
 
 use lab::regions::{Region, Regions};
 

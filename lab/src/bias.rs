@@ -16,12 +16,13 @@
 
 use std::fmt::{self, Write as _};
 
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 use rayon::prelude::*;
 use restir::stats::{
     Equivalence, EquivalencePlan, Summary, Verdict, equivalence, holm, replicas_for,
 };
 use sss::InputError;
+use sss::color::luminance;
 use sss::integrator::pt::{self, PtSettings};
 use sss::limits;
 use sss::scene::{GBuffer, Scene};
@@ -29,11 +30,6 @@ use sss::scene::{GBuffer, Scene};
 use crate::regions::{Region, Regions};
 use engine::{Backend, PipelineError, RunConfig};
 use shifts::preset::Preset;
-
-/// Rec. 709 luminance of linear RGB, in `f64` (statistics accumulate in double precision).
-pub fn luminance(rgb: Vec3) -> f64 {
-    Channel::Luminance.of(rgb.as_dvec3())
-}
 
 /// What a row of the bias test measures: one colour channel, or the Rec. 709 luminance.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -69,7 +65,7 @@ impl Channel {
             Channel::Red => rgb.x,
             Channel::Green => rgb.y,
             Channel::Blue => rgb.z,
-            Channel::Luminance => 0.2126 * rgb.x + 0.7152 * rgb.y + 0.0722 * rgb.z,
+            Channel::Luminance => luminance(rgb),
         }
     }
 }

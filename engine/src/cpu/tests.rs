@@ -9,8 +9,7 @@ fn scene(name: &str, size: u32) -> Scene {
 }
 
 fn luminance_mean(image: &Image) -> f64 {
-    let [r, g, b] = image.mean();
-    0.2126 * r + 0.7152 * g + 0.0722 * b
+    sss::color::luminance(glam::DVec3::from_array(image.mean()))
 }
 
 fn bits(run: &Run) -> (Vec<u32>, Vec<u8>) {
@@ -77,7 +76,7 @@ fn rao_blackwellised_shading_keeps_reservoirs_and_luminance() {
         frames: 3,
         collect_diagnostics: false,
     };
-    let luminance = |p: Vec3| 0.2126 * p.x as f64 + 0.7152 * p.y as f64 + 0.0722 * p.z as f64;
+    let luminance = |p: Vec3| sss::color::luminance(p.as_dvec3());
     for preset in Preset::all() {
         let rb = Preset {
             shade: Shade::AllInputs,

@@ -38,9 +38,10 @@ use rayon::prelude::*;
 use super::pt::{self, Image, PtSettings, Shading};
 use crate::InputError;
 use crate::bssrdf::RadiusSampling;
+use crate::color::luminance;
 use crate::geometry::Hit;
 use crate::material::Material;
-use crate::scene::{GBuffer, Scene, luminance};
+use crate::scene::{GBuffer, Scene};
 
 /// The display gamma of [`perceptual_luminance`].
 pub const GAMMA: f32 = 2.2;

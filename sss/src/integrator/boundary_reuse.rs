@@ -54,11 +54,12 @@ use restir::shift::{CandidateSampler, Domain, Fail, Shift, Shifted};
 use super::pt::{self, Image};
 use super::single_scatter::{Shading, SingleScatterSettings, estimate, sample_stream};
 use crate::InputError;
+use crate::color::luminance;
 use crate::material::{BoundaryKind, Material};
-use crate::random_walk::interface::{cosine_pdf, sample_cosine};
 use crate::random_walk::{Boundary, ExitLighting, Medium, MeshBoundary};
+use crate::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
 use crate::scene::{
-    DIRECTIONAL_DISTANCE, GBuffer, GPixel, Light, REPROJECTION_NORMAL_COSINE, Scene, luminance,
+    DIRECTIONAL_DISTANCE, GBuffer, GPixel, Light, REPROJECTION_NORMAL_COSINE, Scene,
 };
 
 /// `purpose` of the candidate streams (ASCII "SB" + 1: single-scatter boundary).
@@ -239,7 +240,7 @@ impl<'a> CandidateSampler<BoundaryDomain<'a>> for Candidates {
         domain: &BoundaryDomain<'a>,
         rng: &mut Stream,
     ) -> Option<(BoundarySample, f32)> {
-        let dir = sample_cosine(-domain.n1, [rng.next_f32(), rng.next_f32()]);
+        let dir = sample_cosine_hemisphere(-domain.n1, [rng.next_f32(), rng.next_f32()]);
         let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
         let (_, exit, _) = domain.exit(dir)?;
         let s = domain.scene.lights.sample(exit, u)?;
@@ -256,7 +257,7 @@ impl<'a> CandidateSampler<BoundaryDomain<'a>> for Candidates {
         let Some((_, exit, _)) = domain.exit(x.dir) else {
             return 0.0;
         };
-        cosine_pdf(-domain.n1, x.dir) * Candidates::vertex_pdf(domain, x, exit)
+        cosine_hemisphere_pdf(-domain.n1, x.dir) * Candidates::vertex_pdf(domain, x, exit)
     }
 }
 

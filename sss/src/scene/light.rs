@@ -14,14 +14,11 @@ use std::f32::consts::PI;
 
 use glam::Vec3;
 
+use crate::color::luminance;
 use crate::geometry::Frame;
+use crate::sampling::sample_uniform_triangle;
 
 pub use crate::contract::light::DIRECTIONAL_DISTANCE;
-
-/// Rec. 709 luminance.
-pub fn luminance(c: Vec3) -> f32 {
-    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
-}
 
 /// One light source.
 #[derive(Clone, Debug, PartialEq)]
@@ -174,9 +171,8 @@ impl Light {
                 vertices: [v0, v1, v2],
                 radiance,
             } => {
-                // Uniform barycentrics: b0 = 1 − √u0, b1 = √u0 · (1 − u1), b2 = √u0 · u1.
-                let su = u[0].sqrt();
-                let point = (1.0 - su) * v0 + su * (1.0 - u[1]) * v1 + su * u[1] * v2;
+                let [b0, b1, b2] = sample_uniform_triangle(u);
+                let point = b0 * v0 + b1 * v1 + b2 * v2;
                 let normal = (v1 - v0).cross(v2 - v0).normalize();
                 let pdf = self.pdf(x, point);
                 (pdf > 0.0).then_some(PointOnLight {

@@ -35,7 +35,7 @@
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
-use super::pt::{self, Image, PtSettings, Shading};
+use super::pt::{self, PtSettings, SampleMeans, Shading};
 use crate::InputError;
 use crate::bssrdf::RadiusSampling;
 use crate::color::luminance;
@@ -194,7 +194,7 @@ pub fn perceptual_luminance(rgb: Vec3) -> f32 {
 pub struct AdaptiveFrame {
     pub frame: u32,
     /// The pixel estimates (means of their samples).
-    pub image: Image,
+    pub image: SampleMeans,
     /// Samples taken per pixel (0 without a primary hit).
     pub counts: Vec<u32>,
     /// The history each translucent pixel passes to the next frame (`None` elsewhere).
@@ -203,8 +203,8 @@ pub struct AdaptiveFrame {
 
 impl AdaptiveFrame {
     /// The per-pixel sample counts as an image (the count in every channel).
-    pub fn count_image(&self) -> Image {
-        Image {
+    pub fn count_image(&self) -> SampleMeans {
+        SampleMeans {
             width: self.image.width,
             height: self.image.height,
             pixels: self
@@ -281,7 +281,7 @@ pub fn render_frame(
         .sum();
     AdaptiveFrame {
         frame: gbuffer.frame,
-        image: Image {
+        image: SampleMeans {
             width: gbuffer.width,
             height: gbuffer.height,
             pixels,

@@ -51,7 +51,7 @@ use restir::reservoir::{Reservoir, cap_confidence};
 use restir::rng::{Stream, StreamKey};
 use restir::shift::{CandidateSampler, Domain, Fail, Shift, Shifted};
 
-use super::pt::{self, Image};
+use super::pt::{self, SampleMeans};
 use super::single_scatter::{Shading, SingleScatterSettings, estimate, sample_stream};
 use crate::InputError;
 use crate::color::luminance;
@@ -560,7 +560,7 @@ where
 pub struct Rendered {
     /// The method's image: the reservoir's boundary term plus the mean of the plain
     /// estimator's single and multiple scattering (Lambert pixels: the path tracer).
-    pub image: Image,
+    pub image: SampleMeans,
     /// The boundary term alone, `f(Y)·W_Y` per pixel.
     pub boundary: Vec<Vec3>,
     /// Chains cut at `max_segments` in the plain part.

@@ -49,7 +49,7 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use restir::rng::{Stream, StreamKey};
 
-use super::pt::{self, Image, PtSettings, Shading, occluded};
+use super::pt::{self, PtSettings, SampleMeans, Shading, occluded};
 use crate::InputError;
 use crate::geometry::{Frame, Hit};
 use crate::material::{DipoleProfiles, FresnelTransmission, Material, Translucent};
@@ -148,7 +148,7 @@ impl EntryCounts {
 /// A rendered frame and its entry statistics.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImageSpaceFrame {
-    pub image: Image,
+    pub image: SampleMeans,
     pub entries: EntryCounts,
 }
 
@@ -547,7 +547,7 @@ pub fn render(
         sum
     };
     ImageSpaceFrame {
-        image: Image {
+        image: SampleMeans {
             width: gbuffer.width,
             height: gbuffer.height,
             pixels,

@@ -47,7 +47,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use glam::Vec3;
 use restir::rng::{Stream, StreamKey};
 
-use super::pt::{self, Image, PtSettings};
+use super::pt::{self, PtSettings, SampleMeans};
 use crate::InputError;
 use crate::bssrdf::{EntryPoint, ExitPoint, bssrdf_of_profile};
 use crate::geometry::Hit;
@@ -460,7 +460,7 @@ pub fn render<L: ExitLighting, F: Fn(u32) -> L + Sync>(
     first_sample: u32,
     spp: u32,
     lighting_for: F,
-) -> Result<(Image, u64), InputError> {
+) -> Result<(SampleMeans, u64), InputError> {
     let media = Medium::of_scene(scene)?;
     let truncated = AtomicU64::new(0);
     let image = pt::render_pixels(

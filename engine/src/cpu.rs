@@ -77,7 +77,7 @@ pub(crate) fn run(
         .passes()
         .filter(|(_, step)| step.spec.is_some_and(|s| s.shift().is_some()))
         .map(|(_, step)| step.label.clone());
-    let mut frame_state = Frame {
+    let mut state = RunState {
         scene,
         config,
         shade: preset.shade,
@@ -99,18 +99,18 @@ pub(crate) fn run(
     let mut nan_count = 0;
     for frame in 0..config.frames {
         if config.collect_diagnostics && frame + 1 == config.frames {
-            frame_state.recorder = Some(Recorder::new(width, height, frame, pass_labels.clone()));
+            state.recorder = Some(Recorder::new(width, height, frame, pass_labels.clone()));
         }
         for (step, seconds) in plan.steps.iter().zip(&mut seconds) {
             let start = Instant::now();
-            if let Some((image, nans)) = frame_state.step(frame, step)? {
+            if let Some((image, nans)) = state.step(frame, step)? {
                 frames.push(image);
                 nan_count += nans;
             }
             seconds.push(start.elapsed().as_secs_f64());
         }
-        frame_state.rotation = frame_state.rotation.next(&plan);
-        frame_state.previous_gbuffer = frame_state.gbuffer.take();
+        state.rotation = state.rotation.next(&plan);
+        state.previous_gbuffer = state.gbuffer.take();
     }
     let timings = plan
         .steps
@@ -118,22 +118,23 @@ pub(crate) fn run(
         .zip(seconds)
         .map(|(step, seconds)| PassTiming::new(step.label.clone(), seconds))
         .collect();
-    let last = frame_state.rotation.buffer(Slot::Previous);
-    let mut diagnostics = frame_state.counters.as_ref().map(Counters::finish);
-    if let (Some(d), Some(recorder)) = (&mut diagnostics, frame_state.recorder.take()) {
-        d.telemetry = Some(recorder.finish(&frame_state.reservoirs[last]));
+    let last = state.rotation.buffer(Slot::Previous);
+    let mut diagnostics = state.counters.as_ref().map(Counters::finish);
+    if let (Some(d), Some(recorder)) = (&mut diagnostics, state.recorder.take()) {
+        d.telemetry = Some(recorder.finish(&state.reservoirs[last]));
     }
     Ok(Run {
         frames,
         timings,
         diagnostics,
         nan_count,
-        reservoirs: std::mem::take(&mut frame_state.reservoirs[last]),
+        reservoirs: std::mem::take(&mut state.reservoirs[last]),
     })
 }
 
-/// The CPU backend's buffers of a run: the plan's frame resources, and the diagnostics.
-struct Frame<'a> {
+/// The CPU backend's state across the frames of a run: the plan's frame resources (reservoirs,
+/// G-buffers, their rotation) and the diagnostics.
+struct RunState<'a> {
     scene: &'a Scene,
     config: &'a RunConfig,
     shade: Shade,
@@ -153,7 +154,7 @@ struct Frame<'a> {
     recorder: Option<Recorder>,
 }
 
-impl Frame<'_> {
+impl RunState<'_> {
     /// Runs `step` of frame `frame`; shade returns the frame's image and its non-finite count.
     fn step(&mut self, frame: u32, step: &Step) -> Result<Option<(Image, u64)>, PipelineError> {
         let scene = self.scene;

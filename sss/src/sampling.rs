@@ -57,7 +57,7 @@ pub fn invert_cosine_hemisphere(axis: Vec3, dir: Vec3) -> [f32; 2] {
 }
 
 /// Uniform barycentrics `[b0, b1, b2]` on a triangle: `b0 = 1 − √u₀`, `b1 = √u₀ (1 − u₁)`,
-/// `b2 = √u₀ u₁` [Shirley & Chiu 1997 / pbrt-v3 `UniformSampleTriangle` up to vertex order];
+/// `b2 = √u₀ u₁` [pbrt-v3 §13.6.5 `UniformSampleTriangle`, with b1 and b2 swapped];
 /// the point `b0 v0 + b1 v1 + b2 v2` has density [`uniform_triangle_pdf`].
 pub fn sample_uniform_triangle(u: [f32; 2]) -> [f32; 3] {
     let su = u[0].sqrt();

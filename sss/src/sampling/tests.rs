@@ -24,6 +24,26 @@ fn same_angle(u: f32, back: f32, tolerance: f32) -> bool {
     d.min(1.0 - d) < tolerance
 }
 
+/// Chi-square p-value of `n` draws from stream `purpose`, each binned by `cell`, against the
+/// cell probabilities `expected` (which must sum to 1: each test derives them from its pdf).
+fn chi_square_p(
+    purpose: u32,
+    n: usize,
+    expected: &[f64],
+    cell: impl Fn(&mut Stream) -> usize,
+) -> f64 {
+    assert!(
+        (expected.iter().sum::<f64>() - 1.0).abs() < 1e-4,
+        "probabilities sum to 1"
+    );
+    let mut s = stream(purpose);
+    let mut observed = vec![0.0; expected.len()];
+    for _ in 0..n {
+        observed[cell(&mut s)] += 1.0;
+    }
+    chi_square_gof(&observed, expected, 5.0).p_value
+}
+
 #[test]
 fn disk_sampling_inverts() {
     let mut s = stream(0xD15);
@@ -63,14 +83,10 @@ fn disk_sampling_matches_its_pdf() {
             uniform_disk_pdf(radius) as f64 * area
         })
         .collect();
-    assert!((expected.iter().sum::<f64>() - 1.0).abs() < 1e-6);
     let p_value = |sample: &dyn Fn(f32, f32) -> Vec2| {
-        let mut s = stream(0xD16);
-        let mut observed = vec![0.0; RINGS * SECTORS];
-        for _ in 0..N {
-            observed[cell(sample(s.next_f32(), s.next_f32()))] += 1.0;
-        }
-        chi_square_gof(&observed, &expected, 5.0).p_value
+        chi_square_p(0xD16, N, &expected, |s| {
+            cell(sample(s.next_f32(), s.next_f32()))
+        })
     };
     let p = p_value(&|u, v| sample_uniform_disk(radius, u, v));
     assert!(
@@ -87,10 +103,10 @@ fn disk_sampling_matches_its_pdf() {
 
 #[test]
 fn cosine_sampling_inverts() {
-    let mut stream = StreamKey::new(0, 0, 0, 0xC05).stream(5);
+    let mut s = stream(0xC05);
     let axis = Vec3::new(0.0, -0.6, 0.8);
     for _ in 0..10_000 {
-        let u = [stream.next_f32(), stream.next_f32()];
+        let u = [s.next_f32(), s.next_f32()];
         let back = invert_cosine_hemisphere(axis, sample_cosine_hemisphere(axis, u));
         assert!((back[0] - u[0]).abs() < 1e-3, "{u:?} → {back:?}");
         assert!(
@@ -106,12 +122,6 @@ fn cosine_sampling_inverts() {
 fn cosine_chi_square_p(sample: impl Fn(Vec3, [f32; 2]) -> Vec3, n: usize) -> f64 {
     const BINS: usize = 20;
     let axis = Vec3::new(0.0, -0.6, 0.8);
-    let mut stream = StreamKey::new(0, 0, 0, 0xC06).stream(9);
-    let mut observed = vec![0.0; BINS];
-    for _ in 0..n {
-        let mu = axis.dot(sample(axis, [stream.next_f32(), stream.next_f32()]));
-        observed[((mu.clamp(0.0, 1.0) * BINS as f32) as usize).min(BINS - 1)] += 1.0;
-    }
     let (t, _) = axis.any_orthonormal_pair();
     let density = |mu: f64| {
         let dir = (mu as f32) * axis + (1.0 - mu * mu).max(0.0).sqrt() as f32 * t;
@@ -123,8 +133,10 @@ fn cosine_chi_square_p(sample: impl Fn(Vec3, [f32; 2]) -> Vec3, n: usize) -> f64
             simpson(density, a, a + 1.0 / BINS as f64, 50)
         })
         .collect();
-    assert!((expected.iter().sum::<f64>() - 1.0).abs() < 1e-4);
-    chi_square_gof(&observed, &expected, 5.0).p_value
+    chi_square_p(0xC06, n, &expected, |s| {
+        let mu = axis.dot(sample(axis, [s.next_f32(), s.next_f32()]));
+        ((mu.clamp(0.0, 1.0) * BINS as f32) as usize).min(BINS - 1)
+    })
 }
 
 /// Cosine sampling against its pdf: chi-square in cos θ, 20 bins, N = 100 000, α = 1e-3.
@@ -197,14 +209,10 @@ fn triangle_sampling_matches_its_pdf() {
             uniform_triangle_pdf(vertices) as f64 * row_area / COLUMNS as f64
         })
         .collect();
-    assert!((expected.iter().sum::<f64>() - 1.0).abs() < 1e-5);
     let p_value = |sample: &dyn Fn([f32; 2]) -> [f32; 3]| {
-        let mut s = stream(0x7A2);
-        let mut observed = vec![0.0; ROWS * COLUMNS];
-        for _ in 0..N {
-            observed[cell(sample([s.next_f32(), s.next_f32()]))] += 1.0;
-        }
-        chi_square_gof(&observed, &expected, 5.0).p_value
+        chi_square_p(0x7A2, N, &expected, |s| {
+            cell(sample([s.next_f32(), s.next_f32()]))
+        })
     };
     let p = p_value(&sample_uniform_triangle);
     assert!(
@@ -251,13 +259,9 @@ fn truncated_exponential_matches_its_pdf() {
         })
         .collect();
     let p_value = |sample: &dyn Fn(f32) -> f32| {
-        let mut s = stream(0xE2);
-        let mut observed = vec![0.0; BINS];
-        for _ in 0..N {
-            let t = sample(s.next_f32());
-            observed[((t / d * BINS as f32) as usize).min(BINS - 1)] += 1.0;
-        }
-        chi_square_gof(&observed, &expected, 5.0).p_value
+        chi_square_p(0xE2, N, &expected, |s| {
+            ((sample(s.next_f32()) / d * BINS as f32) as usize).min(BINS - 1)
+        })
     };
     let p = p_value(&|u| sample_truncated_exponential(sigma_t, d, u));
     assert!(

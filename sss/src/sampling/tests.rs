@@ -18,6 +18,12 @@ fn simpson(f: impl Fn(f64) -> f64, a: f64, b: f64, n: usize) -> f64 {
     (f(a) + f(b) + inner) * h / 3.0
 }
 
+// Round-trip tolerances: the random numbers are ≤ 1 and each warp and inverse is a handful of
+// f32 operations (a few ulps, ~1e-7), so 1e-5 leaves two orders of margin; an angle read back
+// with atan2 loses precision as the point nears the pole or centre (1e-4, and not checked
+// below u₀ = 1e-6 where it is undefined). The cosine round trip keeps the 1e-3 it was written
+// with: the direction is normalised and reprojected on a basis, which costs more.
+
 /// The angle of `u` and of `back` agree modulo 1 (or the radius is too small to carry one).
 fn same_angle(u: f32, back: f32, tolerance: f32) -> bool {
     let d = (u - back).abs();

@@ -25,9 +25,10 @@ use glam::{DVec3, Vec3};
 use methods::adaptive::cpu::{self as adaptive, AdaptiveParams, perceptual_luminance};
 use methods::image_space::cpu::{self as image_space, EntryCounts, ImageSpaceSettings};
 use restir::stats::{Summary, equivalence, student_t_quantile};
+use sss::color::luminance;
 use sss::integrator::pt::{self, PtSettings};
 use sss::profile::ProfileKind;
-use sss::scene::{GBuffer, Scene, luminance};
+use sss::scene::{GBuffer, Scene};
 
 use lab::regions::{Region, Regions};
 

@@ -28,7 +28,7 @@ layout(std430, binding = 4) readonly buffer FilterIn { vec4 filter_in[]; };
 layout(std430, binding = 5) writeonly buffer FilterOut { vec4 filter_out[]; };
 layout(std430, binding = 6) buffer Cut { uint cut; };
 
-// sss::scene::luminance.
+// sss::color::luminance.
 float svgf_luminance(vec3 c) {
     return glam_dot(c, vec3(0.2126, 0.7152, 0.0722));
 }

@@ -26,7 +26,7 @@ layout(local_size_x = 64) in;
 // std::f32::consts::TAU as an f32.
 const float REUSE_TAU = 6.28318548202514648;
 
-// reuse::sample_disk: r = R sqrt(u1), phi = 2 pi u2 (density 1 / (pi R^2)).
+// sss::sampling::sample_uniform_disk: r = R sqrt(u1), phi = 2 pi u2 (density 1 / (pi R^2)).
 vec2 reuse_sample_disk(float radius, float u_radius, float u_angle) {
     precise float r = radius * sqrt(u_radius);
     precise float phi = REUSE_TAU * u_angle;

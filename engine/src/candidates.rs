@@ -98,8 +98,9 @@ pub fn shadow_test(domain: &SssDomain, canonical: &mut Reservoir<SssSample>) {
 mod tests {
     use super::*;
     use glam::Vec3;
+    use sss::color::luminance;
     use sss::integrator::pt::{PtSettings, Shading, estimate, sample_stream};
-    use sss::scene::{GBuffer, Scene, luminance};
+    use sss::scene::{GBuffer, Scene};
 
     fn scene(name: &str, size: u32) -> Scene {
         let mut scene = Scene::builtin(name).unwrap();

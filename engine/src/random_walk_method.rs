@@ -247,7 +247,8 @@ pub fn render(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use sss::scene::{Lights, luminance};
+    use sss::color::luminance;
+    use sss::scene::Lights;
 
     fn bumpy(w: u32, h: u32) -> Scene {
         let scene = Scene::builtin("bumpy").expect("built-in");

@@ -11,6 +11,7 @@ use restir::reservoir::{Reservoir, cap_confidence};
 use restir::rng::StreamKey;
 use restir::shift::{Domain, Fail, Shift};
 use shifts::{SssDomain, SssSample, Target, resolve_deferred_index};
+use sss::sampling::sample_uniform_disk;
 use sss::scene::{GBuffer, GPixel, Scene};
 
 use crate::purpose;
@@ -286,7 +287,7 @@ pub fn spatial(
     let mut rng = StreamKey::new(pixel, frame, input.pass, purpose::NEIGHBOURS).stream(input.seed);
     let mut taken = Vec::with_capacity(neighbours as usize);
     for _ in 0..neighbours {
-        let offset = sample_disk(radius, rng.next_f32(), rng.next_f32());
+        let offset = sample_uniform_disk(radius, rng.next_f32(), rng.next_f32());
         let q = centre + offset;
         if !(q.x >= 0.0 && q.y >= 0.0 && q.x < width as f32 && q.y < height as f32) {
             continue;
@@ -321,13 +322,6 @@ pub fn spatial(
 /// `max_c d_c` of the receiver's material.
 fn max_d(domain: &SssDomain) -> f32 {
     domain.material().d().max_element()
-}
-
-/// A point uniform in the disk of `radius`: `r = R√u₁`, `φ = 2πu₂` (density `1/(πR²)`).
-pub fn sample_disk(radius: f32, u_radius: f32, u_angle: f32) -> Vec2 {
-    let r = radius * u_radius.sqrt();
-    let phi = std::f32::consts::TAU * u_angle;
-    r * Vec2::new(phi.cos(), phi.sin())
 }
 
 /// The reuse pass `spec` at `pixel`: [`temporal`] or [`spatial`] with the pass's shift, MIS
@@ -525,7 +519,7 @@ mod tests {
         let (mut inner, mut inner_linear) = (0u32, 0u32);
         for _ in 0..n {
             let (u, v) = (rng.next_f32(), rng.next_f32());
-            let p = sample_disk(10.0, u, v);
+            let p = sample_uniform_disk(10.0, u, v);
             assert!(p.length() <= 10.0);
             inner += (p.length() < 5.0) as u32;
             inner_linear += (10.0 * u < 5.0) as u32;

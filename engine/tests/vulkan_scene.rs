@@ -20,8 +20,9 @@ use engine::vulkan::{
 };
 use glam::Vec3;
 use restir::rng::{Stream, StreamKey};
+use sss::color::luminance;
 use sss::material::Material;
-use sss::scene::{GBuffer, LightSample, Scene, luminance};
+use sss::scene::{GBuffer, LightSample, Scene};
 
 /// The run seed of every stream in this file.
 const SEED: u64 = 0x5CE_4E5;

@@ -12,7 +12,6 @@ use sss::scene::{GBuffer, Scene};
 
 use lab::error::Error;
 use lab::method_result::Measured;
-use methods::restir;
 use lab::output::{file_stem, output_dir};
 use lab::progress::Progress;
 use lab::reference_cache::REFERENCE_SEED;
@@ -20,6 +19,7 @@ use lab::regions::{Region, Regions};
 use lab::report::tables::with_ci;
 use lab::scenes::{load_scene, with_resolution};
 use lab::uncertainty::Estimate;
+use methods::restir;
 
 use crate::findings::{self, Quantity, all_above, all_below, mse_below};
 

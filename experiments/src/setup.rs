@@ -12,12 +12,12 @@ use lab::compare::{
     self, Comparison, DEFAULT_BASELINE, Outcome, frame_reference_spp, parse_methods,
 };
 use lab::error::Error;
-use methods::Method;
 use lab::output::write_text;
 use lab::progress::Progress;
 use lab::reference_cache::ReferenceSource;
 use lab::report::{self, Written};
 use lab::scenes::{load_scene, with_resolution};
+use methods::Method;
 
 /// Frames of every experiment's camera trajectory.
 pub const FRAMES: u32 = 16;

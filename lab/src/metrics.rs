@@ -28,11 +28,11 @@
 use glam::DVec3;
 use restir::stats::{Summary, student_t_quantile};
 
-use crate::bias::luminance;
 use crate::reference_cache::FrameReference;
 use crate::regions::{Region, Regions};
 use crate::uncertainty::Estimate;
 use engine::image::{Image, tonemap};
+use sss::color::luminance;
 
 /// ε in the denominator of the relative MSE, in squared radiance units: `(I − R)² / (R² + ε)`
 /// weighs errors of pixels darker than √ε = 0.1 as absolute errors.
@@ -125,7 +125,7 @@ pub fn area_metrics(
             let count = pixels.len() as f64;
             let reference_mean = pixels
                 .iter()
-                .map(|&p| luminance(r[p].as_vec3()))
+                .map(|&p| luminance(r[p].as_vec3().as_dvec3()))
                 .sum::<f64>()
                 / count;
             let (mut squared, mut relative, mut biases) = (
@@ -139,7 +139,7 @@ pub fn area_metrics(
                     let d = image.pixels[p].as_dvec3() - r[p];
                     se += (d * d).element_sum();
                     rel += (d * d * rel_weight(r[p])).element_sum();
-                    y += luminance(image.pixels[p]);
+                    y += luminance(image.pixels[p].as_dvec3());
                 }
                 squared.push(se / (3.0 * count));
                 relative.push(rel / (3.0 * count));
@@ -270,8 +270,8 @@ pub fn error_maps(image: &Image, reference: &[DVec3]) -> Option<(Vec<f64>, Vec<f
             .iter()
             .zip(reference)
             .map(|(&x, &r)| {
-                let abs = luminance((x.as_dvec3() - r).abs().as_vec3());
-                (abs, abs / (luminance(r.as_vec3()) + floor))
+                let abs = luminance((x.as_dvec3() - r).abs().as_vec3().as_dvec3());
+                (abs, abs / (luminance(r.as_vec3().as_dvec3()) + floor))
             })
             .unzip(),
     )

@@ -2,9 +2,9 @@
 //! deterministic image.
 
 use engine::random_walk_method::render;
-use lab::bias::luminance;
 use lab::regions::{Region, Regions};
 use restir::stats::Summary;
+use sss::color::luminance;
 use sss::scene::{GBuffer, Scene};
 
 fn bumpy(w: u32, h: u32) -> Scene {
@@ -36,7 +36,7 @@ fn walks_render_a_plausible_deterministic_image() {
         let values: Vec<f64> = regions
             .pixels(r)
             .iter()
-            .map(|&p| luminance(a.pixels[p]))
+            .map(|&p| luminance(a.pixels[p].as_dvec3()))
             .collect();
         Summary::from_samples(&values).mean
     };

@@ -89,7 +89,7 @@ pub fn path_trace(
 }
 
 /// The `f32` image of an integrator's `f64` per-pixel means.
-pub fn to_image(image: &pt::Image) -> Image {
+pub fn to_image(image: &pt::SampleMeans) -> Image {
     Image {
         width: image.width,
         height: image.height,

@@ -12,9 +12,9 @@ use lab::bias::{
     summarize, test_bytes,
 };
 use lab::limits::MAX_REPLICAS;
-use methods::Method;
 use lab::reference_cache::REFERENCE_SEED;
 use lab::regions::Regions;
+use methods::Method;
 use restir::stats::Verdict;
 use serde_json::{Value, json};
 use sss::limits::{self, MAX_SPP};

@@ -7,8 +7,8 @@ use std::path::PathBuf;
 
 use clap::Args;
 use lab::draw::false_colour_map;
-use methods::Method;
 use lab::output::{file_stem, output_dir};
+use methods::Method;
 use serde_json::json;
 
 use sss::limits;

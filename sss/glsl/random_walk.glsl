@@ -182,7 +182,7 @@ vec3 random_walk_reflect(vec3 dir, vec3 n) {
     return r;
 }
 
-// sample_cosine: a cosine-distributed direction about `axis` (Malley); pdf random_walk_cosine_pdf.
+// sampling::sample_cosine_hemisphere: a cosine-distributed direction about `axis` (Malley); pdf random_walk_cosine_pdf.
 vec3 random_walk_sample_cosine(vec3 axis, vec2 u) {
     precise float r = sqrt(u.x);
     precise float phi = RANDOM_WALK_TAU * u.y;
@@ -196,7 +196,7 @@ vec3 random_walk_sample_cosine(vec3 axis, vec2 u) {
     return glam_normalize(d);
 }
 
-// cosine_pdf: max(0, cos theta) / pi.
+// sampling::cosine_hemisphere_pdf: max(0, cos theta) / pi.
 float random_walk_cosine_pdf(vec3 axis, vec3 dir) {
     precise float p = rust_max(glam_dot(axis, dir), 0.0) * RANDOM_WALK_FRAC_1_PI;
     return p;

@@ -98,7 +98,7 @@ uint single_scatter_pick_channel(vec3 probabilities, float u) {
     return last;
 }
 
-// sample_distance: t = -ln(1 - u (1 - e^{-sigma_t d})) / sigma_t [000 slide 56] (d = inf: the
+// sampling::sample_truncated_exponential: t = -ln(1 - u (1 - e^{-sigma_t d})) / sigma_t [000 slide 56] (d = inf: the
 // plain exponential).
 float single_scatter_sample_distance(float sigma_t, float d, float u) {
     precise float t = -burley_log1p(u * burley_expm1(-sigma_t * d)) / sigma_t;

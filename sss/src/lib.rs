@@ -4,6 +4,7 @@
 //! random walk).
 
 pub mod bssrdf;
+pub mod color;
 /// What the GLSL twins (`sss/glsl/`) share with this crate: per twin its constants and kinds
 /// (`twin::contract!`; rendered to `contract/sss.glsl` by `engine/build.rs`). The modules below
 /// re-export them where they are used.
@@ -14,6 +15,7 @@ pub mod limits;
 pub mod material;
 pub mod profile;
 pub mod random_walk;
+pub mod sampling;
 pub mod scene;
 
 pub use error::InputError;

@@ -12,9 +12,10 @@
 use geometry::Ray;
 use glam::{DVec3, Vec3, Vec3A};
 use sss::bssrdf::TechniqueSelection;
+use sss::color::luminance;
 use sss::integrator::{HitPolicy, PtSettings, Reference, ReferenceConfig, Shard};
 use sss::material::Material;
-use sss::scene::{GBuffer, GPixel, Scene, luminance};
+use sss::scene::{GBuffer, GPixel, Scene};
 
 /// `A ∫_{x ≥ 0} R̄_d(‖x2 − x1‖) dA` for x1 at signed distance `s` from the shadow edge, R̄ = 0
 /// beyond `r_max`: composite 5-point Gauss–Legendre in r on [0, |s|] and [|s|, r_max].

@@ -8,9 +8,10 @@
 use geometry::Hit;
 use glam::Vec3;
 use restir::stats::{Welford, holm, welch};
+use sss::color::luminance;
 use sss::integrator::pt::{estimate, sample_stream};
 use sss::integrator::{HitPolicy, PtSettings, Shading};
-use sss::scene::{GBuffer, GPixel, Scene, luminance};
+use sss::scene::{GBuffer, GPixel, Scene};
 
 const N: u32 = 60_000;
 const ALPHA: f64 = 1e-3;

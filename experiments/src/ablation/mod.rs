@@ -20,7 +20,6 @@ use sss::scene::{GBuffer, Scene};
 use lab::compare::{Comparison, DEFAULT_BASELINE, parse_methods};
 use lab::error::Error;
 use lab::method_result::{Measured, MethodResult};
-use methods::restir;
 use lab::metrics::Area;
 use lab::output::{output_dir, write_text};
 use lab::progress::Progress;
@@ -30,6 +29,7 @@ use lab::report::tables::milliseconds;
 use lab::scenes::{load_scene, with_resolution};
 use lab::telemetry::{self, RegionSummary};
 use lab::uncertainty::INTERVAL_METHOD;
+use methods::restir;
 
 use super::setup::{FRAMES, Report, Settings, compare};
 use tables::{findings, markdown, row_json, telemetry_markdown};

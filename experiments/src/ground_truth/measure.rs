@@ -19,8 +19,8 @@
 use engine::Image;
 use restir::stats::{Summary, student_t_quantile, welch};
 
-use lab::bias::luminance;
 use lab::regions::{Region, Regions};
+use sss::color::luminance;
 
 /// Confidence of every interval of the experiment.
 pub const CONFIDENCE: f64 = 0.99;
@@ -111,7 +111,7 @@ impl Measure {
         let luminance_of = |images: &[Image]| -> Vec<Vec<f64>> {
             images
                 .iter()
-                .map(|i| i.pixels.iter().map(|&p| luminance(p)).collect())
+                .map(|i| i.pixels.iter().map(|&p| luminance(p.as_dvec3())).collect())
                 .collect()
         };
         let (estimates, truths) = (luminance_of(replicas), luminance_of(batches));

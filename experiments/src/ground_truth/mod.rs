@@ -28,12 +28,12 @@ pub use measure::{CONFIDENCE, Interval, Measure, RegionMeasure, noise};
 pub use truth::{TRUTH_SEED, TRUTH_VERSION, Truth, TruthKey};
 
 use lab::error::Error;
-use methods::{Method, REGISTRY, restir};
 use lab::output::{output_dir, write_text};
 use lab::progress::Progress;
 use lab::reference_cache::REFERENCE_SEED;
 use lab::regions::Regions;
 use lab::scenes::{SPHERE_PREFIX, load_scene, with_resolution};
+use methods::{Method, REGISTRY, restir};
 use sss::material::MEASURED_NAMES;
 
 use super::setup::{FRAMES, Report, Settings};

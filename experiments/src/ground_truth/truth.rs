@@ -16,9 +16,9 @@ use glam::Vec3;
 use sss::scene::Scene;
 
 use lab::error::Error;
-use methods::Method;
 use lab::output::{file_stem, output_dir};
 use lab::progress::Progress;
+use methods::Method;
 
 /// Seed of batch 0 (ASCII "GRNDTRTH"); batch `b` uses `TRUTH_SEED + b`.
 pub const TRUTH_SEED: u64 = 0x4752_4E44_5452_5448;

@@ -32,13 +32,13 @@ use terms::{
 };
 pub use terms::{TERM_NAMES, Terms};
 
-use lab::bias::luminance;
 use lab::error::Error;
 use lab::output::output_dir;
 use lab::progress::Progress;
 use lab::reference_cache::REFERENCE_SEED;
 use lab::regions::{Region, Regions};
 use lab::scenes::{load_scene, with_resolution};
+use sss::color::luminance;
 
 use super::setup::{FRAMES, Report, Settings};
 
@@ -229,7 +229,7 @@ fn gaps(
                     std::array::from_fn(|t| {
                         pixels
                             .iter()
-                            .map(|&p| luminance(image[p][t].as_vec3()))
+                            .map(|&p| luminance(image[p][t].as_vec3().as_dvec3()))
                             .sum::<f64>()
                             / pixels.len() as f64
                     })

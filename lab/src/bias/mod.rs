@@ -33,15 +33,11 @@ pub use table::Table;
 
 use std::fmt;
 
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 use restir::stats::{Equivalence, Summary, Verdict, equivalence, holm};
+use sss::color::luminance;
 
 use crate::regions::{Region, Regions};
-
-/// Rec. 709 luminance of linear RGB, in `f64` (statistics accumulate in double precision).
-pub fn luminance(rgb: Vec3) -> f64 {
-    Channel::Luminance.of(rgb.as_dvec3())
-}
 
 /// What a row of the bias test measures: one colour channel, or the Rec. 709 luminance.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -77,7 +73,7 @@ impl Channel {
             Channel::Red => rgb.x,
             Channel::Green => rgb.y,
             Channel::Blue => rgb.z,
-            Channel::Luminance => 0.2126 * rgb.x + 0.7152 * rgb.y + 0.0722 * rgb.z,
+            Channel::Luminance => luminance(rgb),
         }
     }
 }

@@ -120,7 +120,7 @@ pub fn reference_images_with(
         );
     }
     let gbuffer = GBuffer::render(scene, frame);
-    let images: Vec<pt::Image> = (0..batches)
+    let images: Vec<pt::SampleMeans> = (0..batches)
         .map(|b| {
             pt::render(
                 scene,

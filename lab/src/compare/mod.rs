@@ -21,13 +21,13 @@ use sss::scene::{GBuffer, Scene};
 
 use crate::error::Error;
 use crate::method_result::{MethodResult, Replica};
-use methods::{Method, MethodError};
 use crate::output::output_dir;
 use crate::progress::Progress;
 use crate::reference_cache::{
     self, FrameReference, Obtained, Provenance, REFERENCE_SEED, ReferenceSource,
 };
 use crate::regions::Regions;
+use methods::{Method, MethodError};
 
 pub use render::equal_time_method;
 use render::{MethodRuns, render_replicas};

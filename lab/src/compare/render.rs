@@ -9,9 +9,9 @@ use sss::scene::Scene;
 use super::{Comparison, EQUAL_TIME_SPEC};
 use crate::error::Error;
 use crate::method_result::Replica;
+use crate::progress::Progress;
 use methods::pt::Pt;
 use methods::{Method, SampleCounts};
-use crate::progress::Progress;
 
 /// One method's replicas as rendered.
 pub(super) struct MethodRuns {

@@ -35,12 +35,13 @@
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
+use geometry::Hit;
 use sss::InputError;
 use sss::bssrdf::RadiusSampling;
-use geometry::Hit;
-use sss::integrator::pt::{self, Image, PtSettings, Shading};
+use sss::color::luminance;
+use sss::integrator::pt::{self, PtSettings, SampleMeans, Shading};
 use sss::material::Material;
-use sss::scene::{GBuffer, Scene, luminance};
+use sss::scene::{GBuffer, Scene};
 
 /// The display gamma of [`perceptual_luminance`].
 pub const GAMMA: f32 = 2.2;
@@ -193,7 +194,7 @@ pub fn perceptual_luminance(rgb: Vec3) -> f32 {
 pub struct AdaptiveFrame {
     pub frame: u32,
     /// The pixel estimates (means of their samples).
-    pub image: Image,
+    pub image: SampleMeans,
     /// Samples taken per pixel (0 without a primary hit).
     pub counts: Vec<u32>,
     /// The history each translucent pixel passes to the next frame (`None` elsewhere).
@@ -202,8 +203,8 @@ pub struct AdaptiveFrame {
 
 impl AdaptiveFrame {
     /// The per-pixel sample counts as an image (the count in every channel).
-    pub fn count_image(&self) -> Image {
-        Image {
+    pub fn count_image(&self) -> SampleMeans {
+        SampleMeans {
             width: self.image.width,
             height: self.image.height,
             pixels: self
@@ -280,7 +281,7 @@ pub fn render_frame(
         .sum();
     AdaptiveFrame {
         frame: gbuffer.frame,
-        image: Image {
+        image: SampleMeans {
             width: gbuffer.width,
             height: gbuffer.height,
             pixels,

@@ -220,7 +220,7 @@ mod tests {
             radius: RadiusSampling::Xie,
             ..PtSettings::default()
         };
-        let f32s = |i: pt::Image| i.pixels.iter().map(|p| p.as_vec3()).collect::<Vec<_>>();
+        let f32s = |i: pt::SampleMeans| i.pixels.iter().map(|p| p.as_vec3()).collect::<Vec<_>>();
         let want = f32s(pt::render(&scene, &gbuffer, &xie, 4, 0, 2));
         assert_eq!(fixed.image.pixels, want);
         let burley = f32s(pt::render(

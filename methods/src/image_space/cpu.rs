@@ -49,9 +49,9 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use restir::rng::{Stream, StreamKey};
 
-use sss::InputError;
 use geometry::{Frame, Hit};
-use sss::integrator::pt::{self, Image, PtSettings, Shading, occluded};
+use sss::InputError;
+use sss::integrator::pt::{self, PtSettings, SampleMeans, Shading, occluded};
 use sss::material::{DipoleProfiles, FresnelTransmission, Material, Translucent};
 use sss::scene::{GBuffer, GPixel, Scene};
 
@@ -148,7 +148,7 @@ impl EntryCounts {
 /// A rendered frame and its entry statistics.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImageSpaceFrame {
-    pub image: Image,
+    pub image: SampleMeans,
     pub entries: EntryCounts,
 }
 
@@ -547,7 +547,7 @@ pub fn render(
         sum
     };
     ImageSpaceFrame {
-        image: Image {
+        image: SampleMeans {
             width: gbuffer.width,
             height: gbuffer.height,
             pixels,

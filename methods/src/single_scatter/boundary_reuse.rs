@@ -52,14 +52,13 @@ use restir::rng::{Stream, StreamKey};
 use restir::shift::{CandidateSampler, Domain, Fail, Shift, Shifted};
 
 use sss::InputError;
-use sss::integrator::pt::{self, Image};
+use sss::color::luminance;
+use sss::integrator::pt::{self, SampleMeans};
 use sss::integrator::single_scatter::{Shading, SingleScatterSettings, estimate, sample_stream};
 use sss::material::{BoundaryKind, Material};
-use sss::random_walk::interface::{cosine_pdf, sample_cosine};
 use sss::random_walk::{Boundary, ExitLighting, Medium, MeshBoundary};
-use sss::scene::{
-    DIRECTIONAL_DISTANCE, GBuffer, GPixel, Light, REPROJECTION_NORMAL_COSINE, Scene, luminance,
-};
+use sss::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
+use sss::scene::{DIRECTIONAL_DISTANCE, GBuffer, GPixel, Light, REPROJECTION_NORMAL_COSINE, Scene};
 
 /// `purpose` of the candidate streams (ASCII "SB" + 1: single-scatter boundary).
 pub const PURPOSE_BOUNDARY_CANDIDATES: u32 = 0x5342_0001;
@@ -239,7 +238,7 @@ impl<'a> CandidateSampler<BoundaryDomain<'a>> for Candidates {
         domain: &BoundaryDomain<'a>,
         rng: &mut Stream,
     ) -> Option<(BoundarySample, f32)> {
-        let dir = sample_cosine(-domain.n1, [rng.next_f32(), rng.next_f32()]);
+        let dir = sample_cosine_hemisphere(-domain.n1, [rng.next_f32(), rng.next_f32()]);
         let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
         let (_, exit, _) = domain.exit(dir)?;
         let s = domain.scene.lights.sample(exit, u)?;
@@ -256,7 +255,7 @@ impl<'a> CandidateSampler<BoundaryDomain<'a>> for Candidates {
         let Some((_, exit, _)) = domain.exit(x.dir) else {
             return 0.0;
         };
-        cosine_pdf(-domain.n1, x.dir) * Candidates::vertex_pdf(domain, x, exit)
+        cosine_hemisphere_pdf(-domain.n1, x.dir) * Candidates::vertex_pdf(domain, x, exit)
     }
 }
 
@@ -559,7 +558,7 @@ where
 pub struct Rendered {
     /// The method's image: the reservoir's boundary term plus the mean of the plain
     /// estimator's single and multiple scattering (Lambert pixels: the path tracer).
-    pub image: Image,
+    pub image: SampleMeans,
     /// The boundary term alone, `f(Y)·W_Y` per pixel.
     pub boundary: Vec<Vec3>,
     /// Chains cut at `max_segments` in the plain part.

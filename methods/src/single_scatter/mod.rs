@@ -203,7 +203,7 @@ impl SingleScatter {
         frames: u32,
         first_shaded: u32,
         seed: u64,
-    ) -> Result<Vec<sss::integrator::Image>, PipelineError> {
+    ) -> Result<Vec<sss::integrator::SampleMeans>, PipelineError> {
         let settings = SingleScatterSettings {
             channel: self.channels,
             ..SingleScatterSettings::default()

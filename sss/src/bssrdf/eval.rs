@@ -8,8 +8,8 @@ use std::f32::consts::FRAC_1_PI;
 use glam::Vec3;
 
 use super::probe::{EntryPoint, ExitPoint};
+use crate::color::luminance;
 use crate::material::Translucent;
-use crate::scene::luminance;
 
 /// `S = (A/π) R̄_d(‖x1 − x2‖) F_t(n1·ωo) F_t(n2·ωi)` per channel [001 Eq. 2–3], truncated at
 /// `r_max` of the widest channel (x1's cached profiles, equal to [`Translucent::profile_rgb`]);

@@ -10,5 +10,5 @@ pub mod reference;
 pub mod single_scatter;
 
 pub use exact::ExactSum;
-pub use pt::{HitPolicy, Image, PtSettings, Shading};
+pub use pt::{HitPolicy, PtSettings, SampleMeans, Shading};
 pub use reference::{Reference, ReferenceConfig, Shard};

@@ -66,9 +66,12 @@ impl Default for PtSettings {
     }
 }
 
-/// A rendered frame: per-pixel means in `f64`, row-major from the top row.
+/// An integrator's per-pixel result, row-major from the top row: the mean of each pixel's
+/// samples, accumulated in `f64`, and how many samples were left out of the means because they
+/// were not finite. Statistics read it as it is; outputs convert it to the `f32` image they
+/// write (`engine::Image`).
 #[derive(Clone, Debug, PartialEq)]
-pub struct Image {
+pub struct SampleMeans {
     pub width: u32,
     pub height: u32,
     pub pixels: Vec<DVec3>,
@@ -269,7 +272,7 @@ pub fn render(
     seed: u64,
     first_sample: u32,
     spp: u32,
-) -> Image {
+) -> SampleMeans {
     render_pixels(
         gbuffer,
         first_sample..first_sample + spp,
@@ -284,14 +287,14 @@ pub fn render(
 /// The mean over `samples` of `sample(state, pixel, sample, hits)` for every pixel of `gbuffer`
 /// with a primary hit, `state = prepare(pixel, x1)` once per pixel (rayon over rows; a sample
 /// that is a function of its arguments gives the same bits for any thread count). Non-finite
-/// samples count as 0 in the mean and are counted in [`Image::nonfinite`]; pixels without a hit
-/// are 0.
+/// samples count as 0 in the mean and are counted in [`SampleMeans::nonfinite`]; pixels
+/// without a hit are 0.
 pub fn render_pixels<S>(
     gbuffer: &GBuffer,
     samples: std::ops::Range<u32>,
     prepare: impl Fn(u32, &GPixel) -> S + Sync,
     sample: impl Fn(&S, u32, u32, &mut Vec<Hit>) -> Vec3 + Sync,
-) -> Image {
+) -> SampleMeans {
     let width = gbuffer.width as usize;
     let spp = samples.len();
     let mut pixels = vec![DVec3::ZERO; gbuffer.pixels.len()];
@@ -324,7 +327,7 @@ pub fn render_pixels<S>(
             nonfinite
         })
         .sum();
-    Image {
+    SampleMeans {
         width: gbuffer.width,
         height: gbuffer.height,
         pixels,

@@ -48,7 +48,7 @@ use geometry::Hit;
 use glam::Vec3;
 use restir::rng::{Stream, StreamKey};
 
-use super::pt::{self, Image, PtSettings};
+use super::pt::{self, PtSettings, SampleMeans};
 use crate::InputError;
 use crate::bssrdf::{EntryPoint, ExitPoint, bssrdf_of_profile};
 use crate::material::{FresnelTransmission, Material};
@@ -57,6 +57,7 @@ use crate::random_walk::{
     Boundary, Crossing, ExitLighting, Medium, MeshBoundary, PhaseFunction, cross, enter, incident,
     roulette,
 };
+use crate::sampling::sample_truncated_exponential;
 use crate::scene::{GBuffer, GPixel, Scene};
 
 pub use crate::contract::single_scatter::{
@@ -131,14 +132,11 @@ pub fn pick_channel(probabilities: Vec3, u: f32) -> usize {
     last
 }
 
-/// A distance in `(0, d)` from the exponential of extinction `sigma_t` truncated to the chord:
-/// `t = −ln(1 − u(1 − e^{−σt d}))/σt` [000 slide 56] (`d = ∞`: the plain exponential).
-pub fn sample_distance(sigma_t: f32, d: f32, u: f32) -> f32 {
-    -(u * (-sigma_t * d).exp_m1()).ln_1p() / sigma_t
-}
-
-/// The density of a distance drawn by [`sample_distance`] after picking the channel with
-/// `probabilities`: `Σ_c P_c σt,c e^{−σt,c t} / (1 − e^{−σt,c d})`.
+/// The density of a distance drawn by [`sample_truncated_exponential`] (extinction `σt,c`,
+/// truncated to the chord `d`) after picking the channel with `probabilities`: the mixture
+/// `Σ_c P_c σt,c e^{−σt,c t} / (1 − e^{−σt,c d})` of
+/// [`crate::sampling::truncated_exponential_pdf`], written out with `P_c σt,c` multiplied
+/// first (the order its GLSL twin keeps).
 pub fn distance_pdf(sigma_t: Vec3, probabilities: Vec3, d: f32, t: f32) -> f32 {
     (0..3)
         .filter(|&c| probabilities[c] > 0.0)
@@ -204,7 +202,7 @@ fn scatter_on_chord<B: Boundary + ?Sized, P: PhaseFunction, L: ExitLighting>(
 ) -> Option<Vec3> {
     let channel = pick_channel(probabilities, stream.next_f32());
     let sigma_t = medium.sigma_t();
-    let t = sample_distance(sigma_t[channel], d, stream.next_f32());
+    let t = sample_truncated_exponential(sigma_t[channel], d, stream.next_f32());
     let pdf = distance_pdf(sigma_t, probabilities, d, t);
     let scattered = medium
         .phase()
@@ -462,7 +460,7 @@ pub fn render<L: ExitLighting, F: Fn(u32) -> L + Sync>(
     first_sample: u32,
     spp: u32,
     lighting_for: F,
-) -> Result<(Image, u64), InputError> {
+) -> Result<(SampleMeans, u64), InputError> {
     let media = Medium::of_scene(scene)?;
     let truncated = AtomicU64::new(0);
     let image = pt::render_pixels(

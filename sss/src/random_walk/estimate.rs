@@ -19,11 +19,12 @@ use glam::Vec3;
 use restir::rng::Stream;
 
 use super::boundary::Boundary;
-use super::interface::{cosine_pdf, fresnel_dielectric, refract, sample_cosine};
+use super::interface::{fresnel_dielectric, refract};
 use super::lighting::ExitLighting;
 use super::medium::{Interface, Medium};
 use super::phase::PhaseFunction;
 use super::walk::{ExitDirection, WalkEnd, WalkSettings, walk};
+use crate::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
 
 /// One sample of [`estimate_exitant`], with how its walk ended (to count truncations);
 /// `Terminated` also when `wo` is below the surface (no walk is started).
@@ -102,7 +103,7 @@ pub fn enter(interface: Interface, n1: Vec3, wo: Vec3, stream: &mut Stream) -> O
         }
         // Lambertian transmission: cosine-sampled inward direction, f cos / pdf = 1.
         Interface::Diffuse => Some((
-            sample_cosine(-n1, [stream.next_f32(), stream.next_f32()]),
+            sample_cosine_hemisphere(-n1, [stream.next_f32(), stream.next_f32()]),
             1.0,
         )),
     }
@@ -125,7 +126,7 @@ pub fn incident<L: ExitLighting>(
             if let Some(light) =
                 lighting.sample(point, normal, [stream.next_f32(), stream.next_f32()])
             {
-                let p_escape = cosine_pdf(normal, light.wi);
+                let p_escape = cosine_hemisphere_pdf(normal, light.wi);
                 if p_escape > 0.0 {
                     let mis = if light.is_delta {
                         1.0
@@ -136,8 +137,8 @@ pub fn incident<L: ExitLighting>(
                 }
             }
             // Escape direction, cosine-sampled: f·cos/p = 1.
-            let out = sample_cosine(normal, [stream.next_f32(), stream.next_f32()]);
-            let p_escape = cosine_pdf(normal, out);
+            let out = sample_cosine_hemisphere(normal, [stream.next_f32(), stream.next_f32()]);
+            let p_escape = cosine_hemisphere_pdf(normal, out);
             if p_escape > 0.0 {
                 let p_light = lighting.pdf(point, normal, out);
                 total += p_escape / (p_escape + p_light) * lighting.radiance(point, out);

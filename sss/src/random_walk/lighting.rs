@@ -34,8 +34,8 @@ pub(crate) mod test_support {
     use glam::Vec3;
 
     use super::{ExitLighting, LightSample};
-    use crate::random_walk::interface::{cosine_pdf, sample_cosine};
     use crate::random_walk::phase::ISOTROPIC;
+    use crate::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
 
     /// Uniform environment of radiance `radiance`, sampled uniformly over the sphere, with
     /// `pdf_scale ≠ 1` misreporting the density (negative control). With `delta`, each sample is
@@ -50,8 +50,8 @@ pub(crate) mod test_support {
     impl ExitLighting for Furnace {
         fn sample(&self, _: Vec3, normal: Vec3, u: [f32; 2]) -> Option<LightSample> {
             if self.delta {
-                let wi = sample_cosine(normal, u);
-                let radiance_over_pdf = self.radiance / cosine_pdf(normal, wi);
+                let wi = sample_cosine_hemisphere(normal, u);
+                let radiance_over_pdf = self.radiance / cosine_hemisphere_pdf(normal, wi);
                 return Some(LightSample {
                     wi,
                     radiance_over_pdf,

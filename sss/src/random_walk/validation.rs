@@ -11,10 +11,11 @@ use restir::stats::{Equivalence, Summary, Verdict, equivalence};
 use crate::material::fresnel::fresnel_by_angles;
 
 use super::boundary::{Boundary, HalfSpace, MeshBoundary, Sphere};
-use super::interface::{fresnel_dielectric, refract, sample_cosine};
+use super::interface::{fresnel_dielectric, refract};
 use super::medium::{Interface, Medium};
 use super::phase::{HenyeyGreenstein, ISOTROPIC, PhaseFunction, PhaseSample};
 use super::walk::{WalkEnd, WalkSettings, walk};
+use crate::sampling::sample_cosine_hemisphere;
 
 /// Gauss–Legendre nodes and weights on [0, 1] (Newton iteration on `P_n`).
 pub(crate) fn gauss_legendre_01(n: usize) -> Vec<(f64, f64)> {
@@ -304,7 +305,7 @@ fn energy_tally<B: Boundary + ?Sized>(
         let mut sum = [0.0f64; 3];
         for i in 0..walks {
             let mut stream = StreamKey::new(i, replica, 0xE4E2, 2).stream(seed);
-            let dir = sample_cosine(-n1, [stream.next_f32(), stream.next_f32()]);
+            let dir = sample_cosine_hemisphere(-n1, [stream.next_f32(), stream.next_f32()]);
             let end = walk(boundary, medium, x1, dir, &settings, &mut stream);
             let weight = match end {
                 WalkEnd::Exited(exit) => {

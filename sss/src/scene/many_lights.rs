@@ -6,7 +6,8 @@ use std::f32::consts::PI;
 use glam::Vec3;
 use restir::rng::StreamKey;
 
-use super::light::{Light, luminance};
+use super::light::Light;
+use crate::color::luminance;
 
 /// `purpose` of the stream that places generated light `i` (`pixel = i`).
 const MANY_LIGHTS_PURPOSE: u32 = 0x11A7_0001;

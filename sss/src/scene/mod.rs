@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 
 pub use camera::{Camera, FRAMES};
 pub use gbuffer::{GBuffer, GPixel, REPROJECTION_DEPTH_TOLERANCE, REPROJECTION_NORMAL_COSINE};
-pub use light::{DIRECTIONAL_DISTANCE, Light, LightSample, Lights, luminance};
+pub use light::{DIRECTIONAL_DISTANCE, Light, LightSample, Lights};
 pub use many_lights::ManyLights;
 
 use geometry::Geometry;

@@ -5,7 +5,7 @@
 //! edge-stopping weight) is not bit-identical on a device.
 
 use glam::Vec3;
-use sss::scene::luminance;
+use sss::color::luminance;
 
 use super::Params;
 use crate::contract::{SvgfHistory, SvgfPixel};

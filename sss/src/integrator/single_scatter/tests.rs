@@ -78,7 +78,7 @@ fn distance_sampling_inverts_its_truncated_cdf() {
     // on an infinite one, and stays inside the chord.
     for (sigma, d) in [(2.0f32, 0.7f32), (0.3, 5.0), (4.0, f32::INFINITY)] {
         for u in [0.0f32, 1e-6, 0.25, 0.5, 0.9, 0.999_999] {
-            let t = sample_distance(sigma, d, u);
+            let t = sample_truncated_exponential(sigma, d, u);
             let cdf =
                 -(-(sigma as f64) * t as f64).exp_m1() / -(-(sigma as f64) * d as f64).exp_m1();
             assert!(

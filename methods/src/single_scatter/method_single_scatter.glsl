@@ -34,8 +34,8 @@
 
 layout(local_size_x = 64) in;
 
-// SingleScatterParams (methods/src/single_scatter/contract.rs): spp, the sample this dispatch runs, the
-// ChannelSelection and PtHits codes, max_segments.
+// SingleScatterParams (methods/src/single_scatter/contract.rs): spp, the sample this dispatch
+// runs, the ChannelSelection and PtHits codes, max_segments.
 #include "contract/single_scatter_params.glsl"
 
 #define SCENE_BINDING 0

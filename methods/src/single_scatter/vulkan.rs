@@ -11,10 +11,10 @@
 //! transcendentals the GPU must not redo). Binding 12 carries each pixel's light-selection stream,
 //! sum and tallies between dispatches ([`SingleScatterPixelState`]).
 //!
-//! **One dispatch per sample**, as the random walk (`engine::vulkan::render_random_walk`): lavapipe cuts every
-//! loop of an invocation group after 65 535 iterations; the kernel counts the dispatches where it
-//! did, [`SingleScatterImage::cut`] sums them, and a caller must treat a non-zero count as a
-//! failed render.
+//! **One dispatch per sample**, as the random walk ([`engine::vulkan::render_random_walk`]):
+//! lavapipe cuts every loop of an invocation group after 65 535 iterations; the kernel counts the
+//! dispatches where it did, [`SingleScatterImage::cut`] sums them, and a caller must treat a
+//! non-zero count as a failed render.
 
 use bytemuck::{Pod, Zeroable};
 use engine::PipelineError;

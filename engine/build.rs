@@ -247,8 +247,14 @@ fn main() {
     let mut includes: Vec<PathBuf> = INCLUDE_DIRS.iter().map(|dir| manifest.join(dir)).collect();
     includes.push(generated.clone());
     // The include path of the engine's GLSL, for crates whose kernels include it (`links =
-    // "reshift_engine"`: they read `DEP_RESHIFT_ENGINE_GLSL_INCLUDE`, e.g. methods/build.rs).
-    let path = env::join_paths(&includes).expect("include paths without the separator");
+    // "reshift_engine"`: they read `DEP_RESHIFT_ENGINE_GLSL_INCLUDE`, e.g. methods/build.rs):
+    // the twins, the generated headers and the engine's shared building blocks (`glsl/include/`,
+    // which the engine's own kernels include relative to themselves).
+    let published = includes
+        .iter()
+        .cloned()
+        .chain([manifest.join("glsl/include")]);
+    let path = env::join_paths(published).expect("include paths without the separator");
     println!("cargo::metadata=glsl_include={}", path.to_string_lossy());
     let Some(glslc) = Glslc::find() else {
         println!(

@@ -183,19 +183,6 @@ twin::contract! {
         pub pad: [u32; 7],
     }
 
-    /// Push constants of `method_single_scatter`: `spp`, the sample this dispatch runs (one
-    /// dispatch per sample) and `SingleScatterSettings`' knobs the kernel takes (the
-    /// `ChannelSelection` code, the `PtHits` code of the diffusion's probe, `max_segments`).
-    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
-    pub struct SingleScatterParams in push_constant params {
-        pub spp: u32,
-        pub sample_index: u32,
-        pub channel_selection: u32,
-        pub hits: u32,
-        pub max_segments: u32,
-        pub pad: [u32; 3],
-    }
-
     /// A pixel's running sum between the dispatches of `method_pt`.
     #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
     pub struct PtState {

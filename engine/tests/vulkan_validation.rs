@@ -12,7 +12,6 @@ use engine::denoise::{Guide, svgf};
 use engine::vulkan::Checks;
 use engine::vulkan::testing::{assert_no_unreported_errors, validated, validated_or_skip};
 use engine::{Preset, RunConfig, Shade};
-use sss::integrator::single_scatter::ChannelSelection;
 use sss::scene::Scene;
 
 const WIDTH: u32 = 32;
@@ -50,10 +49,6 @@ fn every_method_preset_and_pass_passes_sync_validation() {
     for frame in 0..FRAMES {
         validated("pt", renderer.pt(&scene, frame, SEED, 1));
         validated("random-walk", renderer.random_walk(&scene, frame, SEED, 1));
-        validated(
-            "single-scatter",
-            renderer.single_scatter(&scene, frame, SEED, 1, ChannelSelection::Scattering),
-        );
     }
     // The denoiser stage's device pass: SVGF over the frames of a path-traced trajectory.
     let guides = Guide::trajectory(&scene, FRAMES);

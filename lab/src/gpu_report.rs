@@ -349,7 +349,12 @@ fn time_methods(
         ),
         (
             "single-scatter:1",
-            Box::new(|r, f| frame(r.single_scatter(scene, f, 0, 1, ChannelSelection::Scattering))),
+            Box::new(|r, f| {
+                let channels = ChannelSelection::Scattering;
+                frame(methods::single_scatter::vulkan::render(
+                    r, scene, f, 0, 1, channels,
+                ))
+            }),
         ),
         (
             "image-space:1",

@@ -7,7 +7,7 @@ registry! {
     restir,
     random_walk,
     pt_one_hit,
-    single_scatter,
+    single_scatter with contract,
     image_space with contract,
     adaptive with contract,
 }

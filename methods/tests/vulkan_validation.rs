@@ -1,4 +1,4 @@
-//! The kernels of this crate's methods (image space, adaptive), once, under the Khronos
+//! The kernels of this crate's methods (image space, adaptive, single scattering), once, under the Khronos
 //! validation layer with synchronization validation: any error (an invalid use, a missing
 //! barrier) fails the test with the layer's message (the engine's kernels:
 //! `engine/tests/vulkan_validation.rs`).
@@ -9,7 +9,8 @@
 use engine::vulkan::Checks;
 use engine::vulkan::testing::{assert_no_unreported_errors, validated, validated_or_skip};
 use methods::adaptive::{self, cpu::AdaptiveParams};
-use methods::image_space;
+use methods::{image_space, single_scatter};
+use sss::integrator::single_scatter::ChannelSelection;
 use sss::scene::Scene;
 
 const WIDTH: u32 = 32;
@@ -27,6 +28,9 @@ fn every_method_kernel_passes_sync_validation() {
     for frame in 0..FRAMES {
         let image = image_space::vulkan::render(&mut renderer, &scene, frame, SEED, 1);
         validated("image-space", image);
+        let channels = ChannelSelection::Scattering;
+        let image = single_scatter::vulkan::render(&mut renderer, &scene, frame, SEED, 1, channels);
+        validated("single-scatter", image);
     }
     let params = AdaptiveParams::default();
     let last = adaptive::vulkan::run(&mut renderer, &scene, &params, SEED, FRAMES, |_| {});

@@ -8,7 +8,8 @@
 // and sets scene_lighting_selection to its pixel's light-selection stream before each path (and
 // stores it back after, when the stream is carried between dispatches): SceneLighting::sample
 // draws the light pick from it, the path supplies the other two numbers. Used by
-// method_random_walk.glsl and method_single_scatter.glsl.
+// method_random_walk.glsl and methods/src/single_scatter/method_single_scatter.glsl (through the
+// include path the engine publishes, engine/build.rs).
 
 #ifndef ENGINE_SCENE_LIGHTING_GLSL
 #define ENGINE_SCENE_LIGHTING_GLSL

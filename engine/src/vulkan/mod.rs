@@ -24,7 +24,6 @@ mod random_walk;
 mod renderer;
 mod scene;
 mod shaders;
-mod single_scatter;
 mod svgf;
 pub mod testing;
 mod timing;
@@ -45,10 +44,6 @@ pub use random_walk::{
 };
 pub use renderer::Renderer;
 pub use scene::{GBUFFER, GpuScene};
-pub use single_scatter::{
-    GpuSingleScatterProfile, SINGLE_SCATTER, SingleScatterImage, SingleScatterPixelState,
-    render_single_scatter, scene_single_scatter_media,
-};
 pub use svgf::{SVGF, svgf_filter};
 
 pub use crate::contract::{

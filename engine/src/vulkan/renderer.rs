@@ -1,14 +1,13 @@
 //! The front of the Vulkan backend (DESIGN §6): a [`Renderer`] holds the [`Context`], the
 //! compiled kernels and the uploaded [`GpuScene`] across runs (creating a pipeline on lavapipe
 //! compiles LLVM code, so it is done once per shader) and runs the methods on them: a preset's
-//! frames ([`FrameRun`]), the memoryless methods (path tracer, random walk, single scattering)
+//! frames ([`FrameRun`]), the memoryless methods (path tracer, random walk)
 //! and the spatiotemporal denoiser. A method with a kernel of its own drives it through
 //! [`Renderer::gbuffer`] and [`Renderer::parts`] (the `methods` crate).
 
 use std::collections::HashMap;
 use std::collections::hash_map::Entry;
 
-use sss::integrator::single_scatter::{ChannelSelection, SingleScatterSettings};
 use sss::scene::Scene;
 
 use super::device::Context;
@@ -18,7 +17,6 @@ use super::memory::Buffer;
 use super::random_walk::{RANDOM_WALK, render_random_walk, scene_media};
 use super::scene::{GBUFFER, GpuScene};
 use super::shaders::Shader;
-use super::single_scatter::{SINGLE_SCATTER, render_single_scatter, scene_single_scatter_media};
 use super::svgf::{SVGF, svgf_filter};
 use super::{FrameInput, Kernel, PT, groups_for, render_pt};
 use crate::contract::{FrameParams, GpuPixel, PassParams};
@@ -155,34 +153,6 @@ impl Renderer {
         if out.cut > 0 {
             return Err(PipelineError::Vulkan(VulkanError::LoopsCut {
                 shader: RANDOM_WALK.name,
-                count: out.cut,
-            }));
-        }
-        Ok((out.image.image, out.image.left_out))
-    }
-
-    /// The `single-scatter:spp` method at `frame` with distance channels drawn by `channels`
-    /// (the rest of [`SingleScatterSettings::default`]): the image and the samples left out.
-    pub fn single_scatter(
-        &mut self,
-        scene: &Scene,
-        frame: u32,
-        seed: u64,
-        spp: u32,
-        channels: ChannelSelection,
-    ) -> Result<(Image, u64), PipelineError> {
-        let settings = SingleScatterSettings {
-            channel: channels,
-            ..SingleScatterSettings::default()
-        };
-        let media = scene_single_scatter_media(scene)?;
-        let (gbuffer, params) = self.gbuffer(scene, frame, seed)?;
-        let (context, kernel, gpu) = self.parts(SINGLE_SCATTER)?;
-        let input = FrameInput::new(scene, gpu, &params, &gbuffer);
-        let out = render_single_scatter(context, kernel, &input, &media, &settings, spp)?;
-        if out.cut > 0 {
-            return Err(PipelineError::Vulkan(VulkanError::LoopsCut {
-                shader: SINGLE_SCATTER.name,
                 count: out.cut,
             }));
         }

@@ -11,9 +11,9 @@
 //! ([`SceneLighting`], the random walk's), whose light selection draws from a stream of its own
 //! per pixel ([`PURPOSE_SINGLE_SCATTER_LIGHT`]).
 //!
-//! On Vulkan its twin is the kernel `engine/glsl/method_single_scatter.glsl`
-//! ([`engine::vulkan::Renderer::single_scatter`]): the same sample and light-selection streams,
-//! one dispatch per sample.
+//! On Vulkan its twin is the kernel `method_single_scatter.glsl` beside this file, with its host
+//! code [`vulkan`] and what the two share ([`contract`]): the same sample and light-selection
+//! streams, one dispatch per sample; `parity.rs` holds its parity tests against the CPU.
 //!
 //! `/restir` replaces the boundary (zero-scattering) term by ReSTIR over the entry direction and
 //! the exit's light vertex [000 "ReSTIR Sample"] ([`boundary_reuse`]: `spp`
@@ -22,6 +22,10 @@
 //! boundaries only (other materials are refused); CPU only (refused on Vulkan in one line).
 
 pub mod boundary_reuse;
+pub mod contract;
+#[cfg(test)]
+mod parity;
+pub mod vulkan;
 
 use std::cell::RefCell;
 
@@ -157,7 +161,7 @@ impl Estimator for SingleScatter {
         let frame = frames - 1;
         if let Some(mut renderer) = backend.renderer() {
             let (image, nonfinite) =
-                renderer.single_scatter(scene, frame, seed, self.spp, self.channels)?;
+                vulkan::render(&mut renderer, scene, frame, seed, self.spp, self.channels)?;
             return Ok(Frame {
                 image,
                 frames_rendered: 1,

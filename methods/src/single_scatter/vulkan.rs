@@ -1,7 +1,8 @@
 //! Seed 000's hybrid estimator on the device (`method_single_scatter.glsl`, twin of the
 //! `single-scatter` method over [`sss::integrator::single_scatter::render`]): path-traced zero
 //! and single scattering plus diffusion with `R − R1` on translucent pixels, the path tracer's
-//! direct lighting elsewhere, the exits lit by the scene's lights with shadow rays.
+//! direct lighting elsewhere, the exits lit by the scene's lights with shadow rays; driven
+//! through the engine's [`Renderer`] ([`render`]).
 //!
 //! The estimator needs per-material values that `GpuMaterial` lacks: the medium (binding 11,
 //! the random walk's [`GpuMedium`]) and the multiple-scattering profiles (binding 13,
@@ -10,29 +11,68 @@
 //! transcendentals the GPU must not redo). Binding 12 carries each pixel's light-selection stream,
 //! sum and tallies between dispatches ([`SingleScatterPixelState`]).
 //!
-//! **One dispatch per sample**, as the random walk ([`super::random_walk`]): lavapipe cuts every
-//! loop of an invocation group after 65 535 iterations; the kernel counts the dispatches where it
-//! did, [`SingleScatterImage::cut`] sums them, and a caller must treat a non-zero count as a
-//! failed render.
+//! **One dispatch per sample**, as the random walk ([`engine::vulkan::render_random_walk`]):
+//! lavapipe cuts every loop of an invocation group after 65 535 iterations; the kernel counts the
+//! dispatches where it did, [`SingleScatterImage::cut`] sums them, and a caller must treat a
+//! non-zero count as a failed render.
 
 use bytemuck::{Pod, Zeroable};
+use engine::PipelineError;
+use engine::contract::PtHits;
+use engine::image::Image;
+use engine::vulkan::{
+    Buffer, Context, DeviceImage, FrameInput, GpuMedium, Kernel, Renderer, Shader, VulkanError,
+    groups_for,
+};
 use sss::integrator::HitPolicy;
 use sss::integrator::pt::PtSettings;
-use sss::integrator::single_scatter::{MultipleScattering, SingleScatterSettings};
+use sss::integrator::single_scatter::{
+    ChannelSelection, MultipleScattering, SingleScatterSettings,
+};
 use sss::random_walk::Medium;
 use sss::scene::Scene;
 
-use super::{
-    Buffer, Context, DeviceImage, FrameInput, GpuMedium, Kernel, Shader, VulkanError, groups_for,
-};
-use crate::PipelineError;
-use crate::contract::{PtHits, SingleScatterParams};
+use super::contract::SingleScatterParams;
 
 /// `method_single_scatter.glsl`: scene bindings 0–8, 9 G-buffer (`GpuPixel`), 10 `vec4` out
 /// (mean, `w` = samples left out), 11 [`GpuMedium`] per material, 12 [`SingleScatterPixelState`]
 /// per pixel, 13 [`GpuSingleScatterProfile`] per material. Push constants:
 /// [`SingleScatterParams`].
-pub const SINGLE_SCATTER: Shader = Shader::new("method_single_scatter", 14, 32);
+pub const SINGLE_SCATTER: Shader = Shader::compiled(
+    "method_single_scatter",
+    crate::spirv!("method_single_scatter"),
+    14,
+    size_of::<SingleScatterParams>() as u32,
+);
+
+/// The `single-scatter:spp` method at `frame` with distance channels drawn by `channels` (the
+/// rest of [`SingleScatterSettings::default`]): the image and the samples left out; a dispatch
+/// whose loops the device cut short is an error.
+pub fn render(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    frame: u32,
+    seed: u64,
+    spp: u32,
+    channels: ChannelSelection,
+) -> Result<(Image, u64), PipelineError> {
+    let settings = SingleScatterSettings {
+        channel: channels,
+        ..SingleScatterSettings::default()
+    };
+    let media = scene_single_scatter_media(scene)?;
+    let (gbuffer, params) = renderer.gbuffer(scene, frame, seed)?;
+    let (context, kernel, gpu) = renderer.parts(SINGLE_SCATTER)?;
+    let input = FrameInput::new(scene, gpu, &params, &gbuffer);
+    let out = render_single_scatter(context, kernel, &input, &media, &settings, spp)?;
+    if out.cut > 0 {
+        return Err(PipelineError::Vulkan(VulkanError::LoopsCut {
+            shader: SINGLE_SCATTER.name,
+            count: out.cut,
+        }));
+    }
+    Ok((out.image.image, out.image.left_out))
+}
 
 /// `single_scatter.glsl`'s `SingleScatterProfile` (std430, 60 bytes): [`MultipleScattering`]
 /// with the full profiles' `r_max` computed on the host.
@@ -206,10 +246,8 @@ mod tests {
         assert_eq!(offset_of!(SingleScatterPixelState, sum), 16);
         assert_eq!(offset_of!(SingleScatterPixelState, left_out), 40);
         assert_eq!(offset_of!(SingleScatterPixelState, cut), 48);
-        assert_eq!(
-            size_of::<SingleScatterParams>() as u32,
-            SINGLE_SCATTER.push_bytes
-        );
+        // `method_single_scatter.glsl`'s push-constant block: eight `uint`s.
+        assert_eq!(size_of::<SingleScatterParams>(), 32);
     }
 
     /// Both hit policies reach the kernel; a diffusion with other techniques, radii or profile

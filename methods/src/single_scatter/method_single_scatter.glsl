@@ -4,8 +4,8 @@
 // by side, the estimator's math is sss/glsl/single_scatter.glsl). Seed 000's hybrid estimator on
 // translucent pixels (path-traced zero and single scattering through the material's boundary,
 // diffusion with R - R1 for the rest), the path tracer's direct lighting on Lambert pixels, the
-// exits lit by the scene's lights with shadow rays (include/scene_lighting.glsl, the twin of
-// engine::random_walk_method::SceneLighting).
+// exits lit by the scene's lights with shadow rays (engine/glsl/include/scene_lighting.glsl, the
+// twin of engine::random_walk_method::SceneLighting).
 //
 // Streams, as on the CPU: sample s of a pixel draws from StreamKey { pixel, frame, s,
 // SINGLE_SCATTER_PURPOSE_SINGLE_SCATTER } (single_scatter_sample_stream), and the light selection
@@ -34,8 +34,8 @@
 
 layout(local_size_x = 64) in;
 
-// SingleScatterParams (engine/src/contract.rs): spp, the sample this dispatch runs, the
-// ChannelSelection and PtHits codes, max_segments.
+// SingleScatterParams (methods/src/single_scatter/contract.rs): spp, the sample this dispatch
+// runs, the ChannelSelection and PtHits codes, max_segments.
 #include "contract/single_scatter_params.glsl"
 
 #define SCENE_BINDING 0
@@ -48,13 +48,13 @@ layout(local_size_x = 64) in;
 #include "random_walk.glsl"
 #include "loop_budget.glsl"
 // SceneLighting: exit_lighting_* and scene_lighting_selection.
-#include "include/scene_lighting.glsl"
+#include "scene_lighting.glsl"
 #include "single_scatter.glsl"
 
 // What a pixel carries from one dispatch to the next (std430, 56 bytes; Rust twin
-// engine::vulkan::SingleScatterPixelState): the light-selection stream, the f64 sum of the
-// finite samples, the samples left out, the samples whose chain was cut (Orders::truncated) and
-// the dispatches whose loops the device cut short.
+// methods::single_scatter::vulkan::SingleScatterPixelState): the light-selection stream, the f64
+// sum of the finite samples, the samples left out, the samples whose chain was cut
+// (Orders::truncated) and the dispatches whose loops the device cut short.
 struct SingleScatterPixelState {
     Stream selection;
     double sum[3];

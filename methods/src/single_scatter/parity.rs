@@ -15,10 +15,7 @@ use std::cell::RefCell;
 
 use engine::random_walk_method::SceneLighting;
 use engine::vulkan::testing::{UploadedFrame, kernel_or_skip};
-use engine::vulkan::{
-    Buffer, Context, GpuSingleScatterProfile, Kernel, SINGLE_SCATTER, Shader, groups_for,
-    render_single_scatter, scene_single_scatter_media,
-};
+use engine::vulkan::{Buffer, Context, Kernel, Shader, groups_for};
 use glam::{DVec3, Vec3};
 use restir::rng::StreamKey;
 use sss::integrator::HitPolicy;
@@ -28,6 +25,10 @@ use sss::integrator::single_scatter::{
 use sss::material::{BoundaryKind, Material};
 use sss::random_walk::{ExitLighting, LightSample, Medium};
 use sss::scene::{GBuffer, Scene};
+
+use super::vulkan::{
+    GpuSingleScatterProfile, SINGLE_SCATTER, render_single_scatter, scene_single_scatter_media,
+};
 
 /// `parity_single_scatter.glsl`: scene (0–8), G-buffer (9), image (10), media (11), profiles
 /// (12), diag (13); push constants sample, channel selection, hit policy, max segments.

@@ -40,7 +40,7 @@ enum Command {
     Reference(cli::reference::ReferenceArgs),
     /// Merge reference shards (bit-identical to an unsharded run).
     Merge(cli::reference::MergeArgs),
-    /// Named reproductions of seed 001's figures.
+    /// Named reproductions of paper 001's figures.
     Experiment(cli::experiment::ExperimentArgs),
     /// On the Vulkan device: device and limits, GPU parity, time of every pass at each size,
     /// equal-time comparison; one markdown file for docs/performance.md.

@@ -921,7 +921,7 @@ fn diagnostics_experiments_write_tables_and_findings() {
             "--out",
             out.to_str().unwrap(),
         ]));
-        assert!(text.contains("| finding of seed 001 |"), "{name}: {text}");
+        assert!(text.contains("| finding of paper 001 |"), "{name}: {text}");
         for file in ["table.md", "findings.md"] {
             assert!(out.join(file).is_file(), "{name}: {file}");
         }

@@ -1,6 +1,6 @@
 #version 460
 // Parity kernel for sss/glsl/single_scatter.glsl (test only; the method's kernel is
-// method_single_scatter.glsl): sample `params.sample` of seed 000's hybrid estimator at every
+// method_single_scatter.glsl): sample `params.sample` of paper 000's hybrid estimator at every
 // G-buffer pixel, with a fixed directional "sun" as the exits' lighting and the hit policy as a
 // parameter (engine/tests/vulkan_single_scatter.rs computes the same on the CPU). One dispatch
 // per sample keeps lavapipe's loop budget.

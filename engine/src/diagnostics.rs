@@ -1,4 +1,4 @@
-//! Diagnostic images of a run (seed 001 Fig. 4, 5, 10): which shift the hybrid criterion picks,
+//! Diagnostic images of a run (paper 001 Fig. 4, 5, 10): which shift the hybrid criterion picks,
 //! the fraction of shifted samples that beat the canonical one, shift-failure rates per pass,
 //! and intersections per probe. Counters are summed over all frames; the reuse [`Telemetry`]
 //! records the last frame.

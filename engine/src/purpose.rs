@@ -17,7 +17,7 @@ twin::contract! {
     pub const WALK: u32 = 0x5257_0001;
     /// The light selection at the random walks' exits.
     pub const WALK_LIGHT: u32 = 0x5257_0002;
-    /// The light selection at the exits of seed 000's hybrid estimator (`single-scatter`; ASCII
+    /// The light selection at the exits of paper 000's hybrid estimator (`single-scatter`; ASCII
     /// "SS" + 2: its samples use `sss::integrator::single_scatter::PURPOSE_SINGLE_SCATTER`, "SS"
     /// + 1).
     pub const SINGLE_SCATTER_LIGHT: u32 = 0x5353_0002;

@@ -3,7 +3,7 @@
 //!
 //! Model choices (a different transport model than the BSSRDF methods, so `compare` measures
 //! its difference to the BSSRDF reference, not only its noise):
-//! * the medium is the material's by seed 000's colour mapping ([`Medium::from_translucent`]),
+//! * the medium is the material's by paper 000's colour mapping ([`Medium::from_translucent`]),
 //!   so `fit = "dmfp"` materials are an input error;
 //! * the boundary is the material's `boundary` ([`Interface::of`]); the default, Fresnel-free
 //!   Lambertian transmission, has the exit lobe `1/π` of the diffusion profiles and lets exits

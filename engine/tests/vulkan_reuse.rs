@@ -668,7 +668,7 @@ struct PassCase {
     pass: u32,
 }
 
-/// Seed 001's temporal confidence cap, run besides the presets' default
+/// Paper 001's temporal confidence cap, run besides the presets' default
 /// (`shifts::preset::TEMPORAL_CAP`) so that the kernel is seen to take the cap from its
 /// parameters.
 const SEED_001_CAP: f32 = 20.0;

@@ -1,6 +1,6 @@
 //! The worked example of docs/adding-a-shift.md on both backends: `distant-reconnection`, a
 //! shift added as one Rust file (`shifts/src/distant.rs`), its GLSL twin
-//! (`shifts/glsl/distant.glsl`) and one registry line, in a preset of seed 001's shape
+//! (`shifts/glsl/distant.glsl`) and one registry line, in a preset of paper 001's shape
 //! (candidates → temporal → one spatial pass with 4 neighbours, all with the new shift).
 //!
 //! Its conformance checks and unbiasedness test are in `shifts/tests/{conformance,unbiased}.rs`,

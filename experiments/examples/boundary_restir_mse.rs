@@ -1,4 +1,4 @@
-//! Equal-spp MSE of `single-scatter:1` with and without `/restir` (ReSTIR on seed 000's boundary
+//! Equal-spp MSE of `single-scatter:1` with and without `/restir` (ReSTIR on paper 000's boundary
 //! term, `methods::single_scatter::boundary_reuse`) at frames 0 and 15 of a scene's trajectory: of the
 //! boundary term alone and of the whole method, on the translucent pixels, against each term's
 //! own converged value (the plain estimator at many samples per pixel, so the model error of

@@ -1,4 +1,4 @@
-//! The diagnostics figures of seed 001: the hybrid criterion's map (Fig. 4), the fraction of
+//! The diagnostics figures of paper 001: the hybrid criterion's map (Fig. 4), the fraction of
 //! improved samples of hybrid vs. sequential (Fig. 5) and the temporal shift of the sequential
 //! scheme (Fig. 10). Per-pixel diagnostics of `engine::diagnostics` (the 16-frame trajectory)
 //! are averaged per region in every replica; findings compare those means by their 95%

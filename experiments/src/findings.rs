@@ -1,4 +1,4 @@
-//! Seed 001's qualitative findings and whether measured numbers reproduce them, decided by
+//! Paper 001's qualitative findings and whether measured numbers reproduce them, decided by
 //! confidence intervals, never by point estimates: each experiment states its findings as
 //! [`Finding`]s and writes them as a table ([`markdown`]).
 //!
@@ -26,7 +26,7 @@ pub enum Verdict {
     NotApplicable,
 }
 
-/// One qualitative finding of seed 001 and what the measured numbers say of it.
+/// One qualitative finding of paper 001 and what the measured numbers say of it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Finding {
     pub claim: String,
@@ -142,7 +142,7 @@ pub fn short(method: &str) -> &str {
 /// The findings as a Markdown table.
 pub fn markdown(findings: &[Finding]) -> String {
     let mut out = String::from(
-        "| finding of seed 001 | reproduces | measured (ratio or difference [interval]) |\n|---|---|---|\n",
+        "| finding of paper 001 | reproduces | measured (ratio or difference [interval]) |\n|---|---|---|\n",
     );
     for f in findings {
         let verdict = match f.verdict {
@@ -162,7 +162,7 @@ pub fn markdown(findings: &[Finding]) -> String {
     if findings.iter().any(|f| f.verdict == Verdict::Fails) {
         out.push_str(
             "\nFindings marked **no** are discussed in docs/experiments.md (equal-time rows: a CPU \
-             ReSTIR frame costs several path-traced frames, unlike seed 001's GPU implementation).\n",
+             ReSTIR frame costs several path-traced frames, unlike paper 001's GPU implementation).\n",
         );
     }
     out

@@ -1,5 +1,5 @@
-//! `experiments`: seed 001's experiments and their findings, built on the lab's comparisons
-//! ([`lab::compare`]). Each named experiment ([`Experiment`]) reproduces one of seed 001's
+//! `experiments`: paper 001's experiments and their findings, built on the lab's comparisons
+//! ([`lab::compare`]). Each named experiment ([`Experiment`]) reproduces one of paper 001's
 //! figures (DESIGN §7) and ends in a table of the paper's qualitative findings and whether the
 //! measured numbers reproduce them ([`findings`]). The comparisons (Fig. 6–9) run
 //! [`lab::compare`] at equal time; the diagnostics figures (Fig. 4, 5, 10) average
@@ -79,7 +79,7 @@ impl Experiment {
         }
     }
 
-    /// The figure of seed 001 it reproduces and how, in one line.
+    /// The figure of paper 001 it reproduces and how, in one line.
     pub fn about(self) -> &'static str {
         match self {
             Experiment::ShiftComparison => {

@@ -1,4 +1,4 @@
-//! Fig. 8 of seed 001: hybrid and sequential against equal-time and 1-spp path tracing on the
+//! Fig. 8 of paper 001: hybrid and sequential against equal-time and 1-spp path tracing on the
 //! ten measured materials (`materials`).
 
 use lab::error::Error;

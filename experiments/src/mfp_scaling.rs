@@ -1,4 +1,4 @@
-//! Fig. 9 of seed 001: the gain of hybrid and sequential over path tracing (equal time and
+//! Fig. 9 of paper 001: the gain of hybrid and sequential over path tracing (equal time and
 //! 1 spp) on the same scene at five scales of the mean free path.
 
 use serde_json::json;

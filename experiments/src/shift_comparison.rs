@@ -1,4 +1,4 @@
-//! Fig. 6 (`bumpy`, one large light) and Fig. 7 (`many-lights`) of seed 001: the four presets,
+//! Fig. 6 (`bumpy`, one large light) and Fig. 7 (`many-lights`) of paper 001: the four presets,
 //! equal-time `pt` and `pt:1`, and which shift wins in which region.
 
 use lab::error::Error;
@@ -30,7 +30,7 @@ pub fn run(
     Report::of_comparison(&outcome, written, table)
 }
 
-/// Seed 001 §6 (Fig. 6, 7): reconnection wins in shadow, delayed reconnection in the light,
+/// Paper 001 §6 (Fig. 6, 7): reconnection wins in shadow, delayed reconnection in the light,
 /// hybrid and sequential over all translucent pixels, and every preset beats path tracing
 /// where the light is hard to reach; each decided by the intervals of MSE ratios (equal spp)
 /// or of MSE·s ratios (equal time) ([`findings`]).

@@ -80,7 +80,7 @@ pub struct MethodResult {
     pub frames_rendered: u32,
     /// The metrics at the last frame.
     pub metrics: Vec<AreaMetrics>,
-    /// Seed 001's metric over whole last frames, over replicas ([`tonemapped_mse`]).
+    /// Paper 001's metric over whole last frames, over replicas ([`tonemapped_mse`]).
     pub tonemapped_mse: Estimate,
     /// FLIP and the low-frequency error per area at the last frame.
     pub perceptual: Vec<PerceptualMetrics>,

@@ -22,7 +22,7 @@
 //!   unit of independence: reuse correlates pixels);
 //! * `variance` = mean_{p,c} of the per-pixel sample variance over replicas.
 //!
-//! Seed 001's own metric is [`tonemapped_mse`]: the MSE of Reinhard-tonemapped 8-bit sRGB frames
+//! Paper 001's own metric is [`tonemapped_mse`]: the MSE of Reinhard-tonemapped 8-bit sRGB frames
 //! (values /255), over whole frames.
 
 use glam::DVec3;
@@ -236,7 +236,7 @@ fn pixel_variance(replicas: &[Image], pixels: &[usize]) -> f64 {
         .sum()
 }
 
-/// Seed 001's metric: MSE between the Reinhard-tonemapped 8-bit sRGB frames of `image` and
+/// Paper 001's metric: MSE between the Reinhard-tonemapped 8-bit sRGB frames of `image` and
 /// `reference` ([`tonemap`]), values scaled to [0, 1], over every pixel and channel; RMSE is its
 /// square root. `None` when the sizes differ or the image is empty.
 pub fn tonemapped_mse(image: &Image, reference: &[DVec3]) -> Option<f64> {

@@ -16,7 +16,7 @@ use sss::scene::{FRAMES, Scene};
 const SIDE: [u32; 2] = [24, 18];
 const SEED: u64 = 7;
 
-/// Modified presets pinned besides the registered ones: `hybrid/cap=20` is seed 001's temporal
+/// Modified presets pinned besides the registered ones: `hybrid/cap=20` is paper 001's temporal
 /// cap, whose hash is the one `restir:hybrid` had before the default cap became 3;
 /// `hybrid/shade=all` is Rao-Blackwellised shading.
 const MODIFIED: &[&str] = &["hybrid/cap=20", "hybrid/shade=all"];

@@ -113,7 +113,7 @@ fn on_the_cpu_it_is_the_single_scatter_integrator() {
 
 /// On Vulkan the method renders frame `FRAMES − 1` through its kernel: no non-finite sample, and
 /// for both channel selections relMSE(GPU, CPU seed 7) ≤ 0.01 · relMSE(CPU seed 8, CPU seed 7)
-/// (every built-in scene: `vulkan_seed_methods.rs`). Control: the option reaches the kernel (the
+/// (every built-in scene: `vulkan_comparison_methods.rs`). Control: the option reaches the kernel (the
 /// GPU images of the two selections differ).
 #[test]
 fn on_vulkan_it_renders_through_its_kernel() {

@@ -1,4 +1,4 @@
-//! `single-scatter/restir` (ReSTIR on seed 000's boundary term, `methods::single_scatter::boundary_reuse`)
+//! `single-scatter/restir` (ReSTIR on paper 000's boundary term, `methods::single_scatter::boundary_reuse`)
 //! is unbiased: its boundary term after several frames of a moving camera is equivalent, per
 //! region and colour channel, to the plain estimator's boundary term, with the protocol of
 //! `lab::bias` (as `unbiased.rs`), and a deliberately wrong Jacobian is caught.

@@ -43,7 +43,7 @@ pub trait Estimator: fmt::Debug + Send + Sync + 'static {
         scene: &Scene,
         frames: u32,
         seed: u64,
-    ) -> Result<Frame, PipelineError>;
+    ) -> Result<LastFrame, PipelineError>;
 
     /// [`Estimator::render`] with the per-pixel sample counts of the returned frame, for a
     /// method that chooses them itself (adaptive sampling). The default is `render` and `None`:
@@ -54,7 +54,7 @@ pub trait Estimator: fmt::Debug + Send + Sync + 'static {
         scene: &Scene,
         frames: u32,
         seed: u64,
-    ) -> Result<(Frame, Option<SampleCounts>), PipelineError> {
+    ) -> Result<(LastFrame, Option<SampleCounts>), PipelineError> {
         Ok((self.render(backend, scene, frames, seed)?, None))
     }
 
@@ -135,7 +135,7 @@ impl SampleCounts {
 
 /// The output of [`Estimator::render`].
 #[derive(Clone, Debug)]
-pub struct Frame {
+pub struct LastFrame {
     /// Linear RGB of frame `frames − 1`.
     pub image: Image,
     /// Frames rendered to produce `image` (1 for memoryless estimators).

@@ -44,7 +44,7 @@ macro_rules! spirv {
 pub(crate) use spirv;
 
 pub use estimator::{
-    Entry, Estimator, Frame, Method, Rendered, SampleCounts, Trajectory, memoryless_trajectory,
+    Entry, Estimator, LastFrame, Method, Rendered, SampleCounts, Trajectory, memoryless_trajectory,
     parse_spp,
 };
 

@@ -9,7 +9,7 @@ use engine::{Backend, PipelineError};
 use sss::integrator::pt::{self, HitPolicy, PtSettings};
 use sss::scene::{GBuffer, Scene};
 
-use super::estimator::{Entry, Estimator, Frame, Method, parse_spp};
+use super::estimator::{Entry, Estimator, LastFrame, Method, parse_spp};
 
 pub const ENTRY: Entry = Entry {
     family: "pt",
@@ -47,7 +47,7 @@ impl Estimator for Pt {
         scene: &Scene,
         frames: u32,
         seed: u64,
-    ) -> Result<Frame, PipelineError> {
+    ) -> Result<LastFrame, PipelineError> {
         path_trace(backend, scene, frames - 1, seed, self.spp, HitPolicy::All)
     }
 }
@@ -62,7 +62,7 @@ pub fn path_trace(
     seed: u64,
     spp: u32,
     hits: HitPolicy,
-) -> Result<Frame, PipelineError> {
+) -> Result<LastFrame, PipelineError> {
     let (image, nonfinite) = match backend.renderer() {
         Some(mut renderer) => {
             let (gbuffer, params) = renderer.gbuffer(scene, frame, seed)?;
@@ -81,7 +81,7 @@ pub fn path_trace(
             (to_image(&image), image.nonfinite)
         }
     };
-    Ok(Frame {
+    Ok(LastFrame {
         image,
         frames_rendered: 1,
         nonfinite,

@@ -7,7 +7,7 @@ use engine::{Backend, PipelineError};
 use sss::integrator::pt::HitPolicy;
 use sss::scene::Scene;
 
-use super::estimator::{Entry, Estimator, Frame, Method, parse_spp};
+use super::estimator::{Entry, Estimator, LastFrame, Method, parse_spp};
 use super::pt::path_trace;
 
 pub const ENTRY: Entry = Entry {
@@ -47,7 +47,7 @@ impl Estimator for PtOneHit {
         scene: &Scene,
         frames: u32,
         seed: u64,
-    ) -> Result<Frame, PipelineError> {
+    ) -> Result<LastFrame, PipelineError> {
         path_trace(
             backend,
             scene,

@@ -7,7 +7,7 @@ use engine::random_walk_method;
 use engine::{Backend, PipelineError};
 use sss::scene::{GBuffer, Scene};
 
-use super::estimator::{Entry, Estimator, Frame, Method, parse_spp};
+use super::estimator::{Entry, Estimator, LastFrame, Method, parse_spp};
 
 pub const ENTRY: Entry = Entry {
     family: "random-walk",
@@ -45,7 +45,7 @@ impl Estimator for RandomWalk {
         scene: &Scene,
         frames: u32,
         seed: u64,
-    ) -> Result<Frame, PipelineError> {
+    ) -> Result<LastFrame, PipelineError> {
         let last = frames - 1;
         let (image, nonfinite) = match backend.renderer() {
             Some(mut renderer) => renderer.random_walk(scene, last, seed, self.spp)?,
@@ -54,7 +54,7 @@ impl Estimator for RandomWalk {
                 random_walk_method::render(scene, &gbuffer, seed, self.spp)?
             }
         };
-        Ok(Frame {
+        Ok(LastFrame {
             image,
             frames_rendered: 1,
             nonfinite,

@@ -17,7 +17,7 @@ use engine::{
 use shifts::preset::PRESET_NAMES;
 use sss::scene::Scene;
 
-use super::estimator::{Entry, Estimator, Frame, Method, Trajectory};
+use super::estimator::{Entry, Estimator, LastFrame, Method, Trajectory};
 
 pub const ENTRY: Entry = Entry {
     family: "restir",
@@ -25,7 +25,7 @@ pub const ENTRY: Entry = Entry {
     about: "ReSTIR SSS with spatiotemporal reuse and the preset's shift mapping [001 §5.1]; \
             `/temporal=<shift>` swaps the temporal pass's shift (001 Fig. 10), \
             `/spatial=<shift>` the spatial passes' one shift (see `reshift shifts`); \
-            `/cap=<κ>` sets the temporal confidence cap (default 3; seed 001 uses 20); \
+            `/cap=<κ>` sets the temporal confidence cap (default 3; paper 001 uses 20); \
             `/spatial-cap=<κ>` caps spatial neighbours' confidence (default none); \
             `/neighbours=<n>` sets the spatial passes' neighbour count; \
             `/radius=unclamped` drops the spatial disk's [5, 30] px clamp (floor 1 px; CPU only); \
@@ -155,7 +155,7 @@ impl Estimator for Restir {
         scene: &Scene,
         frames: u32,
         seed: u64,
-    ) -> Result<Frame, PipelineError> {
+    ) -> Result<LastFrame, PipelineError> {
         let config = RunConfig {
             seed,
             frames,
@@ -166,7 +166,7 @@ impl Estimator for Restir {
             .frames
             .pop()
             .ok_or_else(|| PipelineError::Config("the run returned no frame".into()))?;
-        Ok(Frame {
+        Ok(LastFrame {
             image,
             frames_rendered: frames,
             nonfinite: result.nan_count,

@@ -131,7 +131,7 @@ where
 /// Forward shifts and back-shifts go through [`Shift::shift_supported`]: only samples with a
 /// positive target weigh.
 ///
-/// Failure convention (seed 001's): a neighbour whose forward shift fails, or whose reservoir is
+/// Failure convention (paper 001's): a neighbour whose forward shift fails, or whose reservoir is
 /// empty or has `W = 0`, contributes weight 0 but its confidence is still added. This does not darken the
 /// estimate because the MIS weights of the other samples already give that domain
 /// `m_j(y) = 0` wherever its shift fails
@@ -387,7 +387,7 @@ mod tests {
         }
     }
 
-    /// Seed 001's convention: a neighbour whose forward shift fails adds weight 0 but its
+    /// Paper 001's convention: a neighbour whose forward shift fails adds weight 0 but its
     /// confidence. With translation by (0.35, −0.25) about half the neighbour's samples fail,
     /// and the estimate stays unbiased under GBH, pairwise and defensive pairwise (N = 20 000,
     /// δ = 3%, α = 1e-3): the other samples' MIS weights already give the failing domain 0.

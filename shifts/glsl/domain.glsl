@@ -58,7 +58,7 @@ SssSample sss_sample_new(BssrdfSample b, uint light, vec3 x3) {
 
 // SssDomain::new for G-buffer pixel `gpixel`: false if x1 is not on a translucent object (or, as
 // the caller's `Option<GPixel>` is folded into `valid`, if the pixel has no primary hit).
-// BSSRDF IS uses seed 001's technique selection.
+// BSSRDF IS uses paper 001's technique selection.
 bool domain_new(GPixel gpixel, uint pixel, uint frame, uint pass, uint64_t seed,
         out SssDomain domain) {
     domain.pixel = pixel;
@@ -184,7 +184,7 @@ struct Hybrid {
     float kappa_orient;
 };
 
-// Hybrid::for_material: seed 001's defaults [001 §5.1], kappa_dist = 2 max_c d_c (host value
+// Hybrid::for_material: paper 001's defaults [001 §5.1], kappa_dist = 2 max_c d_c (host value
 // GpuMaterial::kappa_dist), kappa_orient = 0.5.
 Hybrid hybrid_for_material(GpuMaterial material) {
     return Hybrid(material.kappa_dist, 0.5);

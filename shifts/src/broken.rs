@@ -57,7 +57,7 @@ impl Shift<SssDomain<'_>> for DelayedWithoutVisibility {
     }
 }
 
-/// The hybrid shift with seed 001's thresholds for the source's material
+/// The hybrid shift with paper 001's thresholds for the source's material
 /// ([`Hybrid::for_material`]), choosing by the base path only, without testing the criterion on
 /// the offset path: not a bijection (a round trip can take the other branch).
 #[derive(Clone, Copy, Debug, Default)]

@@ -36,7 +36,7 @@ twin::contract! {
         /// shift and its back-shift fail on the same events (see `InvertingReconnection`).
         Exact,
         /// Leave the index unknown; `resolve_deferred_index` sets it for the selected sample
-        /// after the pass. Seed 001's fast choice, slightly biased.
+        /// after the pass. Paper 001's fast choice, slightly biased.
         Deferred,
     }
 
@@ -65,7 +65,7 @@ twin::contract! {
     }
 
     /// A stored reservoir `{y, W, c}` of one pixel [001 Alg. 2], the per-pixel buffer that the
-    /// passes read and write: 64 bytes, seed 001's size [001 §5.2], reached without
+    /// passes read and write: 64 bytes, paper 001's size [001 §5.2], reached without
     /// quantisation — every field is a 4-byte scalar, so std430 packs sample and reservoir
     /// without gaps (a 1920×1080 buffer is 126.6 MiB, inside a 128 MiB storage-buffer range).
     #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]

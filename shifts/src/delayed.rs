@@ -29,7 +29,7 @@ use crate::sample::SssSample;
 /// Unknown index (deferred policy): a hit is picked uniformly with a number from the receiver's
 /// stream (purpose `PURPOSE_PICK`, see [`SssDomain`]); the result stores the picked rank. The
 /// `1/hits` pick probability is not in `J` and the back shift replays the picked rank, not the
-/// original hit, so such a shift is not invertible: seed 001's documented small bias.
+/// original hit, so such a shift is not invertible: paper 001's documented small bias.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct DelayedReconnection;
 

@@ -56,7 +56,7 @@ pub struct SssDomain<'s> {
 
 impl<'s> SssDomain<'s> {
     /// The domain of G-buffer pixel `gpixel`; `None` if x1 is not on a translucent object.
-    /// BSSRDF IS uses seed 001's technique selection ([`TechniqueSelection::default`]).
+    /// BSSRDF IS uses paper 001's technique selection ([`TechniqueSelection::default`]).
     pub fn new(
         scene: &'s Scene,
         gpixel: &GPixel,
@@ -92,7 +92,7 @@ impl<'s> SssDomain<'s> {
         })
     }
 
-    /// The same domain with another technique selection (e.g. the channel CDF of seed 000).
+    /// The same domain with another technique selection (e.g. the channel CDF of paper 000).
     pub fn with_selection(self, selection: TechniqueSelection) -> Self {
         SssDomain { selection, ..self }
     }

@@ -19,13 +19,13 @@ pub struct Hybrid {
     pub kappa_orient: f32,
 }
 
-/// Seed 001's `κ_dist / max_c d_c` [001 §5.1].
+/// Paper 001's `κ_dist / max_c d_c` [001 §5.1].
 const KAPPA_DIST_PER_MAX_D: f32 = 2.0;
-/// Seed 001's `κ_orient` [001 §5.1].
+/// Paper 001's `κ_orient` [001 §5.1].
 const KAPPA_ORIENT: f32 = 0.5;
 
 impl Hybrid {
-    /// Seed 001's defaults [001 §5.1]: `κ_dist = 2 · max_c d_c`, `κ_orient = 0.5`.
+    /// Paper 001's defaults [001 §5.1]: `κ_dist = 2 · max_c d_c`, `κ_orient = 0.5`.
     pub fn for_material(material: &Translucent) -> Hybrid {
         Hybrid {
             kappa_dist: KAPPA_DIST_PER_MAX_D * material.d().max_element(),
@@ -40,7 +40,7 @@ impl Hybrid {
             || x1.frame.n.dot(x2.geometric_normal) <= self.kappa_orient
     }
 
-    /// Whether the shift of `x` out of `src` uses reconnection (the diagnostic of seed 001
+    /// Whether the shift of `x` out of `src` uses reconnection (the diagnostic of paper 001
     /// Fig. 4); `None` if x2 is not on `src`'s object.
     pub fn uses_reconnection(&self, x: &SssSample, src: &SssDomain) -> Option<bool> {
         src.entry_point(x).map(|x2| self.connectable(src.x1(), &x2))

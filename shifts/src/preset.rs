@@ -1,6 +1,6 @@
 //! Pass schedules as data (DESIGN §1, §6): a [`Preset`] is a list of passes, each naming its
 //! shift, MIS scheme, neighbour count and confidence cap, and [`PRESETS`] names the presets of
-//! seed 001 [001 §5.1].
+//! paper 001 [001 §5.1].
 //!
 //! A registered shift (`registry.rs`) is usable in any pass by its [`ShiftKind`]; the backends
 //! never match on shifts.
@@ -156,7 +156,7 @@ impl fmt::Display for PresetError {
 
 impl std::error::Error for PresetError {}
 
-/// Temporal confidence cap: `c_prev ≤ 3 · c_cur` (seed 001 §5.1 uses 20; `restir:<preset>/cap=20`).
+/// Temporal confidence cap: `c_prev ≤ 3 · c_cur` (paper 001 §5.1 uses 20; `restir:<preset>/cap=20`).
 ///
 /// With GBH the history's estimate enters the receiver's multiplied by the growth factor
 /// `a = κρ / (κ + ρ) ≤ κ` (`κ = c_prev / c_cur`, `ρ = p̂_cur(y)·J / p̂_prev(x)`). Between

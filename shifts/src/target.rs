@@ -8,7 +8,7 @@ use sss::bssrdf;
 /// How `p̂` weighs the channels of `f` (all of them ≥ 0, so all have the support of `f`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Target {
-    /// `p̂ = luminance(f)` (Rec. 709 weights), seed 001's choice and the only one with a GLSL
+    /// `p̂ = luminance(f)` (Rec. 709 weights), paper 001's choice and the only one with a GLSL
     /// twin (`bssrdf_target`).
     #[default]
     Luminance,

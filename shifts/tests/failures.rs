@@ -331,7 +331,7 @@ fn deferred_index_is_resolved_for_the_selected_sample_only_when_found() {
 
 /// Delayed reconnection of a sample whose index is unknown picks a hit with the receiver's
 /// stream: deterministic for the pair, stores the picked rank, and is not invertible where a
-/// probe has several hits (seed 001's deferred-index bias, measured by the round trip).
+/// probe has several hits (paper 001's deferred-index bias, measured by the round trip).
 #[test]
 fn unknown_index_replay_is_deterministic_and_not_invertible() {
     let f = fixture("bumpy");

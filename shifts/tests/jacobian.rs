@@ -1,6 +1,6 @@
 //! Check 3 of `restir::check`, the finite-difference Jacobian, for delayed reconnection
 //! [001 Eq. 11] on the bumpy scene (curved surface, quad light), spatial and temporal pairs, in
-//! the coordinates of seed 001's extended path space `P × Γ` [001 App. A].
+//! the coordinates of paper 001's extended path space `P × Γ` [001 App. A].
 //!
 //! `SssDomain`'s path coordinates cannot be turned back into a sample, so each test point gets
 //! a chart: x2 in orthonormal coordinates of its triangle's plane (area measure); for an area
@@ -331,7 +331,7 @@ fn well_inside(domain: &SssDomain, e: &Extended) -> bool {
         && (V_MARGIN..=1.0 - V_MARGIN).contains(&e.v)
 }
 
-/// The selections tested: seed 001's nine techniques, then the single-technique selections
+/// The selections tested: paper 001's nine techniques, then the single-technique selections
 /// normal axis / red, tangent / green, bitangent / blue.
 fn selections() -> Vec<(String, TechniqueSelection)> {
     let single = (0..3).map(|i| {

@@ -16,7 +16,7 @@
 //! itself stands for every sample of `i` with `y`'s path: `i` produces `y` iff `T_{i→r}(y)`
 //! succeeds (the test asserts that the image has `y`'s path).
 //!
-//! Negative control: the policy before seed 001's extended-space argument was applied to both
+//! Negative control: the policy before paper 001's extended-space argument was applied to both
 //! ends, `ReceiverOnlyIndex`, which re-traces the chord only at the receiving end of each shift
 //! (each direction with its own γ), so `T_{i→r}` and `T_{r→i}` fail on different events.
 

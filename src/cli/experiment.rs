@@ -1,4 +1,4 @@
-//! `reshift experiment NAME`: the named reproductions of seed 001's figures
+//! `reshift experiment NAME`: the named reproductions of paper 001's figures
 //! (the `experiments` crate); prints the table and the findings (or the JSON) and where the outputs
 //! are.
 

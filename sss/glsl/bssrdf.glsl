@@ -71,7 +71,7 @@ struct TechniqueSelection {
     vec3 channel;
 };
 
-// TechniqueSelection::default: axes 0.5 / 0.25 / 0.25, channels uniform (seed 001).
+// TechniqueSelection::default: axes 0.5 / 0.25 / 0.25, channels uniform (paper 001).
 TechniqueSelection bssrdf_selection_default() {
     TechniqueSelection s;
     s.axis = vec3(0.5, 0.25, 0.25);

@@ -1,4 +1,4 @@
-// Seed 000's hybrid estimator per pixel: the GLSL twin of sss/src/integrator/single_scatter.rs
+// Paper 000's hybrid estimator per pixel: the GLSL twin of sss/src/integrator/single_scatter.rs
 // (read the two side by side). Path-traced zero and single scattering on the object's own mesh
 // with the material's boundary, plus diffusion with the multiple-scattering-only profile R - R1
 // by BSSRDF IS (signed); Lambert pixels get the path tracer's direct lighting.

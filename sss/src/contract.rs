@@ -157,7 +157,7 @@ pub mod pt {
 
         /// Which diffusion profile a BSSRDF evaluates: Burley's normalized diffusion `A R̄_d`
         /// (DESIGN §9, every method's default) or the Jensen dipole of the same material
-        /// (`DipoleProfiles`), the profile of seed 002 (`PtSettings::profile`).
+        /// (`DipoleProfiles`), the profile of paper 002 (`PtSettings::profile`).
         #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
         pub enum ProfileKind in PT_PROFILE {
             #[default]

@@ -18,7 +18,7 @@ pub struct Framing {
 }
 
 impl Framing {
-    /// The scene's own camera: moving and jittered (seed 001's setup).
+    /// The scene's own camera: moving and jittered (paper 001's setup).
     pub const SCENE: Framing = Framing {
         moving: true,
         jitter: true,

@@ -5,12 +5,12 @@
 //!
 //! ```text
 //! walk − BSSRDF = [walk₀ + walk₁ − R1]              low orders: exact paths vs the flat R1 profile
-//!               + [walk≥2 − (R − R1)]               multiple scattering: walk vs seed 000's diffusion
-//!               + [(R1 + (R − R1)) − BSSRDF]        profile: seed 000's R(α) vs the material's A R̄
+//!               + [walk≥2 − (R − R1)]               multiple scattering: walk vs paper 000's diffusion
+//!               + [(R1 + (R − R1)) − BSSRDF]        profile: paper 000's R(α) vs the material's A R̄
 //! ```
 //!
 //! with two controls: path-traced zero + single scattering against the walk's 0- and
-//! 1-collision tallies (the same transport, must agree), and seed 000's hybrid estimator
+//! 1-collision tallies (the same transport, must agree), and paper 000's hybrid estimator
 //! (`single-scatter`) against the walk. Every part is relative to the walk's region mean, with
 //! a 99% CI over K replicas (seeds `0..K`; every estimator of a replica at the same primary
 //! hits, so the differences are paired: the replica is the unit of independence).
@@ -262,7 +262,7 @@ fn gaps(
         .collect()
 }
 
-/// The medium of the scene's first translucent material: `ℓ = 1/σt`, `α`, and seed 000's total
+/// The medium of the scene's first translucent material: `ℓ = 1/σt`, `α`, and paper 000's total
 /// diffuse albedo `A(α)` relative to the material's `A` (the profile part's origin).
 fn medium_line(scene: &Scene) -> Option<String> {
     let media = Medium::of_scene(scene).ok()?;

@@ -4,12 +4,12 @@
 //! * the volumetric random walk by the number of volume collisions before its exit — 0 (the
 //!   unscattered boundary term), 1, ≥ 2 (`sss::random_walk::{enter, walk, incident}`, exactly
 //!   `estimate_exitant` with the exit binned by `Exit::scatter_count`);
-//! * seed 000's hybrid estimator by part (`sss::integrator::single_scatter`): path-traced zero
+//! * paper 000's hybrid estimator by part (`sss::integrator::single_scatter`): path-traced zero
 //!   and single scattering, and the diffusion with the multiple-scattering-only profile
 //!   `R − R1`;
-//! * the diffusion with seed 000's single-scattering profile `R1 = (α/5.108) R̄_{ℓ/5.434}` on the
+//! * the diffusion with paper 000's single-scattering profile `R1 = (α/5.108) R̄_{ℓ/5.434}` on the
 //!   *same* BSSRDF probe and light samples as `R − R1` (a copy of the stream), so
-//!   `R1 + (R − R1)` is seed 000's full profile `R = A(α) R̄_{ℓ/s(A(α))}` sample by sample;
+//!   `R1 + (R − R1)` is paper 000's full profile `R = A(α) R̄_{ℓ/s(A(α))}` sample by sample;
 //! * the material's BSSRDF (`A R̄_{ℓ/s(A)}` with the material's own `A`, the path tracer `pt`).
 //!
 //! Each estimator draws from its own streams (purposes "MG" + n, its exits' light selection

@@ -1,4 +1,4 @@
-//! The comparison figure in the style of seed 001 Fig. 6 and 7: the reference on the left with
+//! The comparison figure in the style of paper 001 Fig. 6 and 7: the reference on the left with
 //! the insets marked, then one row per inset (lit, penumbra, shadowed) and one column per image
 //! (the reference, then each method's final frame of replica 0), each crop labelled with its
 //! region's MSE and efficiency ratio over the baseline with their 95% intervals. With denoisers,

@@ -124,7 +124,7 @@ pub struct ImageFiles {
 /// The comparison's figures, relative to the output folder.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct FigureFiles {
-    /// Reference and methods side by side with insets of each region (seed 001 Fig. 6).
+    /// Reference and methods side by side with insets of each region (paper 001 Fig. 6).
     pub figure: String,
     /// MSE against frame, one panel per region.
     pub convergence: String,

@@ -71,7 +71,7 @@ pub fn milliseconds(r: &MethodResult) -> Measured {
 /// The Markdown table: per method and area, MSE and relMSE (the reference's variance
 /// subtracted), bias ± 99% CI (also relative to the reference mean), ms/frame, efficiency
 /// `1/(MSE·s)` and its ratio to `baseline`, each with its 95% interval; the whole-frame
-/// (`image`) row also carries seed 001's tonemapped 8-bit MSE.
+/// (`image`) row also carries paper 001's tonemapped 8-bit MSE.
 pub fn markdown(results: &[MethodResult], baseline: Option<&MethodResult>) -> String {
     let base = baseline.map_or("baseline".into(), |b| b.label());
     let mut out = format!(

@@ -1,4 +1,4 @@
-// The variance-guided sample count of seed 004: the GLSL twin of
+// The variance-guided sample count of paper 004: the GLSL twin of
 // methods/src/adaptive/cpu.rs (read the two side by side; same functions, same operation
 // order). A sample of the method is pt_estimate_with (pt.glsl) with the radius sampling of the
 // parameters; a frame's pixel value is the f64 mean of its samples rounded to f32, as on the CPU.

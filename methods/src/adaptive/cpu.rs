@@ -1,4 +1,4 @@
-//! Seed 004 (Xie et al. 2020) as the rendering method `adaptive`: Burley BSSRDF importance sampling
+//! Paper 004 (Xie et al. 2020) as the rendering method `adaptive`: Burley BSSRDF importance sampling
 //! with the approximate inverse CDF `g(ξ)` [004 Eq. 21], weighted by the density of `g(U)` so the
 //! estimator stays unbiased, and the single-pass variance-guided (SPVG) sample count per pixel and
 //! frame [004 §4.1]. Its GLSL twin is `adaptive.glsl` beside it.

@@ -1,5 +1,5 @@
 #version 460
-// The adaptive method of seed 004 per pixel and frame: the GLSL twin of
+// The adaptive method of paper 004 per pixel and frame: the GLSL twin of
 // methods/src/adaptive/cpu.rs render_frame (read the two side by side; the controller is
 // adaptive.glsl beside it). Per translucent pixel: the history carried from the previous frame by
 // gbuffer_reproject (none on frame 0 or a disocclusion), the count n = adaptive_sample_count,

@@ -1,4 +1,4 @@
-//! `adaptive[:option=value[/option=value…]]`: seed 004 (Xie et al. 2020) — path tracing with
+//! `adaptive[:option=value[/option=value…]]`: paper 004 (Xie et al. 2020) — path tracing with
 //! Xie's radius sampling `g(ξ)` weighted by its own density (unbiased against the Burley
 //! reference) and the single-pass variance-guided sample count per pixel and frame
 //! ([`cpu`], [004 Eq. 6–17]). Every frame of the trajectory is rendered (the
@@ -27,7 +27,7 @@ use sss::limits::MAX_SPP;
 use sss::scene::Scene;
 
 use self::cpu::AdaptiveParams;
-use crate::estimator::{Entry, Estimator, Frame, Method, SampleCounts};
+use crate::estimator::{Entry, Estimator, LastFrame, Method, SampleCounts};
 use crate::pt::to_image;
 
 pub const ENTRY: Entry = Entry {
@@ -120,7 +120,7 @@ impl Estimator for Adaptive {
         scene: &Scene,
         frames: u32,
         seed: u64,
-    ) -> Result<Frame, PipelineError> {
+    ) -> Result<LastFrame, PipelineError> {
         Ok(self.render_counted(backend, scene, frames, seed)?.0)
     }
 
@@ -130,7 +130,7 @@ impl Estimator for Adaptive {
         scene: &Scene,
         frames: u32,
         seed: u64,
-    ) -> Result<(Frame, Option<SampleCounts>), PipelineError> {
+    ) -> Result<(LastFrame, Option<SampleCounts>), PipelineError> {
         let mut nonfinite = 0;
         let (image, counts) = match backend.renderer() {
             Some(mut renderer) => {
@@ -154,7 +154,7 @@ impl Estimator for Adaptive {
             counts,
             max: self.0.b_max,
         };
-        let frame = Frame {
+        let frame = LastFrame {
             image,
             frames_rendered: frames,
             nonfinite,

@@ -1,4 +1,4 @@
-//! The adaptive method of seed 004 on the device (`method_adaptive.glsl`, `adaptive.glsl`)
+//! The adaptive method of paper 004 on the device (`method_adaptive.glsl`, `adaptive.glsl`)
 //! against its CPU twin [`run`], frame by
 //! frame over a trajectory: the per-pixel sample counts and the images.
 //!

@@ -1,4 +1,4 @@
-//! The adaptive method of seed 004 on the device (`method_adaptive.glsl`, twin of
+//! The adaptive method of paper 004 on the device (`method_adaptive.glsl`, twin of
 //! [`cpu::render_frame`](super::cpu::render_frame) and [`cpu::run`](super::cpu::run), driven through the engine's [`Renderer`] ([`run`])):
 //! per frame of the trajectory its G-buffer, then `b_max` dispatches (one per sample index) that
 //! reproject the previous frame's histories, take each pixel's count of samples and write the

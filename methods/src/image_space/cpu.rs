@@ -1,4 +1,4 @@
-//! Image-space subsurface scattering of seed 002 (Mertens et al. 2003) with the Jensen dipole:
+//! Image-space subsurface scattering of paper 002 (Mertens et al. 2003) with the Jensen dipole:
 //! the rendering method `image-space`. Its GLSL twin is `image_space.glsl` beside it.
 //!
 //! Each of the `spp` passes `s` of a frame runs two stages over the G-buffer:

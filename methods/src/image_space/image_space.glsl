@@ -1,4 +1,4 @@
-// Image-space subsurface scattering of seed 002: the GLSL twin of
+// Image-space subsurface scattering of paper 002: the GLSL twin of
 // methods/src/image_space/cpu.rs (read the two side by side; same functions, same random
 // numbers in the same order, same operation order). Per pass: an irradiance kernel writes
 // image_space_irradiance_at for every translucent pixel, then a gather kernel computes

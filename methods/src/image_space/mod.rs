@@ -1,4 +1,4 @@
-//! `image-space[:spp]`: image-space subsurface scattering of seed 002 (Mertens et al. 2003) with
+//! `image-space[:spp]`: image-space subsurface scattering of paper 002 (Mertens et al. 2003) with
 //! the Jensen dipole ([`cpu`]): per pass, the irradiance of every
 //! translucent pixel from the eye [002 Eq. 5], then a gather of `R_d · E` over the image on each
 //! pixel's tangent plane [002 Eq. 4, 8–9]; `spp` passes are averaged. Lambert pixels take the
@@ -28,7 +28,7 @@ use sss::profile::ProfileKind;
 use sss::scene::{GBuffer, Scene};
 
 use self::cpu::ImageSpaceSettings;
-use crate::estimator::{Entry, Estimator, Frame, Method, parse_spp};
+use crate::estimator::{Entry, Estimator, LastFrame, Method, parse_spp};
 use crate::pt::to_image;
 
 pub const ENTRY: Entry = Entry {
@@ -70,7 +70,7 @@ impl Estimator for ImageSpace {
         scene: &Scene,
         frames: u32,
         seed: u64,
-    ) -> Result<Frame, PipelineError> {
+    ) -> Result<LastFrame, PipelineError> {
         let last = frames - 1;
         let (image, nonfinite) = match backend.renderer() {
             Some(mut renderer) => vulkan::render(&mut renderer, scene, last, seed, self.spp)?,
@@ -81,7 +81,7 @@ impl Estimator for ImageSpace {
                 (to_image(&frame.image), frame.image.nonfinite)
             }
         };
-        Ok(Frame {
+        Ok(LastFrame {
             image,
             frames_rendered: 1,
             nonfinite,

@@ -1,4 +1,4 @@
-//! The image-space method of seed 002 on the device (`method_image_space.glsl`,
+//! The image-space method of paper 002 on the device (`method_image_space.glsl`,
 //! `image_space.glsl`) against its CPU twin [`render`].
 //!
 //! Without Vulkan each test prints why it is skipped and passes, unless

@@ -1,4 +1,4 @@
-//! The image-space method of seed 002 on the device (`method_image_space.glsl`, twin of
+//! The image-space method of paper 002 on the device (`method_image_space.glsl`, twin of
 //! [`cpu::render`](super::cpu::render)): per pass an irradiance dispatch and a gather dispatch over one frame's
 //! G-buffer, driven through the engine's [`Renderer`] ([`render`]).
 //!

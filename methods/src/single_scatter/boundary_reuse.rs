@@ -1,4 +1,4 @@
-//! ReSTIR on seed 000's boundary (zero-scattering) term [000 "ReSTIR Sample"]: the option
+//! ReSTIR on paper 000's boundary (zero-scattering) term [000 "ReSTIR Sample"]: the option
 //! `/restir` of [`single_scatter`](sss::integrator::single_scatter). Single scattering and the `R − R1` diffusion part are the
 //! plain estimator's; only the boundary term `e^{−σt d0} f0 L0` [000 slide 60] is replaced by
 //! the estimate `f(Y) · W_Y` of a per-pixel reservoir, reused over frames and pixels.

@@ -1,7 +1,7 @@
 #version 460
 // The single-scatter method per pixel: the GLSL twin of the `single-scatter` method
 // (methods/src/single_scatter/mod.rs over sss::integrator::single_scatter::render; read them side
-// by side, the estimator's math is sss/glsl/single_scatter.glsl). Seed 000's hybrid estimator on
+// by side, the estimator's math is sss/glsl/single_scatter.glsl). Paper 000's hybrid estimator on
 // translucent pixels (path-traced zero and single scattering through the material's boundary,
 // diffusion with R - R1 for the rest), the path tracer's direct lighting on Lambert pixels, the
 // exits lit by the scene's lights with shadow rays (engine/glsl/include/scene_lighting.glsl, the

@@ -1,4 +1,4 @@
-//! `single-scatter[:spp][/channels=<scattering|uniform>]`: seed 000's hybrid estimator
+//! `single-scatter[:spp][/channels=<scattering|uniform>]`: paper 000's hybrid estimator
 //! (`sss::integrator::single_scatter`): at a translucent primary hit, zero and single scattering
 //! are path traced through the material's `boundary`, and only the rest goes through diffusion,
 //! with the signed multiple-scattering-only profile `R − R1` [000 "Combined Approach"]. Lambert
@@ -37,7 +37,7 @@ use sss::scene::{GBuffer, Scene};
 
 use self::boundary_reuse::{DEFAULT_CAP, ReuseSettings, SameVertices};
 use crate::estimator::{
-    Entry, Estimator, Frame, Method, Trajectory, memoryless_trajectory, parse_spp,
+    Entry, Estimator, LastFrame, Method, Trajectory, memoryless_trajectory, parse_spp,
 };
 use crate::pt::to_image;
 
@@ -145,14 +145,14 @@ impl Estimator for SingleScatter {
         scene: &Scene,
         frames: u32,
         seed: u64,
-    ) -> Result<Frame, PipelineError> {
+    ) -> Result<LastFrame, PipelineError> {
         self.refuse_restir_on(backend)?;
         if let Some(cap) = self.restir {
             let last = self.render_restir(scene, cap, frames, frames - 1, seed)?;
             let image = last.last().ok_or_else(|| {
                 PipelineError::Config(format!("{}: frames = {frames} gave no frame", self.name()))
             })?;
-            return Ok(Frame {
+            return Ok(LastFrame {
                 image: to_image(image),
                 frames_rendered: frames,
                 nonfinite: image.nonfinite,
@@ -162,7 +162,7 @@ impl Estimator for SingleScatter {
         if let Some(mut renderer) = backend.renderer() {
             let (image, nonfinite) =
                 vulkan::render(&mut renderer, scene, frame, seed, self.spp, self.channels)?;
-            return Ok(Frame {
+            return Ok(LastFrame {
                 image,
                 frames_rendered: 1,
                 nonfinite,
@@ -178,7 +178,7 @@ impl Estimator for SingleScatter {
                 exit_lighting(scene, pixel, frame, seed)
             })
             .map_err(|e| PipelineError::Config(format!("{}: {e}", self.name())))?;
-        Ok(Frame {
+        Ok(LastFrame {
             image: to_image(&image),
             frames_rendered: 1,
             nonfinite: image.nonfinite,

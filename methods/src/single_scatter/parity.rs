@@ -1,4 +1,4 @@
-//! Parity of seed 000's hybrid estimator twin (`sss/glsl/single_scatter.glsl`) with
+//! Parity of paper 000's hybrid estimator twin (`sss/glsl/single_scatter.glsl`) with
 //! `sss::integrator::single_scatter`, on the CPU's G-buffer:
 //! - the estimator alone, through the test kernel `parity_single_scatter.glsl`, with a fixed
 //!   directional "sun" lighting the exits on both sides and both hit policies of the diffusion
@@ -6,7 +6,7 @@
 //! - the method's kernel `method_single_scatter.glsl` (scene lighting with shadow rays at the
 //!   exits, `engine::random_walk_method::SceneLighting`'s twin) against `single_scatter::render`
 //!   with the method's light-selection streams. Every built-in scene is covered at the method
-//!   level by `lab/tests/vulkan_seed_methods.rs`.
+//!   level by `lab/tests/vulkan_comparison_methods.rs`.
 //!
 //! Without Vulkan each test prints why it is skipped and passes, unless
 //! `RESHIFT_REQUIRE_VULKAN=1`, which makes it fail.

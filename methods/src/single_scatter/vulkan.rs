@@ -1,4 +1,4 @@
-//! Seed 000's hybrid estimator on the device (`method_single_scatter.glsl`, twin of the
+//! Paper 000's hybrid estimator on the device (`method_single_scatter.glsl`, twin of the
 //! `single-scatter` method over [`sss::integrator::single_scatter::render`]): path-traced zero
 //! and single scattering plus diffusion with `R − R1` on translucent pixels, the path tracer's
 //! direct lighting elsewhere, the exits lit by the scene's lights with shadow rays; driven

@@ -50,7 +50,7 @@ impl ExitPoint {
     }
 
     /// [`ExitPoint::new`] with explicit profiles (their `r_max` derived) instead of the
-    /// material's, e.g. the full profile that samples seed 000's `R − R1`.
+    /// material's, e.g. the full profile that samples paper 000's `R − R1`.
     pub fn with_profiles(
         position: Vec3,
         geometric_normal: Vec3,

@@ -84,7 +84,7 @@ pub struct BssrdfSample {
     pub u_radius: f32,
     pub u_angle: f32,
     /// Rank of x2 among the probe's hits sorted by `t`; `None` = unknown (deferred inversion:
-    /// replay then picks a hit uniformly, seed 001's small bias).
+    /// replay then picks a hit uniformly, paper 001's small bias).
     pub index: Option<u32>,
     /// `p_disk(x2 | x1)` for the x1 whose random numbers are stored (the cached Jacobian part
     /// [001 Eq. 11]); update it whenever the random numbers change.

@@ -56,7 +56,7 @@ pub struct TechniqueSelection {
 }
 
 impl Default for TechniqueSelection {
-    /// Seed 001's choice: axes 0.5 / 0.25 / 0.25, channels uniform.
+    /// Paper 001's choice: axes 0.5 / 0.25 / 0.25, channels uniform.
     fn default() -> Self {
         TechniqueSelection {
             axis: [0.5, 0.25, 0.25],
@@ -67,7 +67,7 @@ impl Default for TechniqueSelection {
 
 impl TechniqueSelection {
     /// Channels picked with probability proportional to `weights` (a channel CDF, e.g. ∝ albedo as
-    /// in seed 000), axes as in [`TechniqueSelection::default`]. `None` unless every weight is
+    /// in paper 000), axes as in [`TechniqueSelection::default`]. `None` unless every weight is
     /// finite and ≥ 0 and their sum is > 0.
     pub fn with_channel_weights(weights: [f32; 3]) -> Option<Self> {
         let sum: f32 = weights.iter().sum();

@@ -17,7 +17,7 @@
 //! Xie's `g(ξ)` instead of the exact inverse ([`RadiusSampling`]; `p_disk` then uses the density
 //! of `g(U)`, so the estimator stays unbiased), and `f` may evaluate the dipole profile of the
 //! material instead of Burley's ([`ProfileKind::Dipole`], the reference of the image-space method
-//! of seed 002). BSSRDF IS keeps sampling Burley radii under the dipole profile: `p_disk > 0`
+//! of paper 002). BSSRDF IS keeps sampling Burley radii under the dipole profile: `p_disk > 0`
 //! wherever the truncated dipole `f` is, so the estimate is unbiased for it.
 
 use geometry::{Hit, Ray};
@@ -164,7 +164,7 @@ pub fn estimate(
 /// One BSSRDF-IS estimate at x1 of `∫ f(x2, ωi) dA dωi` for the path contribution
 /// `contribution(x2, ωi, L_e)` of a BSSRDF on x1's cached profiles (they sample x2 and give
 /// `p_disk`, with radii from `settings.radius`): the material's [`contribution`], its dipole's
-/// ([`contribution_dipole`]), or seed 000's multiple-scattering-only profile
+/// ([`contribution_dipole`]), or paper 000's multiple-scattering-only profile
 /// ([`single_scatter`](super::single_scatter)). Unbiased for any `f` — of either sign — that
 /// vanishes where `p_disk` does; NEE at x2, shadow-tested, per the hit policy (module doc).
 pub fn estimate_bssrdf(

@@ -1,10 +1,10 @@
-//! Seed 000's hybrid estimator [000 "Combined Approach"]: at a translucent primary hit x1, the
+//! Paper 000's hybrid estimator [000 "Combined Approach"]: at a translucent primary hit x1, the
 //! zero-scattering (boundary) term and single scattering are path traced, and only the rest goes
 //! through diffusion, with the multiple-scattering-only profile `R − R1`. A sibling of [`pt`]:
 //! one estimate per pixel sample from the G-buffer, every number from an explicit stream.
 //! GLSL twin: `sss/glsl/single_scatter.glsl`.
 //!
-//! **Medium and boundary.** The material's medium by seed 000's colour mapping
+//! **Medium and boundary.** The material's medium by paper 000's colour mapping
 //! ([`Medium::from_translucent`]: `fit = "dmfp"` is an input error) and its `boundary`
 //! (diffuse by default: Lambertian transmission at entry and exit, next-event estimation at the
 //! exit as in the talk [000 slides 57–60]; a smooth dielectric or index-matched boundary too).
@@ -32,7 +32,7 @@
 //! channel CDF) or `1/3` ([`ChannelSelection::Uniform`]); both are unbiased (one-sample MIS).
 //!
 //! **Multiple scattering: the signed estimator of `R − R1`.** Per channel, `Rn = R − R1` of
-//! [`ScatteringOrders`] (`α = σs/σt`, `ℓ = 1/σt`, seed 000's searchlight `R(α)`). x2 is drawn by
+//! [`ScatteringOrders`] (`α = σs/σt`, `ℓ = 1/σt`, paper 000's searchlight `R(α)`). x2 is drawn by
 //! BSSRDF importance sampling on the *full* profile `R̄_{ℓ/s(A(α))}` ([`pt::estimate_bssrdf`],
 //! NEE at x2), and each hit contributes `f/p` with `f = Rn(r)/π · F_t F_t · cos · L_e` evaluated
 //! with its sign. `Rn < 0` near `r = 0` once `α ≳ 0.29`; the estimator stays unbiased because
@@ -278,7 +278,7 @@ pub fn path_traced<B: Boundary + ?Sized, P: PhaseFunction, L: ExitLighting>(
     orders
 }
 
-/// Seed 000's multiple-scattering-only profile `Rn = R − R1` per channel, with the quantities
+/// Paper 000's multiple-scattering-only profile `Rn = R − R1` per channel, with the quantities
 /// derived once: the full profile's albedo `A(α)` and Burley profile (which samples x2), and the
 /// single-scattering albedo `α/5.108` and profile.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,4 +1,4 @@
-//! Seed 000's artist mapping from a colour `C` and a scatter distance `mfp` to volume coefficients
+//! Paper 000's artist mapping from a colour `C` and a scatter distance `mfp` to volume coefficients
 //! [000, "Parameters"; after Kulla & Conty 2017]:
 //! `S = 4.09712 + 4.20863C − √(9.59217 + 41.6808C + 17.7126C²)`, single-scattering albedo
 //! `α = (1 − S²)/(1 − gS²)`, `σt = 1/mfp`, `σs = α/mfp` (per channel, `C ∈ [0, 1]`).

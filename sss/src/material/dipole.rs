@@ -1,5 +1,5 @@
 //! The Jensen dipole [002 Table 1] of a [`Translucent`] material, prepared for evaluation and
-//! sampling: the profile that the image-space method of seed 002 integrates, and that the
+//! sampling: the profile that the image-space method of paper 002 integrates, and that the
 //! path-traced reference evaluates under
 //! [`ProfileKind::Dipole`](crate::profile::ProfileKind) so that the two can be compared.
 //!

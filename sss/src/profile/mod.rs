@@ -1,6 +1,6 @@
 //! Diffusion profiles (DESIGN §4, §9): Burley normalized diffusion with exact ([`burley`]) and
 //! approximate ([`xie`]) radius sampling, the Christensen–Burley scale `s(A)` ([`scale`]), the
-//! Jensen dipole with Newton sampling ([`dipole`]), and seed 000's single / multiple-only split
+//! Jensen dipole with Newton sampling ([`dipole`]), and paper 000's single / multiple-only split
 //! ([`single_scattering`]).
 
 pub mod burley;

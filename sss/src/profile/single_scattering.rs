@@ -1,7 +1,7 @@
-//! Seed 000's split of the diffusion profile into single scattering `R1` and the
+//! Paper 000's split of the diffusion profile into single scattering `R1` and the
 //! multiple-scattering-only profile `Rn = R − R1` [000, "Single Scattering Diffusion Profile"].
 //!
-//! The `R` of seed 000 is Burley's normalized diffusion with the **searchlight** fit
+//! The `R` of paper 000 is Burley's normalized diffusion with the **searchlight** fit
 //! `s(A) = 1.85 − A + 7|A − 0.8|³` ([`ScaleFit::Searchlight`], [004 Eq. 5] Θ₁), `ℓ = 1/σt` the
 //! volume mean free path, written as a function of the single-scattering albedo `α` through the
 //! seed's Monte Carlo fit (diffuse transmission, η = 1.4, semi-infinite slab)
@@ -26,7 +26,7 @@ use crate::profile::{Burley, ScaleFit, scale_factor};
 /// `A′(0) = 1 / (2(1 + 1.554))` (module doc).
 const SINGLE_ALBEDO_SLOPE: f32 = 1.0 / 5.108;
 
-/// Seed 000's fit of the surface albedo as a function of the single-scattering albedo `α ∈ [0, 1]`.
+/// Paper 000's fit of the surface albedo as a function of the single-scattering albedo `α ∈ [0, 1]`.
 pub fn surface_albedo(alpha: f32) -> f32 {
     let q = (1.0 - alpha.clamp(0.0, 1.0)).sqrt();
     (1.0 - q) / (1.554 * q + 1.0)
@@ -84,7 +84,7 @@ mod tests {
     use super::*;
     use std::f64::consts::PI;
 
-    /// Seed 000's R(r; α) written out from the slide in f64, independently of the module.
+    /// Paper 000's R(r; α) written out from the slide in f64, independently of the module.
     fn slide_r(r: f64, alpha: f64, mfp: f64) -> f64 {
         let q = (1.0 - alpha).sqrt();
         let a = (1.0 - q) / (1.554 * q + 1.0);

@@ -112,7 +112,7 @@ impl Medium {
         })
     }
 
-    /// The medium of a translucent material by seed 000's colour mapping [000 "Parameters"]:
+    /// The medium of a translucent material by paper 000's colour mapping [000 "Parameters"]:
     /// colour `C` = the material's albedo, scatter distance `scale · mfp`, so
     /// `σt = 1/(scale · mfp)`, `σs = α(C, g) σt`, `σa = σt − σs`; the interface is the material's
     /// `boundary` ([`Interface::of`]). Only the fits whose length is the volume mean free path

@@ -4,7 +4,7 @@
 //! - [`phase`]: Henyey–Greenstein sampling, pdf, value and inverse.
 //! - [`medium`]: RGB `σs`, `σa`, the phase function and the boundary's [`Interface`]
 //!   (index-matched, smooth dielectric, Fresnel-free diffuse transmission); built from explicit
-//!   coefficients or from a [`Translucent`](crate::material::Translucent) by seed 000's colour
+//!   coefficients or from a [`Translucent`](crate::material::Translucent) by paper 000's colour
 //!   mapping.
 //! - [`boundary`]: the closed surface seen from inside ([`Boundary`]): half-space (semi-infinite
 //!   medium), sphere, and one closed object of the scene BVH.
@@ -13,7 +13,7 @@
 //!   events, Russian roulette, a reported bounce cap).
 //! - [`lighting`] and [`estimate`]: the pixel-level estimator [`estimate_exitant`] with
 //!   next-event estimation at the exit; its entry ([`enter`]), boundary crossing ([`cross`]) and
-//!   exit lighting ([`incident`]) also serve seed 000's single-scattering estimator
+//!   exit lighting ([`incident`]) also serve paper 000's single-scattering estimator
 //!   ([`crate::integrator::single_scatter`]).
 //!
 //! **Analytic check.** For an index-matched semi-infinite medium with isotropic scattering and

@@ -1,5 +1,5 @@
 //! The built-in scenes: the TOML files of `scenes/`, embedded so they work from any directory.
-//! They recreate seed 001 §6's evaluation setups with procedural geometry.
+//! They recreate paper 001 §6's evaluation setups with procedural geometry.
 
 /// `(name, one-line description)` of every built-in scene.
 pub const BUILTIN: &[(&str, &str)] = &[

@@ -8,7 +8,7 @@
 use geometry::Ray;
 use glam::{Vec2, Vec3, Vec3A};
 
-/// Frames of the camera trajectory (seed 001 §6 records the temporal history over 16 frames).
+/// Frames of the camera trajectory (paper 001 §6 records the temporal history over 16 frames).
 pub const FRAMES: u32 = 16;
 
 /// A pinhole camera whose eye and target move linearly from their start to their end positions

@@ -1,5 +1,5 @@
 //! The seeded many-light generator (`[many_lights]`): small sphere lights scattered uniformly in a
-//! box, for the many-small-lights evaluation of seed 001 §6 (Fig. 7).
+//! box, for the many-small-lights evaluation of paper 001 §6 (Fig. 7).
 
 use std::f32::consts::PI;
 

@@ -1,6 +1,6 @@
 //! Scenes (DESIGN §4): the TOML scene format (`docs/scene-format.md`), camera with its 16-frame
 //! trajectory and jitter, lights with power-proportional selection, the G-buffer, and the
-//! built-in evaluation scenes of seed 001 §6 (`scenes/*.toml`).
+//! built-in evaluation scenes of paper 001 §6 (`scenes/*.toml`).
 
 mod builtin;
 mod camera;

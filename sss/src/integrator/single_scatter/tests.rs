@@ -1,4 +1,4 @@
-//! Tests of seed 000's hybrid estimator: the path-traced orders against a closed form and against
+//! Tests of paper 000's hybrid estimator: the path-traced orders against a closed form and against
 //! the random walk's tallies by collision count, the signed `R − R1` estimator against
 //! quadrature, the whole estimator against the walk where diffusion holds, and determinism.
 //! Replicas (independent batches of samples, each with its own streams) are the statistical
@@ -473,7 +473,7 @@ impl ExitLighting for Sun {
 /// down, diffuse boundary (Lambertian both ways, as the diffusion fits assume), `ior = 1` so the
 /// BSSRDF's `F_t ≡ 1`, seen from straight above.
 ///
-/// Tolerance δ = 4%, because on this geometry the only model error left is seed 000's fit
+/// Tolerance δ = 4%, because on this geometry the only model error left is paper 000's fit
 /// `A(α)` of the total diffuse albedo (and `α/5.108` of the single-scattering one): against the
 /// exact half-space values from Chandrasekhar's H-function (computed below and printed) the
 /// estimator's expectation is 2.0–2.5% low for these albedos. Equivalence per channel at
@@ -481,7 +481,7 @@ impl ExitLighting for Sun {
 /// ±0.6%, so a model bias of −2.5% is shown within δ). Beyond the tolerance, the measured
 /// difference must be the predicted one: the hybrid against the walk times the predicted ratio,
 /// δ = 1% (measured: −2.6%, −2.5%, −2.1% against predicted −2.5%, −2.5%, −2.1%). Negative control: adding the full
-/// Burley profile instead of `R − R1` (the double counting of single scattering that seed 000
+/// Burley profile instead of `R − R1` (the double counting of single scattering that paper 000
 /// starts from) must be flagged `Biased`.
 #[test]
 fn whole_estimator_matches_the_random_walk_on_a_thick_box() {

@@ -1,4 +1,4 @@
-//! The seed methods `image-space` [002], `adaptive` [004] and `single-scatter` [000] render every
+//! The comparison methods `image-space` [002], `adaptive` [004] and `single-scatter` [000] render every
 //! built-in scene on both backends, and the Vulkan images agree with the CPU's of the same seed.
 //! Per-pixel parity on small scenes, with negative controls, is `methods/src/image_space/parity.rs`,
 //! `methods/src/adaptive/parity.rs` and `engine/tests/vulkan_single_scatter.rs`.
@@ -92,8 +92,9 @@ fn scene(name: &str) -> Scene {
 /// value on either backend, finite non-negative pixels, and on Vulkan relMSE(GPU, CPU seed 7) ≤
 /// 0.01 · relMSE(CPU seed 8, CPU seed 7), the adaptive counts equal to the CPU's.
 #[test]
-fn seed_methods_render_every_scene_on_both_backends() {
-    let Some(backend) = backend_or_skip("seed_methods_render_every_scene_on_both_backends") else {
+fn comparison_methods_render_every_scene_on_both_backends() {
+    let Some(backend) = backend_or_skip("comparison_methods_render_every_scene_on_both_backends")
+    else {
         return;
     };
     for (name, _) in Scene::BUILTIN {

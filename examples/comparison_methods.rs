@@ -1,6 +1,6 @@
 //! First measurements of the seed-002 and seed-004 methods on the CPU (before their integration in
-//! the lab): `cargo run --release --example seed_methods -- [image-space|adaptive|both] [replicas]
-//! [σ0²] [κ] [out_dir]` (defaults: both, 16, 0.001, 0.2, `out/seed-methods`).
+//! the lab): `cargo run --release --example comparison_methods -- [image-space|adaptive|both] [replicas]
+//! [σ0²] [κ] [out_dir]` (defaults: both, 16, 0.001, 0.2, `out/comparison-methods`).
 //!
 //! On `bumpy` at 128×96, frame 15 (the end of the 16-frame trajectory):
 //! * **image-space** (`methods::image_space::cpu`, 4 passes): bias per region against the path
@@ -77,7 +77,7 @@ fn ratio(a: &Summary, b: &Summary) -> (f64, f64, f64) {
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let usage =
-        "usage: seed_methods [image-space|adaptive|both|mfp] [replicas] [σ0²] [κ] [out_dir]";
+        "usage: comparison_methods [image-space|adaptive|both|mfp] [replicas] [σ0²] [κ] [out_dir]";
     let mode = args.get(1).map_or("both", |s| s.as_str());
     let replicas: u32 = args.get(2).map_or(16, |s| s.parse().expect(usage));
     let params = AdaptiveParams {
@@ -88,7 +88,7 @@ fn main() {
     if let Err(e) = params.validate() {
         panic!("{e}");
     }
-    let out = PathBuf::from(args.get(5).map_or("out/seed-methods", |s| s.as_str()));
+    let out = PathBuf::from(args.get(5).map_or("out/comparison-methods", |s| s.as_str()));
     std::fs::create_dir_all(&out).expect("output folder");
 
     if mode == "mfp" {

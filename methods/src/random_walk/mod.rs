@@ -1,0 +1,158 @@
+//! `random-walk[:spp]`: the volumetric random walk on translucent pixels and the path tracer
+//! on the others (`engine::random_walk_method`; on Vulkan `method_random_walk.glsl`) — another
+//! transport model than the BSSRDF, the ground truth of the diffusion approximation [000].
+//! Memoryless like `pt`: only the final frame is rendered.
+
+use engine::random_walk_method;
+use engine::{Backend, PipelineError};
+use sss::scene::{GBuffer, Scene};
+
+use super::estimator::{Entry, Estimator, LastFrame, Method, parse_spp};
+
+pub const ENTRY: Entry = Entry {
+    family: "random-walk",
+    usage: "random-walk[:spp]",
+    about: "volumetric random walk on translucent pixels (another transport model than the BSSRDF)",
+    build: |arg| {
+        Ok(Method::new(RandomWalk {
+            spp: parse_spp(arg)?,
+        }))
+    },
+};
+
+/// `spp` walks per translucent pixel, `spp` path-traced samples elsewhere.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RandomWalk {
+    pub spp: u32,
+}
+
+impl Estimator for RandomWalk {
+    fn name(&self) -> String {
+        format!("random-walk:{}", self.spp)
+    }
+
+    fn spp(&self) -> u32 {
+        self.spp
+    }
+
+    fn with_spp(&self, spp: u32) -> Option<Method> {
+        Some(Method::new(RandomWalk { spp }))
+    }
+
+    fn render(
+        &self,
+        backend: &Backend,
+        scene: &Scene,
+        frames: u32,
+        seed: u64,
+    ) -> Result<LastFrame, PipelineError> {
+        let last = frames - 1;
+        let (image, nonfinite) = match backend.renderer() {
+            Some(mut renderer) => renderer.random_walk(scene, last, seed, self.spp)?,
+            None => {
+                let gbuffer = GBuffer::render(scene, last);
+                random_walk_method::render(scene, &gbuffer, seed, self.spp)?
+            }
+        };
+        Ok(LastFrame {
+            image,
+            frames_rendered: 1,
+            nonfinite,
+        })
+    }
+}
+
+/// What the walks of one translucent pixel need: the object's mesh as the boundary, the outward
+/// normal at x1, the scene's lights with the pixel's light-selection stream, and the pixel's
+/// walk stream (both keyed by pixel, frame and seed).
+pub struct PixelWalk<'a> {
+    pub boundary: MeshBoundary<'a>,
+    pub n1: Vec3,
+    pub lighting: SceneLighting<'a>,
+    pub stream: Stream,
+}
+
+impl<'a> PixelWalk<'a> {
+    pub fn new(scene: &'a Scene, g: &GPixel, pixel: u32, frame: u32, seed: u64) -> PixelWalk<'a> {
+        let n = scene.geometry.geometric_normal(g.prim);
+        let inward_winding = n.dot(g.view) < 0.0;
+        let key = |purpose| StreamKey {
+            pixel,
+            frame,
+            pass: 0,
+            purpose,
+        };
+        PixelWalk {
+            boundary: MeshBoundary {
+                geometry: &scene.geometry,
+                object: g.object,
+                inward_winding,
+            },
+            n1: if inward_winding { -n } else { n },
+            lighting: SceneLighting {
+                scene,
+                selection: RefCell::new(key(PURPOSE_WALK_LIGHT).stream(seed)),
+            },
+            stream: key(PURPOSE_WALK).stream(seed),
+        }
+    }
+}
+
+/// Renders frame `gbuffer.frame`: translucent pixels by `spp` random walks each, the others by
+/// the path tracer at `spp`. Returns the image and the number of non-finite estimates (left out).
+pub fn render(
+    scene: &Scene,
+    gbuffer: &GBuffer,
+    seed: u64,
+    spp: u32,
+) -> Result<(Image, u64), PipelineError> {
+    let media =
+        Medium::of_scene(scene).map_err(|e| PipelineError::Config(format!("random-walk: {e}")))?;
+    let base = pt::render(scene, gbuffer, &PtSettings::default(), seed, 0, spp);
+    let mut nonfinite = base.nonfinite;
+    let mut pixels: Vec<DVec3> = base.pixels;
+    for (index, (out, g)) in pixels.iter_mut().zip(&gbuffer.pixels).enumerate() {
+        let Some(g) = g else { continue };
+        let material = scene.objects[g.object as usize].material as usize;
+        let Some(medium) = &media[material] else {
+            continue;
+        };
+        let PixelWalk {
+            boundary,
+            n1,
+            lighting,
+            mut stream,
+        } = PixelWalk::new(scene, g, index as u32, gbuffer.frame, seed);
+        let (mut sum, mut finite) = (DVec3::ZERO, 0u32);
+        for _ in 0..spp {
+            let l = estimate_exitant(
+                &boundary,
+                medium,
+                g.position,
+                n1,
+                g.view,
+                &lighting,
+                &mut stream,
+            );
+            if l.is_finite() {
+                sum += l.as_dvec3();
+                finite += 1;
+            } else {
+                nonfinite += 1;
+            }
+        }
+        *out = if finite > 0 {
+            sum / finite as f64
+        } else {
+            DVec3::ZERO
+        };
+    }
+    Ok((
+        Image {
+            width: gbuffer.width,
+            height: gbuffer.height,
+            pixels: pixels.iter().map(|p| p.as_vec3()).collect(),
+        },
+        nonfinite,
+    ))
+}

@@ -14,8 +14,7 @@
 //! other processes share the machine. Without Vulkan it says why and exits cleanly.
 
 use engine::vulkan::{
-    CANDIDATES, Context, GBUFFER, Kernel, PT, RANDOM_WALK, Renderer, SHADE, SPATIAL, Shader,
-    TEMPORAL,
+    CANDIDATES, Context, GBUFFER, Kernel, PT, Renderer, SHADE, SPATIAL, Shader, TEMPORAL,
 };
 use engine::{Preset, RunConfig};
 use sss::scene::Scene;
@@ -47,15 +46,7 @@ fn mean_sd(v: &[f64]) -> String {
     format!("{mean:.2} ± {:.2}", var.sqrt())
 }
 
-const SHADERS: [Shader; 7] = [
-    GBUFFER,
-    CANDIDATES,
-    TEMPORAL,
-    SPATIAL,
-    SHADE,
-    PT,
-    RANDOM_WALK,
-];
+const SHADERS: [Shader; 6] = [GBUFFER, CANDIDATES, TEMPORAL, SPATIAL, SHADE, PT];
 const PRESETS: [&str; 2] = ["sequential", "hybrid"];
 
 fn main() -> Result<(), String> {

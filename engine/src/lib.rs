@@ -28,8 +28,8 @@ pub mod plan;
 /// streams (probabilistic inversion's γ, the deferred uniform pick) with the top two bits set,
 /// and the path tracer uses `sss::integrator::pt::PURPOSE_PT`.
 pub mod purpose;
-pub mod random_walk_method;
 pub mod reuse;
+pub mod scene_lighting;
 pub mod vulkan;
 
 use std::fmt;

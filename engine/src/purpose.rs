@@ -13,7 +13,7 @@ twin::contract! {
     pub const NEIGHBOURS: u32 = 0x103;
     /// The path-tracing estimate that shades pixels whose x1 is not translucent.
     pub const OPAQUE: u32 = 0x104;
-    /// The volumetric random walks of a pixel (`random_walk_method`).
+    /// The volumetric random walks of a pixel (`methods::random_walk`).
     pub const WALK: u32 = 0x5257_0001;
     /// The light selection at the random walks' exits.
     pub const WALK_LIGHT: u32 = 0x5257_0002;

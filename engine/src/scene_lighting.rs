@@ -1,36 +1,16 @@
-//! The `random-walk[:spp]` method: the volumetric random walk of `sss::random_walk` on the
-//! pixels whose primary hit is translucent, the path tracer on the others.
-//!
-//! Model choices (a different transport model than the BSSRDF methods, so `compare` measures
-//! its difference to the BSSRDF reference, not only its noise):
-//! * the medium is the material's by paper 000's colour mapping ([`Medium::from_translucent`]),
-//!   so `fit = "dmfp"` materials are an input error;
-//! * the boundary is the material's `boundary` ([`Interface::of`]); the default, Fresnel-free
-//!   Lambertian transmission, has the exit lobe `1/π` of the diffusion profiles and lets exits
-//!   use next-event estimation (a smooth dielectric exit reaches area lights only by chance);
-//! * the boundary is the hit object's own mesh; x1's outward normal comes from its winding as
-//!   seen by the camera (the camera sees closed objects from outside).
-//!
-//! [`Interface::of`]: sss::random_walk::Interface::of
-//!
-//! [`SceneLighting`] adapts the scene's lights to [`ExitLighting`], with shadow rays (GLSL twin
-//! `engine/glsl/include/scene_lighting.glsl`, shared by the random-walk and single-scatter
-//! kernels).
+//! [`SceneLighting`]: the scene's lights as [`ExitLighting`] for points where a subsurface path
+//! leaves the boundary, with shadow rays (GLSL twin `engine/glsl/include/scene_lighting.glsl`).
+//! Shared by the random-walk and single-scatter methods (`methods/src/random_walk`,
+//! `methods/src/single_scatter`, CPU and kernels) and the model-gap experiment.
 
 use std::cell::RefCell;
 
 use geometry::Ray;
-use glam::{DVec3, Vec3, Vec3A};
-use restir::rng::{Stream, StreamKey};
-use sss::integrator::pt::{self, PtSettings};
-use sss::random_walk::{self, ExitLighting, Medium, MeshBoundary, estimate_exitant};
-use sss::scene::{GBuffer, GPixel, Light, Scene};
-
-use crate::PipelineError;
-use crate::image::Image;
-
-/// `purpose` of the walks' streams and of the light-selection numbers of [`SceneLighting`].
-pub use crate::purpose::{WALK as PURPOSE_WALK, WALK_LIGHT as PURPOSE_WALK_LIGHT};
+use glam::{Vec3, Vec3A};
+use restir::rng::Stream;
+use sss::integrator::pt;
+use sss::random_walk::{self, ExitLighting};
+use sss::scene::{Light, Scene};
 
 /// The scene's lights as seen from boundary points where a walk leaves, with visibility.
 /// [`Lights::sample`](sss::scene::Lights::sample) takes three numbers and the walk supplies two:
@@ -152,6 +132,7 @@ impl ExitLighting for SceneLighting<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use restir::rng::StreamKey;
     use sss::color::luminance;
     use sss::scene::Lights;
 

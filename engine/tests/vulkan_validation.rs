@@ -48,7 +48,6 @@ fn every_method_preset_and_pass_passes_sync_validation() {
     }
     for frame in 0..FRAMES {
         validated("pt", renderer.pt(&scene, frame, SEED, 1));
-        validated("random-walk", renderer.random_walk(&scene, frame, SEED, 1));
     }
     // The denoiser stage's device pass: SVGF over the frames of a path-traced trajectory.
     let guides = Guide::trajectory(&scene, FRAMES);

@@ -14,8 +14,8 @@ use sss::integrator::single_scatter::{self, SingleScatterSettings};
 use sss::random_walk::{Medium, WalkEnd, WalkSettings, estimate_exitant_with};
 use sss::scene::{GBuffer, Scene};
 
-use engine::random_walk_method::PixelWalk;
 use lab::regions::{Region, Regions};
+use methods::random_walk::PixelWalk;
 use methods::single_scatter::exit_lighting;
 
 fn main() {

@@ -345,7 +345,7 @@ fn time_methods(
         ("pt:1", Box::new(|r, f| frame(r.pt(scene, f, 0, 1)))),
         (
             "random-walk:1",
-            Box::new(|r, f| frame(r.random_walk(scene, f, 0, 1))),
+            Box::new(|r, f| frame(methods::random_walk::vulkan::render(r, scene, f, 0, 1))),
         ),
         (
             "single-scatter:1",

@@ -1,8 +1,8 @@
 //! The random-walk method on a real scene, judged by the lab's regions: a plausible,
 //! deterministic image.
 
-use engine::random_walk_method::render;
 use lab::regions::{Region, Regions};
+use methods::random_walk::render;
 use restir::stats::Summary;
 use sss::color::luminance;
 use sss::scene::{GBuffer, Scene};

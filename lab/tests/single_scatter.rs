@@ -9,7 +9,7 @@
 use std::cell::RefCell;
 
 use engine::Image;
-use engine::random_walk_method::SceneLighting;
+use engine::scene_lighting::SceneLighting;
 use engine::vulkan::testing::{backend_or_skip, rel_mse_pixels};
 use methods::single_scatter::PURPOSE_SINGLE_SCATTER_LIGHT;
 use methods::{Method, REGISTRY};

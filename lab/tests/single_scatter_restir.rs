@@ -115,7 +115,7 @@ static SLAB: Design = Design {
 /// triangle, this design found that the plain boundary term read 6% below the sum of its
 /// one-light values, which `/restir` matched: `SceneLighting::radiance` returned the nearest light
 /// only. It now sums every light along the direction
-/// (`random_walk_method::tests::overlapping_lights_irradiance_agrees_by_both_techniques`); the
+/// (`scene_lighting::tests::overlapping_lights_irradiance_agrees_by_both_techniques`); the
 /// planned CVs were measured with this placement, so it stays.
 static BEHIND: Design = Design {
     name: "slab lit by a sphere, a triangle and a directional light",

@@ -1,5 +1,5 @@
 //! The random-walk method on the device (`method_random_walk.glsl`, `sss/glsl/random_walk.glsl`)
-//! against its CPU twin `engine::random_walk_method::render`, and energy conservation of
+//! against its CPU twin `methods::random_walk::render`, and energy conservation of
 //! the GPU walk on its own.
 //!
 //! Without Vulkan each test prints why it is skipped and passes, unless
@@ -8,12 +8,12 @@
 use engine::vulkan::testing::{UploadedFrame, kernel_or_skip, rel_mse_pixels};
 use std::path::Path;
 
-use engine::random_walk_method::{PixelWalk, render};
-use engine::vulkan::{
-    Context, GpuMedium, Kernel, RANDOM_WALK, RandomWalkImage, WalkStats, render_random_walk,
-    scene_media,
-};
+use engine::vulkan::{Context, Kernel};
 use glam::{DVec3, Vec3};
+use methods::random_walk::vulkan::{
+    GpuMedium, RANDOM_WALK, RandomWalkImage, WalkStats, render_random_walk, scene_media,
+};
+use methods::random_walk::{PixelWalk, render};
 use sss::material::Material;
 use sss::random_walk::{Interface, Medium, WalkEnd, WalkSettings, estimate_exitant_with};
 use sss::scene::{GBuffer, Scene};
@@ -45,7 +45,7 @@ fn render_gpu(
 }
 
 /// Per pixel, how the CPU's `spp` walks ended (`[exited, terminated, truncated]`; zero on pixels
-/// without walks) and their mean: the loop of `random_walk_method::render` written out so that
+/// without walks) and their mean: the loop of `random_walk::render` written out so that
 /// the ends are visible. Its image must equal `render`'s on walk pixels (checked by the caller).
 fn cpu_walks(scene: &Scene, gbuffer: &GBuffer, seed: u64, spp: u32) -> (Vec<[u32; 3]>, Vec<Vec3>) {
     let mut ends = vec![[0u32; 3]; gbuffer.pixels.len()];
@@ -118,7 +118,7 @@ const WALK_RATIO: f64 = 0.05;
 const END_MISMATCH_FRACTION: f64 = 0.05;
 
 /// `method_random_walk` at 4 walks per pixel on the CPU's G-buffer reproduces
-/// `random_walk_method::render` with the same seed on `slab`, `bumpy` and `materials` (40×30,
+/// `random_walk::render` with the same seed on `slab`, `bumpy` and `materials` (40×30,
 /// frame 3): on walk pixels relMSE(GPU, CPU) ≤ 0.05 · relMSE(CPU seed 12, CPU seed 11) and at
 /// most 5 % of pixels end their walks differently; on path-traced pixels the same ratio (the
 /// path tracer's own parity is tested in `vulkan_shade`); nothing is left out as non-finite and

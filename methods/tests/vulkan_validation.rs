@@ -1,4 +1,4 @@
-//! The kernels of this crate's methods (image space, adaptive, single scattering), once, under the Khronos
+//! The kernels of this crate's methods (image space, adaptive, single scattering, random walk), once, under the Khronos
 //! validation layer with synchronization validation: any error (an invalid use, a missing
 //! barrier) fails the test with the layer's message (the engine's kernels:
 //! `engine/tests/vulkan_validation.rs`).
@@ -9,7 +9,7 @@
 use engine::vulkan::Checks;
 use engine::vulkan::testing::{assert_no_unreported_errors, validated, validated_or_skip};
 use methods::adaptive::{self, cpu::AdaptiveParams};
-use methods::{image_space, single_scatter};
+use methods::{image_space, random_walk, single_scatter};
 use sss::integrator::single_scatter::ChannelSelection;
 use sss::scene::Scene;
 
@@ -31,6 +31,8 @@ fn every_method_kernel_passes_sync_validation() {
         let channels = ChannelSelection::Scattering;
         let image = single_scatter::vulkan::render(&mut renderer, &scene, frame, SEED, 1, channels);
         validated("single-scatter", image);
+        let image = random_walk::vulkan::render(&mut renderer, &scene, frame, SEED, 1);
+        validated("random-walk", image);
     }
     let params = AdaptiveParams::default();
     let last = adaptive::vulkan::run(&mut renderer, &scene, &params, SEED, FRAMES, |_| {});

@@ -1,5 +1,5 @@
 // The scene's lights at the exits of a path leaving a translucent object: the GLSL twin of
-// engine::random_walk_method::{SceneLighting, intersect_light} (engine/src/random_walk_method.rs;
+// engine::scene_lighting::{SceneLighting, intersect_light} (engine/src/scene_lighting.rs;
 // read the two side by side). Defines the three exit_lighting_* functions that
 // sss/glsl/random_walk.glsl declares: light samples with shadow rays, the pdf and the radiance
 // of the nearest area light along a direction with its visibility ray.

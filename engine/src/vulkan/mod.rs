@@ -20,7 +20,6 @@ mod frame;
 mod memory;
 mod pass_params;
 mod pt;
-mod random_walk;
 mod renderer;
 mod scene;
 mod shaders;
@@ -39,9 +38,6 @@ pub use error::VulkanError;
 pub use frame::{CANDIDATES, SPATIAL, TEMPORAL};
 pub use memory::Buffer;
 pub use pt::{DeviceImage, FrameInput, PT, SHADE, render_pt, render_pt_hits, shade};
-pub use random_walk::{
-    GpuMedium, RANDOM_WALK, RandomWalkImage, WalkStats, render_random_walk, scene_media,
-};
 pub use renderer::Renderer;
 pub use scene::{GBUFFER, GpuScene};
 pub use svgf::{SVGF, svgf_filter};

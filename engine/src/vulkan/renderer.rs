@@ -14,7 +14,6 @@ use super::device::Context;
 use super::error::VulkanError;
 use super::frame::FrameRun;
 use super::memory::Buffer;
-use super::random_walk::{RANDOM_WALK, render_random_walk, scene_media};
 use super::scene::{GBUFFER, GpuScene};
 use super::shaders::Shader;
 use super::svgf::{SVGF, svgf_filter};
@@ -135,28 +134,6 @@ impl Renderer {
         let input = FrameInput::new(scene, gpu, &params, &gbuffer);
         let out = render_pt(context, kernel, &input, spp)?;
         Ok((out.image, out.left_out))
-    }
-
-    /// The `random-walk:spp` method at `frame`: the image and the samples left out.
-    pub fn random_walk(
-        &mut self,
-        scene: &Scene,
-        frame: u32,
-        seed: u64,
-        spp: u32,
-    ) -> Result<(Image, u64), PipelineError> {
-        let media = scene_media(scene)?;
-        let (gbuffer, params) = self.gbuffer(scene, frame, seed)?;
-        let (context, kernel, gpu) = self.parts(RANDOM_WALK)?;
-        let input = FrameInput::new(scene, gpu, &params, &gbuffer);
-        let out = render_random_walk(context, kernel, &input, &media, spp)?;
-        if out.cut > 0 {
-            return Err(PipelineError::Vulkan(VulkanError::LoopsCut {
-                shader: RANDOM_WALK.name,
-                count: out.cut,
-            }));
-        }
-        Ok((out.image.image, out.image.left_out))
     }
 
     /// The spatiotemporal variance-guided filter's twin over `frames` with their `guides`

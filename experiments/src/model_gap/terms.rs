@@ -28,7 +28,7 @@ use sss::integrator::single_scatter::{
 use sss::random_walk::{Medium, MeshBoundary, WalkEnd, WalkSettings, enter, incident, walk};
 use sss::scene::{GPixel, Scene};
 
-use engine::random_walk_method::SceneLighting;
+use engine::scene_lighting::SceneLighting;
 
 /// The terms, in the order of [`Terms::values`].
 pub const TERM_NAMES: [&str; 8] = [

@@ -1,6 +1,6 @@
 #version 460
-// The random-walk method per pixel: the GLSL twin of engine::random_walk_method::render
-// (engine/src/random_walk_method.rs; read the two side by side). Pixels whose object has a
+// The random-walk method per pixel: the GLSL twin of methods::random_walk::render
+// (methods/src/random_walk/mod.rs; read the two side by side). Pixels whose object has a
 // translucent material get the mean of `spp` volumetric walks (sss/glsl/random_walk.glsl) on the
 // object's own mesh, Fresnel-free diffuse boundary, next-event estimation at the exit; Lambert
 // pixels get the path tracer's mean of `spp` samples, as method_pt.glsl computes it.
@@ -37,9 +37,9 @@ layout(local_size_x = 64) in;
 #include "random_walk.glsl"
 #include "loop_budget.glsl"
 // SceneLighting: exit_lighting_* and scene_lighting_selection.
-#include "include/scene_lighting.glsl"
+#include "scene_lighting.glsl"
 
-// How the walks of one pixel ended (std430, 36 bytes; Rust twin engine::vulkan::WalkStats):
+// How the walks of one pixel ended (std430, 36 bytes; Rust twin methods::random_walk::vulkan::WalkStats):
 // the sum of the exit weights (walk::Exit::weight) of exited walks, the largest |weight_c - 1|
 // among them, the count of each WalkEnd, the non-finite samples (walks or path-traced) and the
 // dispatches whose loops the device cut short.
@@ -147,7 +147,7 @@ void main() {
     }
     state.sum = double[3](sum.x, sum.y, sum.z);
     if (last) {
-        // pt::render divides by spp, random_walk_method::render by the finite walks.
+        // pt::render divides by spp, random_walk::render by the finite walks.
         uint count = walk ? state.finite : params.spp;
         precise dvec3 mean = count > 0u ? sum / double(count) : dvec3(0.0);
         image[pixel] = vec4(vec3(mean), float(tally.nonfinite));

@@ -1,13 +1,41 @@
-//! `random-walk[:spp]`: the volumetric random walk on translucent pixels and the path tracer
-//! on the others (`engine::random_walk_method`; on Vulkan `method_random_walk.glsl`) — another
-//! transport model than the BSSRDF, the ground truth of the diffusion approximation [000].
-//! Memoryless like `pt`: only the final frame is rendered.
+//! `random-walk[:spp]`: the volumetric random walk of `sss::random_walk` on the pixels whose
+//! primary hit is translucent and the path tracer on the others ([`render`]; on Vulkan
+//! [`vulkan::render`], kernel `method_random_walk.glsl`) — another transport model than the
+//! BSSRDF, the ground truth of the diffusion approximation [000]. Memoryless like `pt`: only the
+//! final frame is rendered.
+//!
+//! Model choices (a different transport model than the BSSRDF methods, so `compare` measures
+//! its difference to the BSSRDF reference, not only its noise):
+//! * the medium is the material's by paper 000's colour mapping ([`Medium::from_translucent`]),
+//!   so `fit = "dmfp"` materials are an input error;
+//! * the boundary is the material's `boundary` ([`Interface::of`]); the default, Fresnel-free
+//!   Lambertian transmission, has the exit lobe `1/π` of the diffusion profiles and lets exits
+//!   use next-event estimation (a smooth dielectric exit reaches area lights only by chance);
+//! * the boundary is the hit object's own mesh; x1's outward normal comes from its winding as
+//!   seen by the camera (the camera sees closed objects from outside).
+//!
+//! [`Interface::of`]: sss::random_walk::Interface::of
+//!
+//!
+//! The exits are lit by the engine's [`SceneLighting`] (shared with single-scatter).
 
-use engine::random_walk_method;
+pub mod vulkan;
+
+use std::cell::RefCell;
+
+use engine::image::Image;
+use engine::scene_lighting::SceneLighting;
 use engine::{Backend, PipelineError};
-use sss::scene::{GBuffer, Scene};
+use glam::{DVec3, Vec3};
+use restir::rng::{Stream, StreamKey};
+use sss::integrator::pt::{self, PtSettings};
+use sss::random_walk::{Medium, MeshBoundary, estimate_exitant};
+use sss::scene::{GBuffer, GPixel, Scene};
 
 use super::estimator::{Entry, Estimator, LastFrame, Method, parse_spp};
+
+/// `purpose` of the walks' streams and of the light-selection numbers of [`SceneLighting`].
+pub use engine::purpose::{WALK as PURPOSE_WALK, WALK_LIGHT as PURPOSE_WALK_LIGHT};
 
 pub const ENTRY: Entry = Entry {
     family: "random-walk",
@@ -48,10 +76,10 @@ impl Estimator for RandomWalk {
     ) -> Result<LastFrame, PipelineError> {
         let last = frames - 1;
         let (image, nonfinite) = match backend.renderer() {
-            Some(mut renderer) => renderer.random_walk(scene, last, seed, self.spp)?,
+            Some(mut renderer) => vulkan::render(&mut renderer, scene, last, seed, self.spp)?,
             None => {
                 let gbuffer = GBuffer::render(scene, last);
-                random_walk_method::render(scene, &gbuffer, seed, self.spp)?
+                render(scene, &gbuffer, seed, self.spp)?
             }
         };
         Ok(LastFrame {

@@ -1,6 +1,6 @@
 //! The random-walk method on the device (`method_random_walk.glsl`, twin of
-//! [`random_walk_method::render`](crate::random_walk_method::render)): volumetric walks on
-//! translucent pixels, the path tracer elsewhere, over one frame's G-buffer.
+//! [`super::render`]): volumetric walks on translucent pixels, the path tracer elsewhere, over one
+//! frame's G-buffer; driven through the engine's [`Renderer`] ([`render`]).
 //!
 //! The walk needs per-material values that `GpuMaterial` lacks (`σs`, `σt`, the interface):
 //! they live in this method's own buffer, binding 11 ([`GpuMedium`]), computed on the host by
@@ -20,17 +20,46 @@ use glam::Vec3;
 use sss::random_walk::{Interface, Medium};
 use sss::scene::Scene;
 
-use super::{
-    Buffer, Context, DeviceImage, FrameInput, Kernel, MethodParams, Shader, VulkanError, groups_for,
+use engine::PipelineError;
+use engine::image::Image;
+use engine::vulkan::{
+    Buffer, Context, DeviceImage, FrameInput, Kernel, MethodParams, Renderer, Shader, VulkanError,
+    groups_for,
 };
-use crate::PipelineError;
-use crate::image::Image;
 
 /// `method_random_walk.glsl`: scene bindings 0–8, 9 G-buffer (`GpuPixel`), 10 `vec4` out (mean,
 /// `w` = non-finite samples left out), 11 [`GpuMedium`] per material, 12 [`WalkStats`] per
 /// pixel, 13 the per-pixel state carried between dispatches (bindings 11–13 are this method's
 /// own, after the contract's 0–10). Push constants: [`MethodParams`], `pad[0]` = the sample.
-pub const RANDOM_WALK: Shader = Shader::new("method_random_walk", 14, 32);
+pub const RANDOM_WALK: Shader = Shader::compiled(
+    "method_random_walk",
+    crate::spirv!("method_random_walk"),
+    14,
+    size_of::<MethodParams>() as u32,
+);
+
+/// The `random-walk:spp` method at `frame`: the image and the samples left out; a dispatch whose
+/// loops the device cut short is an error.
+pub fn render(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    frame: u32,
+    seed: u64,
+    spp: u32,
+) -> Result<(Image, u64), PipelineError> {
+    let media = scene_media(scene)?;
+    let (gbuffer, params) = renderer.gbuffer(scene, frame, seed)?;
+    let (context, kernel, gpu) = renderer.parts(RANDOM_WALK)?;
+    let input = FrameInput::new(scene, gpu, &params, &gbuffer);
+    let out = render_random_walk(context, kernel, &input, &media, spp)?;
+    if out.cut > 0 {
+        return Err(PipelineError::Vulkan(VulkanError::LoopsCut {
+            shader: RANDOM_WALK.name,
+            count: out.cut,
+        }));
+    }
+    Ok((out.image.image, out.image.left_out))
+}
 
 /// `random_walk.glsl`'s `RandomWalkMedium` (std430, 48 bytes): one material's medium. The kernel
 /// reads it only for translucent materials (it decides by `GpuMaterial`'s kind, as the CPU
@@ -202,7 +231,6 @@ mod tests {
         );
         assert_eq!(offset_of!(WalkPixelState, sum), 32);
         assert_eq!(offset_of!(WalkPixelState, finite), 56);
-        assert_eq!(size_of::<MethodParams>() as u32, RANDOM_WALK.push_bytes);
     }
 
     /// `bumpy`'s translucent material maps to the CPU's medium bit for bit, with the material's

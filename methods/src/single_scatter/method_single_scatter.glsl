@@ -5,7 +5,7 @@
 // translucent pixels (path-traced zero and single scattering through the material's boundary,
 // diffusion with R - R1 for the rest), the path tracer's direct lighting on Lambert pixels, the
 // exits lit by the scene's lights with shadow rays (engine/glsl/include/scene_lighting.glsl, the
-// twin of engine::random_walk_method::SceneLighting).
+// twin of engine::scene_lighting::SceneLighting).
 //
 // Streams, as on the CPU: sample s of a pixel draws from StreamKey { pixel, frame, s,
 // SINGLE_SCATTER_PURPOSE_SINGLE_SCATTER } (single_scatter_sample_stream), and the light selection

@@ -29,7 +29,7 @@ pub mod vulkan;
 
 use std::cell::RefCell;
 
-use engine::random_walk_method::SceneLighting;
+use engine::scene_lighting::SceneLighting;
 use engine::{Backend, PipelineError};
 use restir::rng::StreamKey;
 use sss::integrator::single_scatter::{self, ChannelSelection, SingleScatterSettings};

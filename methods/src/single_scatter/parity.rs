@@ -4,7 +4,7 @@
 //!   directional "sun" lighting the exits on both sides and both hit policies of the diffusion
 //!   probe (the method uses only `All`);
 //! - the method's kernel `method_single_scatter.glsl` (scene lighting with shadow rays at the
-//!   exits, `engine::random_walk_method::SceneLighting`'s twin) against `single_scatter::render`
+//!   exits, `engine::scene_lighting::SceneLighting`'s twin) against `single_scatter::render`
 //!   with the method's light-selection streams. Every built-in scene is covered at the method
 //!   level by `lab/tests/vulkan_comparison_methods.rs`.
 //!
@@ -13,7 +13,7 @@
 
 use std::cell::RefCell;
 
-use engine::random_walk_method::SceneLighting;
+use engine::scene_lighting::SceneLighting;
 use engine::vulkan::testing::{UploadedFrame, kernel_or_skip};
 use engine::vulkan::{Buffer, Context, Kernel, Shader, groups_for};
 use glam::{DVec3, Vec3};

@@ -11,7 +11,7 @@
 //! transcendentals the GPU must not redo). Binding 12 carries each pixel's light-selection stream,
 //! sum and tallies between dispatches ([`SingleScatterPixelState`]).
 //!
-//! **One dispatch per sample**, as the random walk ([`engine::vulkan::render_random_walk`]):
+//! **One dispatch per sample**, as the random walk ([`render_random_walk`](crate::random_walk::vulkan::render_random_walk)):
 //! lavapipe cuts every loop of an invocation group after 65 535 iterations; the kernel counts the
 //! dispatches where it did, [`SingleScatterImage::cut`] sums them, and a caller must treat a
 //! non-zero count as a failed render.
@@ -21,8 +21,7 @@ use engine::PipelineError;
 use engine::contract::PtHits;
 use engine::image::Image;
 use engine::vulkan::{
-    Buffer, Context, DeviceImage, FrameInput, GpuMedium, Kernel, Renderer, Shader, VulkanError,
-    groups_for,
+    Buffer, Context, DeviceImage, FrameInput, Kernel, Renderer, Shader, VulkanError, groups_for,
 };
 use sss::integrator::HitPolicy;
 use sss::integrator::pt::PtSettings;
@@ -33,6 +32,7 @@ use sss::random_walk::Medium;
 use sss::scene::Scene;
 
 use super::contract::SingleScatterParams;
+use crate::random_walk::vulkan::GpuMedium;
 
 /// `method_single_scatter.glsl`: scene bindings 0–8, 9 G-buffer (`GpuPixel`), 10 `vec4` out
 /// (mean, `w` = samples left out), 11 [`GpuMedium`] per material, 12 [`SingleScatterPixelState`]

@@ -1,8 +1,8 @@
 //! What the GLSL twins cost to compile on the device. Lavapipe compiles a compute pipeline in
 //! two steps: SPIR-V → NIR at pipeline creation, NIR → LLVM → machine code at the first dispatch
 //! (llvmpipe builds shader variants lazily). So this bench measures, on a fresh device per
-//! repeat, the process CPU seconds of (1) creating every pass pipeline and the engine's method
-//! pipelines (not those of the `methods` crate) and (2) a first
+//! repeat, the process CPU seconds of (1) creating every pass pipeline (not the kernels of the
+//! `methods` crate) and (2) a first
 //! one-frame run of the `sequential` and `hybrid` presets at 8×8 (every pass kernel's first
 //! dispatch) minus the same run repeated warm. It prints mean ± sd over
 //! `RESHIFT_BENCH_REPEATS` (default 3) and the SPIR-V sizes. Run it with Mesa's disk cache
@@ -14,7 +14,7 @@
 //! other processes share the machine. Without Vulkan it says why and exits cleanly.
 
 use engine::vulkan::{
-    CANDIDATES, Context, GBUFFER, Kernel, PT, Renderer, SHADE, SPATIAL, Shader, TEMPORAL,
+    CANDIDATES, Context, GBUFFER, Kernel, Renderer, SHADE, SPATIAL, Shader, TEMPORAL,
 };
 use engine::{Preset, RunConfig};
 use sss::scene::Scene;
@@ -46,7 +46,7 @@ fn mean_sd(v: &[f64]) -> String {
     format!("{mean:.2} ± {:.2}", var.sqrt())
 }
 
-const SHADERS: [Shader; 6] = [GBUFFER, CANDIDATES, TEMPORAL, SPATIAL, SHADE, PT];
+const SHADERS: [Shader; 5] = [GBUFFER, CANDIDATES, TEMPORAL, SPATIAL, SHADE];
 const PRESETS: [&str; 2] = ["sequential", "hybrid"];
 
 fn main() -> Result<(), String> {

@@ -36,7 +36,8 @@ twin::contract! {
         Directional,
     }
 
-    /// `PtParams::hits`: the path tracer's `sss::integrator::pt::HitPolicy`.
+    /// The path tracer's `sss::integrator::pt::HitPolicy` as the kernels read it (`sss/glsl/pt.glsl`:
+    /// `method_pt`'s and `method_single_scatter`'s push constants, the shade pass's opaque pixels).
     #[derive(Clone, Copy, Debug, PartialEq, Eq)]
     pub enum PtHits in PT_HITS {
         UniformOne,
@@ -164,32 +165,12 @@ twin::contract! {
         pub shade: u32,
     }
 
-    /// Push constants of `method_pt`.
-    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
-    pub struct PtParams in push_constant params {
-        pub spp: u32,
-        /// A `PtHits` code.
-        pub hits: u32,
-        /// The sample this dispatch adds (one dispatch per sample).
-        pub sample_index: u32,
-        pub pad: [u32; 5],
-    }
-
     /// Push constants of `method_random_walk`.
     #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
     pub struct MethodParams in push_constant params {
         pub spp: u32,
         /// `pad[0]`: the sample this dispatch runs.
         pub pad: [u32; 7],
-    }
-
-    /// A pixel's running sum between the dispatches of `method_pt`.
-    #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-    pub struct PtState {
-        pub sum: [f64; 3],
-        pub left_out: u32,
-        /// Samples whose loops the device cut short.
-        pub cut: u32,
     }
 
     /// "No pixel" in a denoiser guide's object and previous pixel (`engine::denoise::guide::NONE`).

@@ -1,5 +1,5 @@
-//! Every Vulkan method of the engine, every preset and so every pass kernel, and the SVGF
-//! denoiser, once, under the Khronos
+//! Every preset and so every pass kernel of the engine, and the SVGF denoiser, once, under the
+//! Khronos
 //! validation layer with synchronization validation: any error (an invalid use, a missing
 //! barrier) fails the test with the layer's message. The negative control (a frame recorded
 //! without one of its barriers is caught) is `renderer::tests` in the library; the kernels of the
@@ -11,7 +11,7 @@
 use engine::denoise::{Guide, svgf};
 use engine::vulkan::Checks;
 use engine::vulkan::testing::{assert_no_unreported_errors, validated, validated_or_skip};
-use engine::{Preset, RunConfig, Shade};
+use engine::{Preset, RunConfig, Shade, run_pt};
 use sss::scene::Scene;
 
 const WIDTH: u32 = 32;
@@ -26,7 +26,7 @@ fn scene() -> Scene {
 }
 
 #[test]
-fn every_method_preset_and_pass_passes_sync_validation() {
+fn every_preset_pass_and_the_denoiser_pass_sync_validation() {
     let Some(mut renderer) = validated_or_skip("sync_validation", Checks::Sync) else {
         return;
     };
@@ -46,14 +46,10 @@ fn every_method_preset_and_pass_passes_sync_validation() {
             validated(&what, renderer.run(&scene, &preset, &config));
         }
     }
-    for frame in 0..FRAMES {
-        validated("pt", renderer.pt(&scene, frame, SEED, 1));
-    }
-    // The denoiser stage's device pass: SVGF over the frames of a path-traced trajectory.
+    // The denoiser stage's device pass: SVGF over the frames of a path-traced trajectory (traced
+    // on the CPU: the path tracer's kernel is the `methods` crate's).
     let guides = Guide::trajectory(&scene, FRAMES);
-    let frames: Vec<_> = (0..FRAMES)
-        .map(|f| validated("pt", renderer.pt(&scene, f, SEED, 1)).0)
-        .collect();
+    let frames = run_pt(&scene, 1, &config).frames;
     validated(
         "svgf",
         renderer.svgf(&guides, &frames, &svgf::Params::default()),

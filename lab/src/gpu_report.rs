@@ -22,6 +22,7 @@ use engine::vulkan::testing::rel_mse;
 use engine::vulkan::{DeviceDetails, VulkanError};
 use engine::{Backend, PipelineError, Preset, Run, RunConfig};
 use methods::adaptive::cpu::AdaptiveParams;
+use sss::integrator::pt::HitPolicy;
 use sss::integrator::single_scatter::ChannelSelection;
 use sss::scene::Scene;
 
@@ -342,7 +343,19 @@ fn time_methods(
         .ok_or_else(|| Error::Invalid("no Vulkan renderer".into()))?;
     type Frame<'a> = Box<dyn FnMut(&mut engine::vulkan::Renderer, u32) -> Result<(), Error> + 'a>;
     let methods: [(&str, Frame); 4] = [
-        ("pt:1", Box::new(|r, f| frame(r.pt(scene, f, 0, 1)))),
+        (
+            "pt:1",
+            Box::new(|r, f| {
+                frame(methods::pt::vulkan::render(
+                    r,
+                    scene,
+                    f,
+                    0,
+                    1,
+                    HitPolicy::All,
+                ))
+            }),
+        ),
         (
             "random-walk:1",
             Box::new(|r, f| frame(methods::random_walk::vulkan::render(r, scene, f, 0, 1))),

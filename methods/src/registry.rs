@@ -3,7 +3,7 @@
 // `ENTRY` it registers, `with contract` where the folder has a `contract.rs` for its GLSL.
 // src/lib.rs reads this list (`REGISTRY`), and so does build.rs (the contracts to render).
 registry! {
-    pt,
+    pt with contract,
     restir,
     random_walk,
     pt_one_hit,

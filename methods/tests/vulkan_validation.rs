@@ -1,4 +1,5 @@
-//! The kernels of this crate's methods (image space, adaptive, single scattering, random walk), once, under the Khronos
+//! The kernels of this crate's methods (path tracer, image space, adaptive, single scattering,
+//! random walk), once, under the Khronos
 //! validation layer with synchronization validation: any error (an invalid use, a missing
 //! barrier) fails the test with the layer's message (the engine's kernels:
 //! `engine/tests/vulkan_validation.rs`).
@@ -9,7 +10,8 @@
 use engine::vulkan::Checks;
 use engine::vulkan::testing::{assert_no_unreported_errors, validated, validated_or_skip};
 use methods::adaptive::{self, cpu::AdaptiveParams};
-use methods::{image_space, random_walk, single_scatter};
+use methods::{image_space, pt, random_walk, single_scatter};
+use sss::integrator::pt::HitPolicy;
 use sss::integrator::single_scatter::ChannelSelection;
 use sss::scene::Scene;
 
@@ -26,6 +28,12 @@ fn every_method_kernel_passes_sync_validation() {
     let mut scene = Scene::builtin("bumpy").expect("built-in scene");
     scene.camera = scene.camera.with_resolution(WIDTH, HEIGHT);
     for frame in 0..FRAMES {
+        for hits in [HitPolicy::All, HitPolicy::UniformOne] {
+            validated(
+                "pt",
+                pt::vulkan::render(&mut renderer, &scene, frame, SEED, 1, hits),
+            );
+        }
         let image = image_space::vulkan::render(&mut renderer, &scene, frame, SEED, 1);
         validated("image-space", image);
         let channels = ChannelSelection::Scattering;

@@ -18,7 +18,7 @@
 // PT_PURPOSE_PT, PT_SHADOW_EPSILON and the profiles PT_PROFILE_* (PtSettings::profile; no buffer
 // carries it yet) (sss/src/contract.rs).
 #include "contract/sss.glsl"
-// PtParams::hits: PT_HITS_UNIFORM_ONE, PT_HITS_ALL (engine/src/contract.rs).
+// PtHits (engine/src/contract.rs): PT_HITS_UNIFORM_ONE, PT_HITS_ALL.
 #include "contract/engine.glsl"
 // std::f32::consts::FRAC_1_PI.
 const float PT_FRAC_1_PI = 0.31830987;

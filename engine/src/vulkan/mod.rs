@@ -17,11 +17,12 @@ mod decode;
 mod device;
 mod error;
 mod frame;
+mod frame_input;
 mod memory;
 mod pass_params;
-mod pt;
 mod renderer;
 mod scene;
+mod shade;
 mod shaders;
 mod svgf;
 pub mod testing;
@@ -36,15 +37,15 @@ pub use decode::decode_error;
 pub use device::{Context, DEVICE_ENV, DeviceDetails, DeviceInfo, DeviceKind, choose_device};
 pub use error::VulkanError;
 pub use frame::{CANDIDATES, SPATIAL, TEMPORAL};
+pub use frame_input::{DeviceImage, FrameInput};
 pub use memory::Buffer;
-pub use pt::{DeviceImage, FrameInput, PT, SHADE, render_pt, render_pt_hits, shade};
 pub use renderer::Renderer;
 pub use scene::{GBUFFER, GpuScene};
+pub use shade::{SHADE, shade};
 pub use svgf::{SVGF, svgf_filter};
 
 pub use crate::contract::{
     FrameParams, GpuCamera, GpuLight, GpuMaterial, GpuPixel, GpuTriangle, MethodParams, PassParams,
-    PtParams,
 };
 pub use shaders::{Code, Shader};
 pub use validation::{Checks, Message, Severity, VALIDATION_ENV};

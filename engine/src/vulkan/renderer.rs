@@ -1,9 +1,9 @@
 //! The front of the Vulkan backend (DESIGN §6): a [`Renderer`] holds the [`Context`], the
 //! compiled kernels and the uploaded [`GpuScene`] across runs (creating a pipeline on lavapipe
-//! compiles LLVM code, so it is done once per shader) and runs the methods on them: a preset's
-//! frames ([`FrameRun`]), the memoryless methods (path tracer, random walk)
-//! and the spatiotemporal denoiser. A method with a kernel of its own drives it through
-//! [`Renderer::gbuffer`] and [`Renderer::parts`] (the `methods` crate).
+//! compiles LLVM code, so it is done once per shader) and runs on them a preset's frames
+//! ([`FrameRun`]) and the spatiotemporal denoiser. A method with a kernel of its own (the
+//! `methods` crate: the path tracer, random walk, ...) drives it through [`Renderer::gbuffer`]
+//! and [`Renderer::parts`].
 
 use std::collections::HashMap;
 use std::collections::hash_map::Entry;
@@ -17,7 +17,7 @@ use super::memory::Buffer;
 use super::scene::{GBUFFER, GpuScene};
 use super::shaders::Shader;
 use super::svgf::{SVGF, svgf_filter};
-use super::{FrameInput, Kernel, PT, groups_for, render_pt};
+use super::{Kernel, groups_for};
 use crate::contract::{FrameParams, GpuPixel, PassParams};
 use crate::denoise::Guide;
 use crate::denoise::svgf::Params as SvgfSettings;
@@ -119,21 +119,6 @@ impl Renderer {
             [groups_for(n as u32, GBUFFER.local_size), 1, 1],
         )?;
         Ok((gpixels, params))
-    }
-
-    /// The `pt:spp` method at `frame`: the image and the samples left out of the means.
-    pub fn pt(
-        &mut self,
-        scene: &Scene,
-        frame: u32,
-        seed: u64,
-        spp: u32,
-    ) -> Result<(Image, u64), VulkanError> {
-        let (gbuffer, params) = self.gbuffer(scene, frame, seed)?;
-        let (context, kernel, gpu) = self.parts(PT)?;
-        let input = FrameInput::new(scene, gpu, &params, &gbuffer);
-        let out = render_pt(context, kernel, &input, spp)?;
-        Ok((out.image, out.left_out))
     }
 
     /// The spatiotemporal variance-guided filter's twin over `frames` with their `guides`

@@ -1,6 +1,6 @@
 #version 460
 // The path-tracer method per pixel: the GLSL twin of sss::integrator::pt::render for one pixel
-// (the `pt[:spp]` method of methods/src/pt.rs uses the All hit policy). Sample s uses
+// (the `pt[:spp]` method of methods/src/pt/mod.rs uses the All hit policy, `pt-one-hit` UniformOne). Sample s uses
 // the stream StreamKey { pixel, frame, s, PURPOSE_PT }; finite samples are summed in f64 in sample order and
 // the mean (sum / spp in f64) is rounded to f32, as the CPU's DVec3 mean and `as_vec3`.
 // Samples left out of the sum (but not of the divisor), counted in w: NaN or infinite ones, as on
@@ -12,7 +12,7 @@
 
 layout(local_size_x = 64) in;
 
-// PtParams (engine/src/contract.rs): spp, the HitPolicy code, the sample this dispatch adds
+// PtParams (contract.rs beside this file): spp, the PtHits code, the sample this dispatch adds
 // (one dispatch per sample, see below).
 #include "contract/pt_params.glsl"
 
@@ -20,12 +20,13 @@ layout(local_size_x = 64) in;
 // Hits kept per probe (KEPT_HITS of the contract). Probes of the path tracer see at most 8 on
 // the built-in scenes (bumpy, 32×32, 64 spp); 16 leaves room, beyond is flagged.
 #include "contract/engine.glsl"
+#include "contract/pt.glsl"
 #define BVH_MAX_HITS KEPT_HITS
 #include "scene.glsl"
 #include "pt.glsl"
 #include "loop_budget.glsl"
 
-// PtState (contract/engine.glsl) is the running sum of a pixel between dispatches: one dispatch
+// PtState (contract/pt.glsl) is the running sum of a pixel between dispatches: one dispatch
 // per sample keeps every dispatch's loops far inside lavapipe's loop budget (loop_budget.glsl)
 // whatever spp is.
 

@@ -1,10 +1,15 @@
 //! `pt[:spp]`: the path-traced baseline, BSSRDF importance sampling with every probe hit
-//! [001 Eq. 10] (`sss::integrator::pt`; on Vulkan its twin `method_pt.glsl`). It has no memory
-//! across frames, so only the final frame is rendered. [`path_trace`] is the path tracer on
-//! either backend with any hit policy, for this method and its variants.
+//! [001 Eq. 10] (`sss::integrator::pt`; on Vulkan [`vulkan::render`], kernel `method_pt.glsl`,
+//! its twin). It has no memory across frames, so only the final frame is rendered.
+//! [`path_trace`] is the path tracer on either backend with any hit policy, for this method and
+//! its variants (`pt-one-hit`).
+
+pub mod contract;
+#[cfg(test)]
+mod parity;
+pub mod vulkan;
 
 use engine::image::Image;
-use engine::vulkan::{FrameInput, PT, render_pt_hits};
 use engine::{Backend, PipelineError};
 use sss::integrator::pt::{self, HitPolicy, PtSettings};
 use sss::scene::{GBuffer, Scene};
@@ -54,7 +59,7 @@ impl Estimator for Pt {
 
 /// Frame `frame` of `scene` path-traced at `spp` samples per pixel with the probe hits chosen
 /// by `hits`: `sss::integrator::pt::render` on the CPU; on Vulkan the G-buffer kernel, then the
-/// `method_pt` kernel (`engine::vulkan::render_pt_hits`), both on the backend's renderer.
+/// `method_pt` kernel ([`vulkan::render`]), both on the backend's renderer.
 pub fn path_trace(
     backend: &Backend,
     scene: &Scene,
@@ -64,13 +69,7 @@ pub fn path_trace(
     hits: HitPolicy,
 ) -> Result<LastFrame, PipelineError> {
     let (image, nonfinite) = match backend.renderer() {
-        Some(mut renderer) => {
-            let (gbuffer, params) = renderer.gbuffer(scene, frame, seed)?;
-            let (context, kernel, gpu) = renderer.parts(PT)?;
-            let input = FrameInput::new(scene, gpu, &params, &gbuffer);
-            let out = render_pt_hits(context, kernel, &input, spp, hits)?;
-            (out.image, out.left_out)
-        }
+        Some(mut renderer) => vulkan::render(&mut renderer, scene, frame, seed, spp, hits)?,
         None => {
             let gbuffer = GBuffer::render(scene, frame);
             let settings = PtSettings {

@@ -1,10 +1,14 @@
-//! Renders the methods' contracts to GLSL headers and compiles their kernels to SPIR-V with
-//! `glslc` (docs/adding-a-method.md, docs/gpu-backend.md).
+//! Writes the crate's method registry, renders the methods' contracts to GLSL headers and
+//! compiles their kernels to SPIR-V with `glslc` (docs/adding-a-method.md, docs/gpu-backend.md).
 //!
-//! Contracts: a method folder's `contract.rs` (one `twin::contract!`) is included here through
-//! its line `<folder> with contract` in `src/registry.rs` (the list the crate reads too), so the
-//! items rendered are the ones the crate compiles; each is written to
-//! `$OUT_DIR/glsl/contract/<folder>.glsl`, with one header per push-constant block.
+//! Registry: a method is registered by its `pub mod <name>;` line between `// Method registry`
+//! and `// End of the method registry` in `src/lib.rs`; `methods-registry` (methods/registry,
+//! a build dependency) reads those lines. Its `METHODS` become `$OUT_DIR/registry.rs`,
+//! `pub const REGISTRY: &[Entry] = &[<name>::ENTRY, ...];`, which `src/lib.rs` includes.
+//!
+//! Contracts: a method folder's `contract.rs` (one `twin::contract!`) exists or not; the ones that
+//! exist `methods-registry` compiled, so the items rendered are the ones the crate compiles; each
+//! is written to `$OUT_DIR/glsl/contract/<folder>.glsl`, with one header per push-constant block.
 //!
 //! Kernels: every `src/<folder>/method_*.glsl` is one compute entry point. It finds the GLSL of
 //! its folder beside it, the generated headers through `$OUT_DIR/glsl`, and the engine's GLSL
@@ -17,41 +21,33 @@
 use std::env;
 use std::path::PathBuf;
 
+use methods_registry::{METHODS, contracts};
 use twin::glslc::Glslc;
 
-/// The build script's reading of `src/registry.rs`: each folder marked `with contract` has its
-/// `src/<folder>/contract.rs` included as a module, and [`contracts`] lists their items.
-macro_rules! registry {
-    ($($name:ident $(with $contract:ident)?),* $(,)?) => {
-        $($(
-            #[allow(dead_code)]
-            mod $name {
-                // From the manifest: a relative path would be read from src/registry.rs, where
-                // the macro is called.
-                include!(concat!(
-                    env!("CARGO_MANIFEST_DIR"),
-                    "/src/",
-                    stringify!($name),
-                    "/",
-                    stringify!($contract),
-                    ".rs"
-                ));
-            }
-        )?)*
-        /// Each method folder with a contract, and its items.
-        fn contracts() -> Vec<(&'static str, Vec<twin::Item>)> {
-            vec![$($((stringify!($name), { let _ = stringify!($contract); $name::glsl_items() }),)?)*]
-        }
-    };
+/// `src/lib.rs`'s `REGISTRY`: one line per registered method, the line that names it in a
+/// compile error (a module without `ENTRY`).
+fn registry() -> String {
+    let mut out = String::from(
+        "/// Every method family the CLI knows, one per `pub mod` line of the method registry in\n\
+         /// `src/lib.rs`, in its order (the modules' alphabetical order, which `cargo fmt` keeps).\n\
+         pub const REGISTRY: &[Entry] = &[\n",
+    );
+    for method in METHODS {
+        let name = method.name;
+        out.push_str(&format!(
+            "    {name}::ENTRY, // `pub mod {name};` in the method registry of src/lib.rs: \
+             a method defines `pub const ENTRY: Entry`\n"
+        ));
+    }
+    out.push_str("];\n");
+    out
 }
-
-include!("src/registry.rs");
 
 fn main() {
     println!("cargo::rustc-check-cfg=cfg(reshift_glslc)");
-    // A new method folder comes with its line in src/registry.rs; a folder is watched whole
-    // (its kernels, twins and contract).
-    println!("cargo::rerun-if-changed=src/registry.rs");
+    // A new method comes with its line in src/lib.rs; a folder is watched whole (its kernels,
+    // twins and contract).
+    println!("cargo::rerun-if-changed=src/lib.rs");
     let mut folders: Vec<PathBuf> = std::fs::read_dir("src")
         .expect("methods/src exists")
         .map(|entry| entry.expect("readable methods/src").path())
@@ -72,6 +68,7 @@ fn main() {
     kernels.sort();
 
     let out_dir = PathBuf::from(env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
+    std::fs::write(out_dir.join("registry.rs"), registry()).expect("OUT_DIR is writable");
     let generated = out_dir.join("glsl");
     let contract_dir = generated.join("contract");
     std::fs::create_dir_all(&contract_dir).expect("OUT_DIR is writable");

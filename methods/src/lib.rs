@@ -5,22 +5,31 @@
 //! A method renders the final frame of a scene's camera trajectory (or every frame of it) for
 //! one replica seed on a backend. Each family implements [`Estimator`] with its [`Entry`]
 //! (family, usage, about, build); [`REGISTRY`] lists the entries. A method with a kernel of its
-//! own is one folder (`image_space/`, `adaptive/`): its entry and estimator (`mod.rs`), its CPU
-//! estimator (`cpu.rs`) and GLSL twin, its kernel (`method_*.glsl`, compiled by `build.rs`) with
-//! its Vulkan host code (`vulkan.rs`, on the engine's [`Renderer`](engine::vulkan::Renderer)), its
-//! contract (`contract.rs`) and its tests. Adding one is that folder, its `mod` line below and
-//! its line in `src/registry.rs`, which lists the entries in [`REGISTRY`] and tells `build.rs`
-//! which folders have a contract (docs/adding-a-method.md). The `mod` lines stay written out:
-//! `cargo fmt` and readers follow them.
+//! own is one folder (`pt/`, `image_space/`, `adaptive/`, ...): its entry and estimator
+//! (`mod.rs`), its CPU estimator (`cpu.rs`) and GLSL twin, its kernel (`method_*.glsl`, compiled
+//! by `build.rs`) with its Vulkan host code (`vulkan.rs`, on the engine's
+//! [`Renderer`](engine::vulkan::Renderer)), its contract (`contract.rs`) and its tests.
+//!
+//! Adding one is that folder and its `pub mod` line in the method registry below: that line is
+//! the registration. `build.rs` reads the block (through `methods-registry`, methods/registry)
+//! and generates [`REGISTRY`] from it, `<name>::ENTRY` per line in the block's order, which is
+//! alphabetical (`cargo fmt` sorts consecutive `mod` lines; nothing depends on the order but the
+//! listing of `reshift methods`); a folder with a `contract.rs` has its contract rendered to GLSL
+//! (docs/adding-a-method.md). The `mod` lines stay written out: `cargo fmt` and readers follow
+//! them.
 
-pub mod adaptive;
 mod estimator;
+
+// Method registry: one `pub mod <name>;` line per method family, whose module defines
+// `pub const ENTRY: Entry` (only such lines, comments and blank lines go here).
+pub mod adaptive;
 pub mod image_space;
 pub mod pt;
 pub mod pt_one_hit;
 pub mod random_walk;
 pub mod restir;
 pub mod single_scatter;
+// End of the method registry.
 
 use std::fmt;
 
@@ -48,17 +57,7 @@ pub use estimator::{
     parse_spp,
 };
 
-/// The crate's reading of `src/registry.rs`: [`REGISTRY`] (build.rs has its own, for the
-/// contracts).
-macro_rules! registry {
-    ($($name:ident $(with $contract:ident)?),* $(,)?) => {
-        /// Every method family the CLI knows, in the order `reshift methods` lists them
-        /// (`src/registry.rs`).
-        pub const REGISTRY: &[Entry] = &[$($name::ENTRY),*];
-    };
-}
-
-include!("registry.rs");
+include!(concat!(env!("OUT_DIR"), "/registry.rs"));
 
 /// A method specification that could not be parsed.
 #[derive(Clone, Debug, PartialEq)]

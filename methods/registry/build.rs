@@ -1,6 +1,6 @@
 //! Reads the method registry of the `methods` crate, the `pub mod <name>;` lines between
 //! `// Method registry` and `// End of the method registry` in `methods/src/lib.rs`, and writes
-//! `$OUT_DIR/methods.rs` for this crate: [`METHODS`](../src/lib.rs) in the registry's order, and
+//! `$OUT_DIR/methods.rs` for this crate: `METHODS` in the registry's order, and
 //! one module per method folder with a `contract.rs`, that file included, for `contracts()`.
 //!
 //! Why a crate of its own: `methods/build.rs` renders the folders' contracts, so it must compile

@@ -13,8 +13,8 @@
 //! Adding one is that folder and its `pub mod` line in the method registry below: that line is
 //! the registration. `build.rs` reads the block (through `methods-registry`, methods/registry)
 //! and generates [`REGISTRY`] from it, `<name>::ENTRY` per line in the block's order, which is
-//! alphabetical (`cargo fmt` sorts consecutive `mod` lines; nothing depends on the order but the
-//! listing of `reshift methods`); a folder with a `contract.rs` has its contract rendered to GLSL
+//! alphabetical (`cargo fmt` sorts consecutive `mod` lines; only listings follow the order:
+//! `reshift methods`, the rows of the ground-truth experiment); a folder with a `contract.rs` has its contract rendered to GLSL
 //! (docs/adding-a-method.md). The `mod` lines stay written out: `cargo fmt` and readers follow
 //! them.
 

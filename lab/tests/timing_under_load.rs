@@ -6,14 +6,15 @@
 //! The two runs render bit-identical images (the CPU backend is deterministic; asserted), so
 //! the MSEs and their spread are the same in both and only the timings differ. The renders are
 //! timed in the process's CPU time ([`engine::clock`]), which the background processes do not
-//! add to: their load takes cores away from the render (its wall time grows about 3×) but
-//! not CPU time it spends. What the load can still change in that CPU time (caches shared with
-//! the other processes, context switches) measured +6–8% here, against intervals about ±9%
-//! wide (`pt`'s image efficiency, 8 replicas) that have to miss each other to fail.
+//! add to: their load takes cores away from the render (its wall time grew 2–4× in six runs
+//! on a 2-core machine) but not CPU time it spends. What the load can still change in that CPU
+//! time (caches shared with the other processes, context switches) measured +2–9% in those
+//! runs, against intervals about ±8% wide each (`pt`'s image efficiency, 8 replicas), which
+//! have to miss each other to fail.
 //!
 //! How it fails: with a clock that counts the time the render waits for a core. Timed in wall
-//! time, each method's efficiency falls about 3–4× under this load and leaves the quiet run's
-//! interval. The ratio alone would not show it: replicas are rendered in rounds of one seed and
+//! time (measured once, by making the CPU backend's clock the wall clock), `pt`'s image
+//! efficiency fell 4.4× under this load and left the quiet run's interval. The ratio alone would not show it: replicas are rendered in rounds of one seed and
 //! paired by seed, so a steady load slows both methods of a pair alike and mostly widens the
 //! ratio's interval. The load is separate processes: busy threads in this process would be
 //! counted in its CPU time.

@@ -9,6 +9,7 @@
 
 pub mod backend;
 pub mod candidates;
+pub mod clock;
 /// What the kernels (`engine/glsl/`) and the scene twins (`sss/glsl/`) share with the host: the
 /// device buffers' std430 structs, push constants, kinds, limits and diag codes
 /// (`twin::contract!`; rendered to `contract/engine.glsl` and one header per push-constant block

@@ -17,8 +17,11 @@ use crate::uncertainty::{CONFIDENCE, Estimate, Interval, log_cost};
 pub struct Replica {
     /// Linear RGB of each measured frame, in the comparison's order (the last frame last).
     pub frames: Vec<Image>,
-    /// Wall-clock seconds per rendered frame (with a denoiser's: both).
+    /// Seconds per rendered frame on the backend's clock ([`engine::clock`]: process CPU time
+    /// on the CPU backend), over every frame the replica rendered (with a denoiser's: both).
     pub seconds_per_frame: f64,
+    /// Wall-clock seconds per rendered frame of the rendering (a denoiser's not included).
+    pub wall_seconds_per_frame: f64,
     /// The denoiser's share of `seconds_per_frame` (0 for a raw frame).
     pub denoiser_seconds_per_frame: f64,
     pub frames_rendered: u32,
@@ -72,9 +75,14 @@ pub struct MethodResult {
     /// ([`Rendered::spp`]): `spp` unless the method chooses counts per pixel (`adaptive`).
     pub mean_spp: f64,
     pub replicas: usize,
-    /// Wall-clock seconds per rendered frame over replicas (one timing per replica), the
-    /// denoiser's included.
+    /// Seconds per rendered frame on the backend's clock ([`engine::clock`]) over replicas (one
+    /// timing per replica, over every frame it rendered), the denoiser's included at equal
+    /// time. Efficiencies count these; their per-replica spread is in every efficiency's
+    /// interval ([`crate::uncertainty::log_cost`]).
     pub seconds: Estimate,
+    /// Wall-clock seconds per rendered frame of the rendering over replicas (reported beside
+    /// `seconds`, counted nowhere).
+    pub wall_seconds: Estimate,
     /// The denoiser's seconds per frame over replicas (`None` for raw frames).
     pub denoiser_seconds: Option<Estimate>,
     pub frames_rendered: u32,
@@ -124,6 +132,7 @@ impl MethodResult {
             .collect::<Option<_>>()?;
         let perceptual = perceptual_metrics(&finals, last_reference, last_regions)?;
         let seconds: Vec<f64> = replicas.iter().map(|r| r.seconds_per_frame).collect();
+        let wall: Vec<f64> = replicas.iter().map(|r| r.wall_seconds_per_frame).collect();
         Some(MethodResult {
             method: method.to_string(),
             denoiser: None,
@@ -131,6 +140,7 @@ impl MethodResult {
             mean_spp: replicas.iter().map(|r| r.spp).sum::<f64>() / replicas.len() as f64,
             replicas: replicas.len(),
             seconds: Estimate::mean(&seconds),
+            wall_seconds: Estimate::mean(&wall),
             denoiser_seconds: None,
             frames_rendered: replicas.iter().map(|r| r.frames_rendered).max()?,
             metrics: convergence.last()?.metrics.clone(),

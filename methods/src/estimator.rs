@@ -4,8 +4,8 @@
 use std::fmt;
 use std::path::Path;
 use std::sync::Arc;
-use std::time::Instant;
 
+use engine::clock::{Stopwatch, Timing};
 use engine::image::Image;
 use engine::{Backend, PipelineError};
 use sss::integrator::pt::PtSettings;
@@ -162,8 +162,11 @@ pub struct Trajectory {
 pub struct Rendered {
     /// Linear RGB of frame `frames − 1`.
     pub image: Image,
-    /// Wall-clock seconds per rendered frame (G-buffer included; on Vulkan with read-back).
+    /// Seconds per rendered frame on the backend's clock ([`engine::clock`]: CPU time of the
+    /// process on the CPU backend, wall time on Vulkan with read-back; G-buffer included).
     pub seconds_per_frame: f64,
+    /// Wall-clock seconds per rendered frame.
+    pub wall_seconds_per_frame: f64,
     /// Frames the method rendered to produce `image` (1 for memoryless estimators).
     pub frames_rendered: u32,
     /// Shaded values that were NaN or infinite (written as 0 or left out of the mean).
@@ -215,8 +218,8 @@ impl Method {
         self.0.reference()
     }
 
-    /// [`Method::render`] on `backend`, timed: `seconds_per_frame` is wall-clock time per
-    /// rendered frame, including read-back on Vulkan.
+    /// [`Method::render`] on `backend`, timed per rendered frame on the backend's clock
+    /// ([`engine::clock`]) and on the wall clock.
     pub fn render_on(
         &self,
         backend: &Backend,
@@ -234,10 +237,12 @@ impl Method {
                 limits::memory(origin, "frames", &value, bytes, "the run")
             })
             .map_err(|e| PipelineError::Config(e.to_string()))?;
-        let start = Instant::now();
+        let watch = Stopwatch::start(backend);
         let (frame, counts) = self.0.render_counted(backend, scene, frames, seed)?;
+        let timing = watch.read().per(frame.frames_rendered);
         Ok(Rendered {
-            seconds_per_frame: start.elapsed().as_secs_f64() / frame.frames_rendered as f64,
+            seconds_per_frame: timing.seconds,
+            wall_seconds_per_frame: timing.wall_seconds,
             image: frame.image,
             frames_rendered: frame.frames_rendered,
             nonfinite: frame.nonfinite,
@@ -249,22 +254,23 @@ impl Method {
     }
 
     /// [`Estimator::render_trajectory`] of replica `seed` on `backend`, timed like
-    /// [`Method::render_on`]: the returned `seconds_per_frame` is the wall-clock time of the
-    /// whole trajectory per rendered frame.
+    /// [`Method::render_on`]: the returned timing is the whole trajectory's per rendered frame
+    /// (a memoryless method renders every frame, so it is timed on every frame of the
+    /// trajectory, like a method with memory).
     pub fn render_trajectory_on(
         &self,
         backend: &Backend,
         scene: &Scene,
         frames: u32,
         seed: u64,
-    ) -> Result<(Trajectory, f64), PipelineError> {
+    ) -> Result<(Trajectory, Timing), PipelineError> {
         if frames == 0 {
             return Err(PipelineError::Config("frames = 0; need at least 1".into()));
         }
-        let start = Instant::now();
+        let watch = Stopwatch::start(backend);
         let trajectory = self.0.render_trajectory(backend, scene, frames, seed)?;
-        let seconds = start.elapsed().as_secs_f64() / trajectory.frames_rendered.max(1) as f64;
-        Ok((trajectory, seconds))
+        let timing = watch.read().per(trajectory.frames_rendered);
+        Ok((trajectory, timing))
     }
 }
 

@@ -42,7 +42,9 @@ pub struct CompareArgs {
     /// Every method at its own samples per pixel (the default).
     #[arg(long, conflicts_with = "equal_time")]
     pub equal_spp: bool,
-    /// Scale a bare `pt` to this many seconds per frame (`pt:N` and ReSTIR presets keep their cost).
+    /// Scale a bare `pt` to this many seconds per frame (`pt:N` and ReSTIR presets keep their
+    /// cost), on the backend's clock: CPU seconds of the process on the CPU backend (about twice
+    /// the wall time on 2 cores), wall seconds on Vulkan.
     #[arg(long, value_name = "SECONDS")]
     pub equal_time: Option<f64>,
     /// Image size WxH.

@@ -6,6 +6,7 @@
 use std::path::PathBuf;
 
 use clap::Args;
+use engine::clock::Clock;
 use lab::draw::false_colour_map;
 use lab::output::{file_stem, output_dir};
 use methods::Method;
@@ -86,7 +87,9 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
             "frames": args.frames,
             "frames_rendered": rendered.frames_rendered,
             "seed": args.seed,
+            "clock": Clock::of(&backend).name(),
             "seconds_per_frame": json_number(rendered.seconds_per_frame),
+            "wall_seconds_per_frame": json_number(rendered.wall_seconds_per_frame),
             "nonfinite": rendered.nonfinite,
             "mean_spp": json_number(rendered.spp),
             "exr": exr.display().to_string(),
@@ -99,7 +102,7 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
         );
     } else {
         println!(
-            "{} on {} ({}×{}, frame {} of {}, {}): {:.1} ms/frame over {} rendered frame(s), {:.2} samples per pixel, {} non-finite\n{}\n{}{}",
+            "{} on {} ({}×{}, frame {} of {}, {}): {:.1} ms/frame of {} ({:.1} ms wall) over {} rendered frame(s), {:.2} samples per pixel, {} non-finite\n{}\n{}{}",
             method,
             scene.name,
             rendered.image.width,
@@ -108,6 +111,8 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
             args.frames,
             backend,
             1e3 * rendered.seconds_per_frame,
+            Clock::of(&backend).name(),
+            1e3 * rendered.wall_seconds_per_frame,
             rendered.frames_rendered,
             rendered.spp,
             rendered.nonfinite,

@@ -19,11 +19,11 @@ pub mod oidn;
 pub mod svgf;
 
 use std::fmt;
-use std::time::Instant;
 
 pub use guide::Guide;
 
 use crate::backend::Backend;
+use crate::clock::{Stopwatch, Timing};
 use crate::image::Image;
 
 /// A denoiser of the stage.
@@ -75,8 +75,9 @@ impl fmt::Display for Denoiser {
 #[derive(Clone, Debug)]
 pub struct Denoised {
     pub image: Image,
-    /// Wall-clock seconds of the denoiser (the guides' G-buffers excluded: a renderer has them).
-    pub seconds: f64,
+    /// The denoiser's time on its backend's clock ([`crate::clock`]; the guides' G-buffers
+    /// excluded: a renderer has them).
+    pub timing: Timing,
 }
 
 /// Why a frame could not be denoised; one line each.
@@ -151,14 +152,14 @@ pub fn denoise(
             });
         }
     }
-    let start = Instant::now();
+    let watch = Stopwatch::start(backend);
     let image = match denoiser {
         Denoiser::Oidn => oidn::denoise(guides.last().expect("checked"), last)?,
         Denoiser::Svgf => svgf::denoise_on(backend, guides, frames, &svgf::Params::default())?,
     };
     Ok(Denoised {
         image,
-        seconds: start.elapsed().as_secs_f64(),
+        timing: watch.read(),
     })
 }
 

@@ -118,7 +118,10 @@ pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, E
                 variation: v.clone(),
                 over_pt: ratios(row, pt),
                 over_default: own_group.then(|| ratios(row, default)),
-                milliseconds: (milliseconds(row), pt.map(milliseconds)),
+                milliseconds: (
+                    milliseconds(&row.seconds),
+                    pt.map(|p| milliseconds(&p.seconds)),
+                ),
                 mse_over_default: default.filter(|_| own_group).map(|d| {
                     let time = row.seconds.ln().zip(d.seconds.ln());
                     let time = time.and_then(|(a, b)| a.minus(&b));

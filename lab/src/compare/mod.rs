@@ -4,8 +4,10 @@
 //!
 //! [`run`] takes a [`Comparison`], obtains the references ([`crate::reference_cache`]: the
 //! comparison's at the last frame, and cheaper ones at the earlier frames for the convergence
-//! record), renders the replicas (seeds `0..K`; with an equal-time budget a bare `pt` is first
-//! calibrated; `render`) and reduces them to [`MethodResult`]s: an [`Outcome`]. It writes
+//! record), renders the replicas (seeds `0..K`, in rounds of one seed over every method, each
+//! timed on every frame on its backend's clock, [`engine::clock`]; with an equal-time budget a
+//! bare `pt` is first calibrated; `render`) and reduces them to [`MethodResult`]s: an
+//! [`Outcome`]. It writes
 //! nothing but the reference cache; [`crate::report::write`] writes the outcome's tables,
 //! `results.json`, images, figures and `report.html` into its folder.
 
@@ -59,8 +61,9 @@ pub struct Comparison {
     pub replicas: u32,
     /// Frames of the camera trajectory; the tables measure the last one.
     pub frames: u32,
-    /// `Some(seconds)`: equal time, [`EQUAL_TIME_SPEC`] is scaled to `seconds` per frame and
-    /// every other method keeps its cost; `None`: every method at its own spp.
+    /// `Some(seconds)`: equal time, [`EQUAL_TIME_SPEC`] is scaled to `seconds` per frame on the
+    /// backend's clock ([`engine::clock`]: CPU seconds on the CPU backend) and every other method
+    /// keeps its cost; `None`: every method at its own spp.
     pub equal_time: Option<f64>,
     /// The reference of the last frame.
     pub reference: ReferenceSource,
@@ -191,8 +194,9 @@ impl Comparison {
 }
 
 /// Runs the comparison of `plan`, reporting to `progress` (phases `reference frame F` and
-/// `replicas`). A stop request ends it after the current replica with the replicas rendered so
-/// far ([`Outcome::interrupted`]), or, while a reference renders, with [`Error::Interrupted`].
+/// `replicas`). A stop request ends it after the current replica with the whole rounds of
+/// replicas rendered so far (seeds `0..k` of every method, `render`; [`Outcome::interrupted`]),
+/// or, while a reference renders, with [`Error::Interrupted`].
 pub fn run(plan: &Comparison, progress: &mut dyn Progress) -> Result<Outcome, Error> {
     plan.check()?;
     let out = output_dir(&plan.out)?;

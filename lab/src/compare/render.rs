@@ -1,6 +1,8 @@
-//! Rendering a comparison's replicas: every method's replicas (seeds `0..K`), each one's frames
-//! at the measured frames and its last frame through each denoiser, with an equal-time budget
-//! first calibrated on the bare path tracer ([`equal_time_method`]).
+//! Rendering a comparison's replicas: every method's replicas (seeds `0..K`, in rounds of one
+//! seed), each one's frames at the measured frames and its last frame through each denoiser,
+//! with an equal-time budget first calibrated on the bare path tracer ([`equal_time_method`]).
+//! Every replica is timed on every frame it renders, on its backend's clock
+//! ([`engine::clock`]: process CPU time on the CPU backend) and on the wall clock.
 
 use engine::Backend;
 use engine::denoise::{self, DenoiseError, Denoiser, Guide};
@@ -29,10 +31,14 @@ pub(super) struct Renders {
     pub(super) denoise_errors: Vec<String>,
 }
 
-/// The replicas of every method, in order, each with its images at `frames` (ascending, the
-/// last frame last) and its last frame through each denoiser of the plan; after a stop request
-/// the list ends with the method that was rendering, with the replicas it finished. A denoiser
-/// that fails on a replica leaves that method's denoised row out with one line in
+/// The replicas of every method, in the plan's order, each with its images at `frames`
+/// (ascending, the last frame last) and its last frame through each denoiser of the plan.
+///
+/// Replicas are rendered in rounds: seed 0 of every method, then seed 1, and so on, so the
+/// replicas of one seed, which the intervals pair ([`crate::uncertainty`]), are timed close
+/// together. After a stop request the current replica finishes and the round it belongs to is
+/// dropped unless it is whole: every method keeps the same seeds, the rounds finished. A
+/// denoiser that fails on a replica leaves that method's denoised row out with one line in
 /// `denoise_errors`; one that is not installed is left out of every method with one line.
 pub(super) fn render_replicas(
     plan: &Comparison,
@@ -50,8 +56,6 @@ pub(super) fn render_replicas(
     } else {
         Guide::trajectory(&plan.scene, plan.frames)
     };
-    let whole_trajectory = plan.denoise.iter().any(|d| d.temporal());
-    let mut denoisers = plan.denoise.clone();
     let mut denoise_errors = Vec::new();
     // Untimed warm-up: loading a library, creating a device or compiling kernels is not the
     // per-frame cost a renderer pays.
@@ -61,32 +65,32 @@ pub(super) fn render_replicas(
             let _ = denoise::denoise(d, &plan.backend, &guides, std::slice::from_ref(&black));
         }
     }
-    progress.begin(
-        "replicas",
-        plan.methods.len() as u64 * plan.replicas as u64,
-        0,
-    );
-    let mut runs = Vec::new();
-    'methods: for (spec, method) in &plan.methods {
-        // `pt:N` pins its spp; a bare `pt` is scaled to the budget.
-        let method = match plan.equal_time {
-            Some(b) if spec == EQUAL_TIME_SPEC => equal_time_method(method, b, seconds_per_spp),
-            _ => method.clone(),
-        };
-        progress.item(&method.name());
-        let mut run = MethodRuns {
+    let mut runs: Vec<MethodRuns> = plan
+        .methods
+        .iter()
+        .map(|(spec, method)| MethodRuns {
             spec: spec.clone(),
-            method: method.clone(),
+            // `pt:N` pins its spp; a bare `pt` is scaled to the budget.
+            method: match plan.equal_time {
+                Some(b) if spec == EQUAL_TIME_SPEC => equal_time_method(method, b, seconds_per_spp),
+                _ => method.clone(),
+            },
             replicas: Vec::new(),
-            denoised: denoisers.iter().map(|&d| (d, Vec::new())).collect(),
-        };
-        for seed in 0..plan.replicas as u64 {
+            denoised: plan.denoise.iter().map(|&d| (d, Vec::new())).collect(),
+        })
+        .collect();
+    progress.begin("replicas", runs.len() as u64 * plan.replicas as u64, 0);
+    'rounds: for seed in 0..plan.replicas as u64 {
+        for i in 0..runs.len() {
             if progress.stop_requested() {
-                runs.push(run);
-                break 'methods;
+                for run in &mut runs {
+                    run.truncate(seed as usize);
+                }
+                break 'rounds;
             }
-            let (replica, trajectory) =
-                render_replica(plan, &method, frames, seed, whole_trajectory)?;
+            let run = &mut runs[i];
+            progress.item(&run.method.name());
+            let (replica, trajectory) = render_replica(plan, &run.method, frames, seed)?;
             let mut failed = Vec::new();
             for (d, denoised) in &mut run.denoised {
                 match denoise_replica(*d, &plan.backend, &guides, &trajectory, &replica) {
@@ -95,26 +99,38 @@ pub(super) fn render_replicas(
                 }
             }
             for (d, e) in failed {
-                run.denoised.retain(|(x, _)| *x != d);
                 if matches!(e, DenoiseError::Unavailable(_)) {
-                    denoisers.retain(|x| *x != d);
+                    for run in &mut runs {
+                        run.denoised.retain(|(x, _)| *x != d);
+                    }
                     denoise_errors.push(format!("{d}: {e}; its rows are left out"));
                 } else {
+                    runs[i].denoised.retain(|(x, _)| *x != d);
                     denoise_errors.push(format!(
-                        "{spec}, replica {seed}: {e}; its {d} row is left out"
+                        "{}, replica {seed}: {e}; its {d} row is left out",
+                        runs[i].spec
                     ));
                 }
             }
-            run.replicas.push(replica);
+            runs[i].replicas.push(replica);
             progress.step();
         }
-        runs.push(run);
     }
     progress.end();
     Ok(Renders {
         runs,
         denoise_errors,
     })
+}
+
+impl MethodRuns {
+    /// Keeps the first `n` replicas, raw and denoised.
+    fn truncate(&mut self, n: usize) {
+        self.replicas.truncate(n);
+        for (_, denoised) in &mut self.denoised {
+            denoised.truncate(n);
+        }
+    }
 }
 
 /// `replica`'s last frame through `denoiser`, from the frames of its `trajectory` (the last
@@ -129,49 +145,37 @@ fn denoise_replica(
 ) -> Result<Replica, DenoiseError> {
     let d = denoise::denoise(denoiser, backend, guides, trajectory)?;
     let per_frame = if denoiser.temporal() {
-        d.seconds / trajectory.len() as f64
+        d.timing.per(trajectory.len() as u32)
     } else {
-        d.seconds
+        d.timing
     };
     Ok(Replica {
         frames: vec![d.image],
-        denoiser_seconds_per_frame: per_frame,
+        denoiser_seconds_per_frame: per_frame.seconds,
         ..replica.clone()
     })
 }
 
-/// Replica `seed` of `method` at `frames`, and the frames a denoiser reads: the whole
-/// trajectory when earlier frames are measured or `whole_trajectory` is asked for (a temporal
-/// denoiser), else only the last frame (which a memoryless method renders alone).
+/// Replica `seed` of `method` at `frames`, and the whole trajectory (which a temporal
+/// denoiser reads). Every frame of the trajectory is rendered and timed, by a memoryless
+/// method too (each frame on its own, the last one the image a single render returns), so
+/// that every method's time per frame is its mean over the same frames of the camera's path.
 fn render_replica(
     plan: &Comparison,
     method: &Method,
     frames: &[u32],
     seed: u64,
-    whole_trajectory: bool,
 ) -> Result<(Replica, Vec<engine::Image>), Error> {
-    let (backend, scene) = (&plan.backend, &plan.scene);
-    if frames.len() == 1 && !whole_trajectory {
-        let r = method.render_on(backend, scene, plan.frames, seed)?;
-        let replica = Replica {
-            frames: vec![r.image.clone()],
-            seconds_per_frame: r.seconds_per_frame,
-            denoiser_seconds_per_frame: 0.0,
-            frames_rendered: r.frames_rendered,
-            nonfinite: r.nonfinite,
-            spp: r.spp,
-        };
-        return Ok((replica, vec![r.image]));
-    }
-    let (trajectory, seconds_per_frame) =
-        method.render_trajectory_on(backend, scene, plan.frames, seed)?;
+    let (trajectory, timing) =
+        method.render_trajectory_on(&plan.backend, &plan.scene, plan.frames, seed)?;
     let images = (0..)
         .zip(&trajectory.frames)
         .filter_map(|(f, image)| frames.contains(&f).then(|| image.clone()))
         .collect();
     let replica = Replica {
         frames: images,
-        seconds_per_frame,
+        seconds_per_frame: timing.seconds,
+        wall_seconds_per_frame: timing.wall_seconds,
         denoiser_seconds_per_frame: 0.0,
         frames_rendered: trajectory.frames_rendered,
         nonfinite: trajectory.nonfinite,
@@ -183,16 +187,14 @@ fn render_replica(
     Ok((replica, trajectory.frames))
 }
 
-/// Seconds per sample per pixel of the path tracer on this scene (median of 3 runs at 4 spp).
+/// Seconds per sample per pixel of the path tracer on this scene and backend, on the clock its
+/// replicas are timed with: the median of 3 trajectories of `frames` frames at 4 spp.
 fn calibrate_pt(backend: &Backend, scene: &Scene, frames: u32) -> Result<f64, Error> {
     let pt = Method::new(Pt { spp: 4 });
     let mut times = Vec::new();
     for seed in 0..3 {
-        times.push(
-            pt.render_on(backend, scene, frames, 1_000_000 + seed)?
-                .seconds_per_frame
-                / 4.0,
-        );
+        let (_, timing) = pt.render_trajectory_on(backend, scene, frames, 1_000_000 + seed)?;
+        times.push(timing.seconds / 4.0);
     }
     times.sort_by(f64::total_cmp);
     Ok(times[1])
@@ -237,6 +239,7 @@ mod tests {
         let replica = Replica {
             frames: vec![frames[1].clone()],
             seconds_per_frame: 0.5,
+            wall_seconds_per_frame: 0.5,
             denoiser_seconds_per_frame: 0.0,
             frames_rendered: 2,
             nonfinite: 1,

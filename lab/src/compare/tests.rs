@@ -163,3 +163,79 @@ fn a_comparison_writes_its_outputs_and_reuses_the_reference() {
     assert!(matches!(run(&empty, &mut Silent), Err(Error::Invalid(_))));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Stops after `after` replicas and records the order they were rendered in.
+struct StopAfter {
+    after: usize,
+    items: Vec<String>,
+    steps: usize,
+}
+
+impl Progress for StopAfter {
+    /// Counts the steps of the `replicas` phase only (a reference's batches are steps too).
+    fn begin(&mut self, _what: &str, _total: u64, _done: u64) {
+        self.steps = 0;
+    }
+
+    fn item(&mut self, name: &str) {
+        self.items.push(name.to_string());
+    }
+
+    fn step(&mut self) {
+        self.steps += 1;
+    }
+
+    fn stop_requested(&self) -> bool {
+        self.steps >= self.after
+    }
+}
+
+/// Replicas are rendered in rounds of one seed (seed 0 of every method, then seed 1), and a
+/// stop request in the middle of a round keeps only the whole rounds: every row has the same
+/// seeds, so its ratios stay paired. Rows keep the plan's order.
+#[test]
+fn replicas_render_in_rounds_and_a_stop_keeps_whole_rounds() {
+    let dir = std::env::temp_dir().join(format!("reshift-rounds-{}", std::process::id()));
+    let plan = Comparison {
+        scene: with_resolution(Scene::builtin("bumpy").unwrap(), Some((8, 6))),
+        scene_key: "bumpy".into(),
+        methods: parse_methods(&["restir:hybrid", "pt:2"]).unwrap(),
+        baseline: "pt:2".into(),
+        replicas: 3,
+        frames: 2,
+        equal_time: None,
+        reference: ReferenceSource::Cache {
+            dir: dir.join("cache"),
+            spp: 8,
+            batch_spp: 4,
+        },
+        frame_reference_spp: None,
+        out: dir.join("out"),
+        backend: Backend::Cpu,
+        denoise: Vec::new(),
+    };
+    let mut progress = StopAfter {
+        after: 3,
+        items: Vec::new(),
+        steps: 0,
+    };
+    let stopped = run(&plan, &mut progress).unwrap();
+    assert_eq!(progress.items, ["restir:hybrid", "pt:2", "restir:hybrid"]);
+    assert!(stopped.interrupted);
+    let methods: Vec<&str> = stopped.rows.iter().map(|r| r.method.as_str()).collect();
+    assert_eq!(methods, ["restir:hybrid", "pt:2"]);
+    assert!(
+        stopped.rows.iter().all(|r| r.replicas == 1),
+        "round 1 dropped"
+    );
+    let whole = run(&plan, &mut Silent).unwrap();
+    assert!(!whole.interrupted);
+    for row in &whole.rows {
+        assert_eq!(row.replicas, 3);
+        // Every frame is timed: a memoryless method renders (and is timed on) the whole
+        // trajectory like ReSTIR.
+        assert_eq!(row.frames_rendered, 2, "{}", row.method);
+        assert!(row.seconds.value > 0.0 && row.wall_seconds.value > 0.0);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

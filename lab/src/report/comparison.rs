@@ -4,6 +4,7 @@
 //! ([`super::plots`], [`super::figure`]) and `report.html` ([`super::html`]), from the
 //! [`Outcome`] that [`crate::compare::run`] measured.
 
+use engine::clock::Clock;
 use engine::denoise::Denoiser;
 
 use crate::compare::{Comparison, Outcome};
@@ -67,6 +68,7 @@ pub fn write(plan: &Comparison, outcome: &Outcome) -> Result<Written, Error> {
     let run = RunEntry {
         scene: plan.scene.name.clone(),
         backend: plan.backend.to_string(),
+        clock: Clock::of(&plan.backend),
         width: reference.width,
         height: reference.height,
         frames: plan.frames,
@@ -153,6 +155,10 @@ fn table_texts(
     }
     let all_rows: Vec<MethodResult> = groups.iter().flat_map(|(_, g)| g.iter().cloned()).collect();
     markdown.push_str(&format!("\n{}", tables::perceptual(&all_rows)));
+    markdown.push_str(&format!(
+        "\n{}\n",
+        tables::time_note(Clock::of(&plan.backend))
+    ));
     for e in &outcome.denoise_errors {
         markdown.push_str(&format!("\nDenoiser: {e}\n"));
     }

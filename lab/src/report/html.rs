@@ -78,6 +78,18 @@ fn measured(value: Option<f64>, ci: Option<Interval>) -> Option<Measured> {
     value.map(|value| Measured { value, ci })
 }
 
+/// Seconds `value` and their interval in milliseconds.
+fn milliseconds(value: f64, ci: Option<Interval>) -> Option<Measured> {
+    let ms = |s: f64| 1e3 * s;
+    measured(
+        Some(ms(value)),
+        ci.map(|i| Interval {
+            lo: ms(i.lo),
+            hi: ms(i.hi),
+        }),
+    )
+}
+
 /// The page of `results`, whose images lie in `out`.
 pub fn report(results: &Results, out: &Path) -> Result<String, Error> {
     let r = results;
@@ -96,7 +108,8 @@ pub fn report(results: &Results, out: &Path) -> Result<String, Error> {
     let _ = writeln!(
         page,
         "<p>{w}×{h}, {frames} frames (tables: frame {frame}), {k} replicas per method, backend \
-         {backend}, budget {mode}. Reference of frame {frame}: {spp} spp in {batches} batches; \
+         {backend} (ms/frame: {clock}; wall ms/frame: wall time, reported only), budget {mode}. \
+         Reference of frame {frame}: {spp} spp in {batches} batches; \
          earlier frames: {earlier}. Intervals: {conf}% confidence, {how}. Bias: {bconf}% \
          Student-t over replicas.{stopped}</p>",
         w = r.width,
@@ -105,6 +118,7 @@ pub fn report(results: &Results, out: &Path) -> Result<String, Error> {
         frame = r.frame,
         k = r.replicas,
         backend = escape(&r.backend),
+        clock = escape(&r.clock),
         mode = r.budget.mode,
         spp = r.reference.spp,
         batches = r.reference.batches,
@@ -241,18 +255,13 @@ fn full_table(page: &mut String, r: &Results) {
         page,
         "<h2>All numbers (frame {})</h2><table><tr><th>method</th><th>spp</th><th>area</th>\
          <th>px</th><th>MSE</th><th>relMSE</th><th>bias ± 99%</th><th>ms/frame</th>\
-         <th>efficiency</th><th>eff. ratio</th><th>MSE ratio</th><th>FLIP</th>\
+         <th>wall ms/frame</th><th>efficiency</th><th>eff. ratio</th><th>MSE ratio</th><th>FLIP</th>\
          <th>low-freq. MSE</th></tr>\n",
         r.frame
     );
     for m in &r.methods {
-        let ms = measured(
-            Some(1e3 * m.seconds_per_frame),
-            m.seconds_per_frame_ci.map(|i| Interval {
-                lo: 1e3 * i.lo,
-                hi: 1e3 * i.hi,
-            }),
-        );
+        let ms = milliseconds(m.seconds_per_frame, m.seconds_per_frame_ci);
+        let wall = milliseconds(m.wall_seconds_per_frame, m.wall_seconds_per_frame_ci);
         for a in &m.areas {
             let AreaEntry {
                 area,
@@ -269,12 +278,13 @@ fn full_table(page: &mut String, r: &Results) {
                 page,
                 "<tr><td>{}</td><td>{}</td><td>{area}</td><td>{pixels}</td><td>{}</td><td>{}</td>\
                  <td>{bias}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>\
-                 </tr>",
+                 <td>{}</td></tr>",
                 escape(&label(m)),
                 m.spp,
                 with_ci(measured(Some(a.mse), a.mse_ci)),
                 with_ci(measured(Some(a.rel_mse), a.rel_mse_ci)),
                 with_ci(ms),
+                with_ci(wall),
                 with_ci(measured(a.efficiency, a.efficiency_ci)),
                 with_ci(measured(a.efficiency_ratio, a.efficiency_ratio_ci)),
                 with_ci(measured(a.mse_ratio, a.mse_ratio_ci)),

@@ -1,10 +1,11 @@
-//! `results.json` of a comparison (schema `reshift-compare/3`, docs/results-schema.md) as typed
+//! `results.json` of a comparison (schema `reshift-compare/4`, docs/results-schema.md) as typed
 //! structs. Optional and non-finite numbers are written as `null`, never NaN; keys are written
 //! in sorted order ([`Results::to_json`]).
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
+use engine::clock::Clock;
 use serde::Serialize;
 use sss::integrator::Reference;
 
@@ -15,7 +16,7 @@ use crate::regions::{Region, Regions};
 use crate::uncertainty::{CONFIDENCE, INTERVAL_METHOD, Interval};
 
 /// The schema name written into [`Results::schema`].
-pub const SCHEMA: &str = "reshift-compare/3";
+pub const SCHEMA: &str = "reshift-compare/4";
 
 /// The whole document.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -24,6 +25,9 @@ pub struct Results {
     pub scene: String,
     /// `cpu` or `vulkan (<device>)`.
     pub backend: String,
+    /// What `seconds_per_frame` counts ([`Clock::name`]): `process CPU time` on the CPU
+    /// backend, `wall time` on Vulkan.
+    pub clock: String,
     pub width: u32,
     pub height: u32,
     /// Frames of the trajectory; the tables measure the last, `frame`.
@@ -62,6 +66,8 @@ pub struct Results {
 pub struct RunEntry {
     pub scene: String,
     pub backend: String,
+    /// The clock the renders were timed with.
+    pub clock: Clock,
     pub width: u32,
     pub height: u32,
     pub frames: u32,
@@ -143,11 +149,16 @@ pub struct MethodEntry {
     pub spp: u32,
     pub mean_spp: f64,
     pub replicas: usize,
-    /// Mean over replicas of the wall-clock seconds per rendered frame.
+    /// Mean over replicas of the seconds per rendered frame on the comparison's `clock`
+    /// (efficiencies and equal time count these).
     pub seconds_per_frame: f64,
     pub seconds_per_frame_ci: Option<Interval>,
     /// One timing per replica, by seed.
     pub seconds_per_frame_replicas: Vec<f64>,
+    /// The same renders on the wall clock (the denoiser's time not included), reported only.
+    pub wall_seconds_per_frame: f64,
+    pub wall_seconds_per_frame_ci: Option<Interval>,
+    pub wall_seconds_per_frame_replicas: Vec<f64>,
     pub frames_rendered: u32,
     pub nonfinite: u64,
     pub tonemapped_mse: f64,
@@ -224,6 +235,7 @@ impl Results {
             schema: SCHEMA.into(),
             scene: run.scene,
             backend: run.backend,
+            clock: run.clock.name().into(),
             width: run.width,
             height: run.height,
             frames: run.frames,
@@ -310,6 +322,7 @@ impl MethodEntry {
         images: ImageFiles,
     ) -> MethodEntry {
         let seconds = Measured::of(&r.seconds);
+        let wall = Measured::of(&r.wall_seconds);
         let tonemapped = Measured::of(&r.tonemapped_mse);
         let (denoiser_seconds, denoiser_seconds_ci) =
             split(r.denoiser_seconds.as_ref().map(Measured::of));
@@ -324,6 +337,9 @@ impl MethodEntry {
             seconds_per_frame: seconds.value,
             seconds_per_frame_ci: seconds.ci,
             seconds_per_frame_replicas: r.seconds.influences().to_vec(),
+            wall_seconds_per_frame: wall.value,
+            wall_seconds_per_frame_ci: wall.ci,
+            wall_seconds_per_frame_replicas: r.wall_seconds.influences().to_vec(),
             frames_rendered: r.frames_rendered,
             nonfinite: r.nonfinite,
             tonemapped_mse: tonemapped.value,

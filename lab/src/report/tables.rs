@@ -4,12 +4,14 @@
 
 use std::fmt::Write as _;
 
+use engine::clock::Clock;
+
 use crate::method_result::{Measured, MethodResult};
 use crate::metrics::Area;
-use crate::uncertainty::Interval;
+use crate::uncertainty::{Estimate, Interval};
 
 /// Column names of [`csv`], in order.
-pub const CSV_HEADER: &str = "method,spp,mean_spp,replicas,area,pixels,ms_per_frame,ms_per_frame_lo,ms_per_frame_hi,mse,mse_lo,mse_hi,rel_mse,rel_mse_lo,rel_mse_hi,bias,bias_ci99,relative_bias,variance,reference_mse,efficiency,efficiency_lo,efficiency_hi,efficiency_ratio,efficiency_ratio_lo,efficiency_ratio_hi,tonemapped_mse,tonemapped_mse_lo,tonemapped_mse_hi";
+pub const CSV_HEADER: &str = "method,spp,mean_spp,replicas,area,pixels,ms_per_frame,ms_per_frame_lo,ms_per_frame_hi,wall_ms_per_frame,wall_ms_per_frame_lo,wall_ms_per_frame_hi,mse,mse_lo,mse_hi,rel_mse,rel_mse_lo,rel_mse_hi,bias,bias_ci99,relative_bias,variance,reference_mse,efficiency,efficiency_lo,efficiency_hi,efficiency_ratio,efficiency_ratio_lo,efficiency_ratio_hi,tonemapped_mse,tonemapped_mse_lo,tonemapped_mse_hi";
 
 /// Column names of [`convergence_csv`], in order.
 pub const CONVERGENCE_HEADER: &str = "method,frame,area,pixels,mse,mse_lo,mse_hi,reference_mse";
@@ -56,9 +58,9 @@ fn relative_bias(r: &MethodResult, area: Area) -> Option<f64> {
     (m.reference_mean > 0.0).then(|| m.bias / m.reference_mean)
 }
 
-/// Milliseconds per frame with its interval.
-pub fn milliseconds(r: &MethodResult) -> Measured {
-    let s = Measured::of(&r.seconds);
+/// Milliseconds of seconds `seconds` with its interval.
+pub fn milliseconds(seconds: &Estimate) -> Measured {
+    let s = Measured::of(seconds);
     Measured {
         value: 1e3 * s.value,
         ci: s.ci.map(|i| Interval {
@@ -68,15 +70,26 @@ pub fn milliseconds(r: &MethodResult) -> Measured {
     }
 }
 
+/// What the ms/frame columns measure when `clock` timed the renders ([`engine::clock`]).
+pub fn time_note(clock: Clock) -> String {
+    format!(
+        "ms/frame: {} per rendered frame, over every frame of each replica (what equal-time \
+         budgets and efficiencies count); wall ms/frame: the same renders on the wall clock, \
+         reported only.",
+        clock.name()
+    )
+}
+
 /// The Markdown table: per method and area, MSE and relMSE (the reference's variance
-/// subtracted), bias ± 99% CI (also relative to the reference mean), ms/frame, efficiency
-/// `1/(MSE·s)` and its ratio to `baseline`, each with its 95% interval; the whole-frame
+/// subtracted), bias ± 99% CI (also relative to the reference mean), ms/frame on the backend's
+/// clock and on the wall clock ([`time_note`]), efficiency `1/(MSE·s)` and its ratio to
+/// `baseline`, each with its 95% interval; the whole-frame
 /// (`image`) row also carries paper 001's tonemapped 8-bit MSE.
 pub fn markdown(results: &[MethodResult], baseline: Option<&MethodResult>) -> String {
     let base = baseline.map_or("baseline".into(), |b| b.label());
     let mut out = format!(
-        "| method | spp | area | px | MSE [95% CI] | relMSE [95% CI] | bias ± 99% CI | rel. bias | ms/frame [95% CI] | efficiency [95% CI] | eff. / {base} [95% CI] | TM-8bit MSE [95% CI] |\n\
-         |---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
+        "| method | spp | area | px | MSE [95% CI] | relMSE [95% CI] | bias ± 99% CI | rel. bias | ms/frame [95% CI] | wall ms/frame [95% CI] | efficiency [95% CI] | eff. / {base} [95% CI] | TM-8bit MSE [95% CI] |\n\
+         |---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
     );
     for r in results {
         for m in &r.metrics {
@@ -93,7 +106,7 @@ pub fn markdown(results: &[MethodResult], baseline: Option<&MethodResult>) -> St
             };
             let _ = writeln!(
                 out,
-                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 r.label(),
                 spp_cell(r),
                 m.area.name(),
@@ -102,7 +115,8 @@ pub fn markdown(results: &[MethodResult], baseline: Option<&MethodResult>) -> St
                 with_ci(Some(Measured::of(&m.rel_mse))),
                 bias,
                 rel,
-                with_ci(Some(milliseconds(r))),
+                with_ci(Some(milliseconds(&r.seconds))),
+                with_ci(Some(milliseconds(&r.wall_seconds))),
                 with_ci(r.efficiency(m.area)),
                 with_ci(baseline.and_then(|b| r.efficiency_ratio(b, m.area))),
                 tm,
@@ -149,15 +163,12 @@ pub fn denoiser_time(results: &[MethodResult]) -> String {
     let mut out = String::from("| method | denoiser ms/frame [95% CI] |\n|---|---:|\n");
     for r in results {
         if let Some(s) = &r.denoiser_seconds {
-            let m = Measured::of(s);
-            let ms = Measured {
-                value: 1e3 * m.value,
-                ci: m.ci.map(|i| Interval {
-                    lo: 1e3 * i.lo,
-                    hi: 1e3 * i.hi,
-                }),
-            };
-            let _ = writeln!(out, "| {} | {} |", r.label(), with_ci(Some(ms)));
+            let _ = writeln!(
+                out,
+                "| {} | {} |",
+                r.label(),
+                with_ci(Some(milliseconds(s)))
+            );
         }
     }
     out
@@ -219,14 +230,15 @@ pub fn csv(results: &[MethodResult], baseline: Option<&MethodResult>) -> String 
         for m in &r.metrics {
             let _ = writeln!(
                 out,
-                "{},{},{},{},{},{},{},{},{},{:e},{},{},{},{:e},{},{},{}",
+                "{},{},{},{},{},{},{},{},{},{},{:e},{},{},{},{:e},{},{},{}",
                 r.label(),
                 r.spp,
                 r.mean_spp,
                 r.replicas,
                 m.area.name(),
                 m.pixels,
-                cells(Some(milliseconds(r))),
+                cells(Some(milliseconds(&r.seconds))),
+                cells(Some(milliseconds(&r.wall_seconds))),
                 cells(Some(Measured::of(&m.mse))),
                 cells(Some(Measured::of(&m.rel_mse))),
                 m.bias,
@@ -296,6 +308,7 @@ mod tests {
             mean_spp: 1.0,
             replicas: 2,
             seconds: Estimate::mean(&[0.45, 0.55]),
+            wall_seconds: Estimate::mean(&[0.25, 0.3]),
             denoiser_seconds: None,
             frames_rendered: 16,
             convergence: vec![FrameMetrics {
@@ -352,10 +365,12 @@ mod tests {
         for line in csv.lines() {
             assert_eq!(line.split(',').count(), columns, "{line}");
         }
-        // Efficiency = 1 / (0.2 · 0.5) = 10 (column 21); the tonemapped MSE has no spread.
+        // Efficiency = 1 / (0.2 · 0.5) = 10 (column 24), from the clock's seconds, not the
+        // wall's (0.275 s, column 10); the tonemapped MSE has no spread.
         let row = csv.lines().nth(1).unwrap();
-        let efficiency: f64 = row.split(',').nth(20).unwrap().parse().unwrap();
-        assert!((efficiency - 10.0).abs() < 1e-9, "{row}");
+        let column = |i: usize| -> f64 { row.split(',').nth(i).unwrap().parse().unwrap() };
+        assert!((column(23) - 10.0).abs() < 1e-9, "{row}");
+        assert!((column(9) - 275.0).abs() < 1e-9, "{row}");
         assert!(row.ends_with(",2.5e-1,2.5e-1,2.5e-1"), "{row}");
         let v = verdict(&results, baseline);
         assert!(v.contains("| restir:hybrid | 2.00 ["), "{v}");

@@ -5,7 +5,6 @@
 //! is bit-identical for any thread count.
 
 use std::convert::Infallible;
-use std::time::Instant;
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -20,11 +19,12 @@ use shifts::PixelReservoir;
 use shifts::preset::{PassSpec, Preset, Shade};
 
 use crate::candidates::{self, ProbeCounts};
+use crate::clock::Stopwatch;
 use crate::diagnostics::{Counters, HybridChoice, Recorder};
 use crate::image::Image;
 use crate::plan::{PassKernel, Plan, Resource, Role, Rotation, Slot, Step};
 use crate::reuse::{self, PassInput, Previous, Reused, ShiftCounts, StepTelemetry};
-use crate::{PassTiming, PipelineError, Run, RunConfig, purpose};
+use crate::{Backend, PassTiming, PipelineError, Run, RunConfig, purpose};
 
 /// Fills `out` (row-major, rows of `width`) with `kernel(pixel)` in parallel over rows; the
 /// first error in pixel order wins, so errors are as deterministic as results.
@@ -102,12 +102,12 @@ pub(crate) fn run(
             state.recorder = Some(Recorder::new(width, height, frame, pass_labels.clone()));
         }
         for (step, seconds) in plan.steps.iter().zip(&mut seconds) {
-            let start = Instant::now();
+            let watch = Stopwatch::start(&Backend::Cpu);
             if let Some((image, nans)) = state.step(frame, step)? {
                 frames.push(image);
                 nan_count += nans;
             }
-            seconds.push(start.elapsed().as_secs_f64());
+            seconds.push(watch.read());
         }
         state.rotation = state.rotation.next(&plan);
         state.previous_gbuffer = state.gbuffer.take();
@@ -116,7 +116,7 @@ pub(crate) fn run(
         .steps
         .iter()
         .zip(seconds)
-        .map(|(step, seconds)| PassTiming::new(step.label.clone(), seconds))
+        .map(|(step, seconds)| PassTiming::timed(step.label.clone(), &seconds))
         .collect();
     let last = state.rotation.buffer(Slot::Previous);
     let mut diagnostics = state.counters.as_ref().map(Counters::finish);

@@ -34,7 +34,6 @@ pub mod scene_lighting;
 pub mod vulkan;
 
 use std::fmt;
-use std::time::Instant;
 
 use glam::DVec3;
 use restir::resample::ResampleError;
@@ -43,6 +42,7 @@ use sss::integrator::pt::{self, PtSettings};
 use sss::scene::{FRAMES, GBuffer, Scene};
 
 pub use backend::Backend;
+use clock::Stopwatch;
 pub use diagnostics::Diagnostics;
 pub use image::Image;
 pub use restir::mis::MisKind;
@@ -80,25 +80,40 @@ impl Default for RunConfig {
     }
 }
 
-/// Time of one pass (wall-clock on the CPU, GPU timestamps on Vulkan), per frame and summed
-/// over the frames of a run.
+/// Time of one pass, per frame and summed over the frames of a run: wall-clock and process CPU
+/// time on the CPU backend ([`clock`]), GPU timestamps on Vulkan.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PassTiming {
     /// `gbuffer`, a [`PassSpec::label`], `shade`, or `pt` for the baseline.
     pub label: String,
     /// The sum of `per_frame`.
     pub seconds: f64,
-    /// Seconds of each frame, in order.
+    /// Seconds of each frame, in order (wall-clock on the CPU backend).
     pub per_frame: Vec<f64>,
+    /// CPU seconds of the process over all frames (all its threads; the CPU backend, where the
+    /// platform has a process CPU clock).
+    pub cpu_seconds: Option<f64>,
 }
 
 impl PassTiming {
-    /// The timing of `label` from the seconds of each frame.
+    /// The timing of `label` from the seconds of each frame (a clock with no CPU time).
     pub fn new(label: String, per_frame: Vec<f64>) -> PassTiming {
         PassTiming {
             label,
             seconds: per_frame.iter().sum(),
             per_frame,
+            cpu_seconds: None,
+        }
+    }
+
+    /// The timing of `label` from both clocks' readings of each frame.
+    pub fn timed(label: String, per_frame: &[clock::Timing]) -> PassTiming {
+        let cpu = per_frame
+            .iter()
+            .all(|t| t.clock == clock::Clock::ProcessCpu);
+        PassTiming {
+            cpu_seconds: cpu.then(|| per_frame.iter().map(|t| t.seconds).sum()),
+            ..PassTiming::new(label, per_frame.iter().map(|t| t.wall_seconds).collect())
         }
     }
 }
@@ -221,12 +236,12 @@ pub fn run_pt(scene: &Scene, spp: u32, config: &RunConfig) -> Run {
     let (mut gbuffer_seconds, mut pt_seconds, mut nan_count) = (Vec::new(), Vec::new(), 0);
     let frames = (0..config.frames)
         .map(|frame| {
-            let start = Instant::now();
+            let watch = Stopwatch::start(&Backend::Cpu);
             let gbuffer = GBuffer::render(scene, frame);
-            gbuffer_seconds.push(start.elapsed().as_secs_f64());
-            let start = Instant::now();
+            gbuffer_seconds.push(watch.read());
+            let watch = Stopwatch::start(&Backend::Cpu);
             let image = pt::render(scene, &gbuffer, &settings, config.seed, 0, spp);
-            pt_seconds.push(start.elapsed().as_secs_f64());
+            pt_seconds.push(watch.read());
             nan_count += image.nonfinite;
             Image {
                 width: image.width,
@@ -238,8 +253,8 @@ pub fn run_pt(scene: &Scene, spp: u32, config: &RunConfig) -> Run {
     Run {
         frames,
         timings: vec![
-            PassTiming::new("gbuffer".into(), gbuffer_seconds),
-            PassTiming::new("pt".into(), pt_seconds),
+            PassTiming::timed("gbuffer".into(), &gbuffer_seconds),
+            PassTiming::timed("pt".into(), &pt_seconds),
         ],
         diagnostics: None,
         nan_count,

@@ -8,7 +8,7 @@ pub use crate::contract::ResampleCode;
 use crate::mis::{MAX_DOMAINS, MisScheme};
 use crate::reservoir::{InvalidCandidate, Reservoir, Ris};
 use crate::rng::Stream;
-use crate::shift::{CandidateSampler, Domain, Shift};
+use crate::shift::{CandidateSampler, Domain, Evaluated, Shift};
 
 /// A reservoir together with the domain its sample lives in.
 pub struct Source<'a, D: Domain> {
@@ -128,7 +128,7 @@ where
 /// `targets[j] = p̂_{←j}(y)` via [`Shift::target_from`], and `p̂_i(x_i) / J_i` for the
 /// sample's own domain. Confidences are used as given: cap them before the call.
 ///
-/// Forward shifts and back-shifts go through [`Shift::shift_supported`]: only samples with a
+/// Forward shifts and back-shifts go through [`Shift::shift_supported`] (as [`Shift::shift_with_target`]): only samples with a
 /// positive target weigh.
 ///
 /// Failure convention (paper 001's): a neighbour whose forward shift fails, or whose reservoir is
@@ -191,13 +191,12 @@ where
     if n > MAX_DOMAINS {
         return Err(ResampleError::TooManyDomains(n));
     }
-    let domain_of = |j: usize| {
-        if j == 0 {
-            receiver.domain
-        } else {
-            neighbours[j - 1].domain
-        }
-    };
+    // Domain j: the receiver, then the neighbours' (padded with the receiver's).
+    let mut domains = [receiver.domain; MAX_DOMAINS];
+    for (d, nb) in domains[1..n].iter_mut().zip(neighbours) {
+        *d = nb.domain;
+    }
+    let domain_of = |j: usize| domains[j];
     let mut confidences = [0.0f32; MAX_DOMAINS];
     confidences[0] = receiver.reservoir.confidence;
     for (c, nb) in confidences[1..n].iter_mut().zip(neighbours) {
@@ -225,18 +224,22 @@ where
             ris.skip(input.confidence).map_err(wrap)?;
             continue;
         };
-        let (y, jacobian, own_target) = if i == 0 {
-            (x, 1.0, None)
+        let (y, jacobian, own_target, target) = if i == 0 {
+            (x, 1.0, None, r.target(&x))
         } else {
-            match shift.shift_supported(&x, domain_of(i), r) {
-                Ok(s) => {
+            match shift.shift_with_targets(&x, domain_of(i), r) {
+                Ok(Evaluated {
+                    shifted: s,
+                    target,
+                    source_target,
+                }) => {
                     if !(s.jacobian.is_finite() && s.jacobian > 0.0) {
                         return Err(ResampleError::BadJacobian {
                             source: i,
                             jacobian: s.jacobian,
                         });
                     }
-                    (s.y, s.jacobian, Some(domain_of(i).target(&x) / s.jacobian))
+                    (s.y, s.jacobian, Some(source_target / s.jacobian), target)
                 }
                 Err(_) => {
                     ris.skip(input.confidence).map_err(wrap)?;
@@ -244,7 +247,6 @@ where
                 }
             }
         };
-        let target = r.target(&y);
         if !(target.is_finite() && target >= 0.0) {
             return Err(wrap(InvalidCandidate::Target(target)));
         }
@@ -256,10 +258,10 @@ where
                 targets[i] = t;
             }
             if mis.needs_all_targets(i) {
-                for (j, t) in targets.iter_mut().enumerate().skip(1) {
-                    if j != i {
-                        *t = shift.target_from(&y, r, domain_of(j));
-                    }
+                // Every domain but r and i: those before i, then those after it.
+                let (before, after) = (1..i.max(1), (i + 1).max(1)..n);
+                for js in [before, after] {
+                    shift.targets_from(&y, r, &domains[js.clone()], &mut targets[js]);
                 }
             }
             mis.weight(i, targets, confidences)

@@ -21,6 +21,15 @@ pub struct Shifted<S> {
     pub jacobian: f32,
 }
 
+/// [`Shift::shift_with_targets`]: `y = T(x)` with `p̂_dst(y)` and `p̂_src(x)`.
+pub struct Evaluated<D: Domain> {
+    pub shifted: Shifted<D::Sample>,
+    /// `p̂_dst(y)`.
+    pub target: f32,
+    /// `p̂_src(x)`.
+    pub source_target: f32,
+}
+
 /// A shift mapping `T_{src→dst}`.
 ///
 /// Deterministic given the two domains: a shift that needs randomness draws it from a
@@ -40,13 +49,48 @@ pub trait Shift<D: Domain>: Sync {
         self.shift(x, src, dst)
     }
 
+    /// [`Shift::shift_supported`] with `p̂_dst(T(x))` beside it, which resampling reads next.
+    /// A shift whose support check has evaluated `p̂_dst` overrides it to return that value
+    /// rather than evaluate it twice; the default evaluates it.
+    fn shift_with_target(
+        &self,
+        x: &D::Sample,
+        src: &D,
+        dst: &D,
+    ) -> Result<(Shifted<D::Sample>, f32), Fail> {
+        let shifted = self.shift_supported(x, src, dst)?;
+        let target = dst.target(&shifted.y);
+        Ok((shifted, target))
+    }
+
+    /// [`Shift::shift_with_target`] with `p̂_src(x)` too, the input's target in its own domain
+    /// that MIS weights read. A shift that evaluates both from work they share (where a sample
+    /// lies, what lights it) overrides it; the default evaluates `p̂_src(x)` on its own.
+    fn shift_with_targets(&self, x: &D::Sample, src: &D, dst: &D) -> Result<Evaluated<D>, Fail> {
+        let (shifted, target) = self.shift_with_target(x, src, dst)?;
+        Ok(Evaluated {
+            shifted,
+            target,
+            source_target: src.target(x),
+        })
+    }
+
     /// `p̂_{←j}(y) = p̂_j(T_{r→j}(y)) · |T'_{r→j}(y)|`, 0 when the back-shift fails
     /// (DESIGN §9, [001 Eq. 7]). A shift with a cheaper exact way to evaluate this may override
     /// it; `restir::check::partition_of_unity` catches overrides that ignore failures.
     fn target_from(&self, y: &D::Sample, receiver: &D, other: &D) -> f32 {
-        match self.shift_supported(y, receiver, other) {
-            Ok(back) => other.target(&back.y) * back.jacobian,
+        match self.shift_with_target(y, receiver, other) {
+            Ok((back, target)) => target * back.jacobian,
             Err(_) => 0.0,
+        }
+    }
+
+    /// [`Shift::target_from`] of one `y` into each of `others`, written to `out` (same length):
+    /// the canonical sample's back-shifts that its MIS weight reads. A shift that shares work
+    /// between them (locating `y` once) overrides it; the default calls `target_from` for each.
+    fn targets_from(&self, y: &D::Sample, receiver: &D, others: &[&D], out: &mut [f32]) {
+        for (t, other) in out.iter_mut().zip(others) {
+            *t = self.target_from(y, receiver, other);
         }
     }
 }

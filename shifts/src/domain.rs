@@ -28,6 +28,15 @@ pub struct LightPath {
     pub shadow_target: Vec3,
 }
 
+/// What of a sample does not depend on the domain it is evaluated in ([`SssDomain::locate`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Located {
+    /// x2.
+    pub x2: EntryPoint,
+    /// From x2 toward the light vertex; `None` for an unknown light or x3 = x2.
+    pub light: Option<LightPath>,
+}
+
 /// One domain Ω: the pixel `pixel` (linear index) of frame `frame`, receiving in pass `pass`,
 /// under the run seed `seed`.
 ///
@@ -133,11 +142,29 @@ impl<'s> SssDomain<'s> {
 
     /// x2 of `y`; `None` if its triangle does not exist or lies on another object than x1.
     pub fn entry_point(&self, y: &SssSample) -> Option<EntryPoint> {
+        (y.object() == self.x1.object)
+            .then(|| self.locate_x2(y))
+            .flatten()
+    }
+
+    /// x2 of `y` wherever it lies (no check against x1's object); `None` if its triangle does
+    /// not exist or is not on `y`'s object.
+    fn locate_x2(&self, y: &SssSample) -> Option<EntryPoint> {
         let geometry = &self.scene.geometry;
         if y.prim() >= geometry.triangle_count() || geometry.object_of(y.prim()) != y.object() {
             return None;
         }
-        (y.object() == self.x1.object).then(|| EntryPoint::new(geometry, y.prim(), y.bary()))
+        Some(EntryPoint::new(geometry, y.prim(), y.bary()))
+    }
+
+    /// What of `y` does not depend on the domain: its x2 and light path ([`Located`]), for
+    /// evaluating it in several domains of the scene ([`SssDomain::target_located`]).
+    pub fn locate(&self, y: &SssSample) -> Option<Located> {
+        let x2 = self.locate_x2(y)?;
+        Some(Located {
+            x2,
+            light: self.light_path(x2.position, y),
+        })
     }
 
     /// `p_disk(x2 | x1)` of this domain's x1 [`bssrdf::p_disk`].
@@ -176,13 +203,23 @@ impl<'s> SssDomain<'s> {
 
     /// `f(ȳ) = S · max(0, n2·ωi) · L_e`, unshadowed, RGB (DESIGN §9); 0 outside the support.
     pub fn contribution(&self, y: &SssSample) -> Vec3 {
-        let Some(x2) = self.entry_point(y) else {
+        match self.entry_point(y) {
+            Some(x2) => self.contribution_at(&x2, y),
+            None => Vec3::ZERO,
+        }
+    }
+
+    /// [`SssDomain::contribution`] of `y` whose entry point `x2` the caller has located.
+    pub fn contribution_at(&self, x2: &EntryPoint, y: &SssSample) -> Vec3 {
+        self.contribution_lit(x2, self.light_path(x2.position, y))
+    }
+
+    /// `f` at x2 lit along `light` (`None`: no light path, `f = 0`).
+    fn contribution_lit(&self, x2: &EntryPoint, light: Option<LightPath>) -> Vec3 {
+        let Some(light) = light else {
             return Vec3::ZERO;
         };
-        let Some(light) = self.light_path(x2.position, y) else {
-            return Vec3::ZERO;
-        };
-        let f = bssrdf::contribution(&self.material, &self.x1, &x2, light.wi, light.radiance);
+        let f = bssrdf::contribution(&self.material, &self.x1, x2, light.wi, light.radiance);
         if f.is_finite() { f } else { Vec3::ZERO }
     }
 
@@ -249,6 +286,24 @@ impl Domain for SssDomain<'_> {
     /// `p̂` of the unshadowed `f` (DESIGN §9), luminance unless [`SssDomain::with_target`].
     fn target(&self, y: &SssSample) -> f32 {
         self.target.of(self.contribution(y)).max(0.0)
+    }
+}
+
+impl SssDomain<'_> {
+    /// [`Domain::target`] of `y` whose entry point `x2` the caller has located.
+    pub fn target_at(&self, x2: &EntryPoint, y: &SssSample) -> f32 {
+        self.target.of(self.contribution_at(x2, y)).max(0.0)
+    }
+
+    /// [`Domain::target`] of `y` from what [`SssDomain::locate`] found of it (in any domain of
+    /// this scene): the same value, without locating `y` again.
+    pub fn target_located(&self, located: &Located, y: &SssSample) -> f32 {
+        let f = if y.object() == self.x1.object {
+            self.contribution_lit(&located.x2, located.light)
+        } else {
+            Vec3::ZERO
+        };
+        self.target.of(f).max(0.0)
     }
 }
 

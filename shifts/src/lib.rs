@@ -38,7 +38,7 @@ mod target;
 pub use contract::{IndexPolicy, PixelReservoir, SssSample};
 pub use delayed::DelayedReconnection;
 pub use distant::DistantReconnection;
-pub use domain::{LightPath, SssDomain};
+pub use domain::{LightPath, Located, SssDomain};
 pub use hybrid::Hybrid;
 pub use inversion::{InvertingReconnection, resolve_deferred_index};
 pub use kind::ShiftKind;

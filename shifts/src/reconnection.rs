@@ -1,8 +1,8 @@
 //! The identity shift and reconnection `[y0, y1, x2, x3]` [001 §3.2.1] (DESIGN §5).
 
-use restir::shift::{Domain, Fail, Shift, Shifted};
+use restir::shift::{Evaluated, Fail, Shift, Shifted};
 
-use crate::domain::SssDomain;
+use crate::domain::{Located, SssDomain};
 use crate::numbers::{DeclaresNumbers, Numbers};
 use crate::sample::SssSample;
 
@@ -41,7 +41,7 @@ impl DeclaresNumbers for Reconnection {
     const NUMBERS: Numbers = Numbers::KEPT;
 }
 
-impl Shift<SssDomain<'_>> for Reconnection {
+impl<'s> Shift<SssDomain<'s>> for Reconnection {
     fn shift(
         &self,
         x: &SssSample,
@@ -50,17 +50,81 @@ impl Shift<SssDomain<'_>> for Reconnection {
     ) -> Result<Shifted<SssSample>, Fail> {
         reconnect(x, dst).map(|y| Shifted { y, jacobian: 1.0 })
     }
+
+    /// The support check has evaluated `p̂_dst(y)`: it is returned, not evaluated again.
+    fn shift_with_target(
+        &self,
+        x: &SssSample,
+        _src: &SssDomain,
+        dst: &SssDomain,
+    ) -> Result<(Shifted<SssSample>, f32), Fail> {
+        reconnect_with_target(x, dst).map(|(y, target)| (Shifted { y, jacobian: 1.0 }, target))
+    }
+
+    /// `y = x`: both targets from one [`SssDomain::locate`] of x.
+    fn shift_with_targets(
+        &self,
+        x: &SssSample,
+        src: &SssDomain<'s>,
+        dst: &SssDomain<'s>,
+    ) -> Result<Evaluated<SssDomain<'s>>, Fail> {
+        let located = src.locate(x).ok_or(Fail::Rejected)?;
+        let target = reconnect_located(&located, x, dst)?;
+        Ok(Evaluated {
+            shifted: Shifted {
+                y: *x,
+                jacobian: 1.0,
+            },
+            target,
+            source_target: src.target_located(&located, x),
+        })
+    }
+
+    /// `y` located once for all of `others` (`J = 1`).
+    fn targets_from(
+        &self,
+        y: &SssSample,
+        receiver: &SssDomain,
+        others: &[&SssDomain],
+        out: &mut [f32],
+    ) {
+        let located = receiver.locate(y);
+        for (t, other) in out.iter_mut().zip(others) {
+            *t = located
+                .and_then(|l| reconnect_located(&l, y, other).ok())
+                .unwrap_or(0.0);
+        }
+    }
 }
 
 /// The support checks of reconnection into `dst`: x2 on y1's object (`Rejected`), within
 /// `r_max` of the widest channel and with `p̂_dst > 0` (`OutOfSupport`). All depend only on the
 /// path `[y1, x2, x3]`, so they hold in both directions of a round trip.
 pub(crate) fn reconnect(x: &SssSample, dst: &SssDomain) -> Result<SssSample, Fail> {
-    let x2 = dst.entry_point(x).ok_or(Fail::Rejected)?;
-    let r = (x2.position - dst.x1().position).length();
-    // `target` is finite and ≥ 0, so `<= 0` means "outside the support".
-    if r.is_nan() || r > dst.material().r_max_all() || dst.target(x) <= 0.0 {
+    reconnect_with_target(x, dst).map(|(y, _)| y)
+}
+
+/// [`reconnect`] with the `p̂_dst(y) > 0` its check evaluated.
+fn reconnect_with_target(x: &SssSample, dst: &SssDomain) -> Result<(SssSample, f32), Fail> {
+    let located = dst.locate(x).ok_or(Fail::Rejected)?;
+    reconnect_located(&located, x, dst).map(|target| (*x, target))
+}
+
+/// [`reconnect`]'s checks of `x`, found where `located` says, into `dst`; `p̂_dst(x)` if they
+/// pass.
+fn reconnect_located(located: &Located, x: &SssSample, dst: &SssDomain) -> Result<f32, Fail> {
+    if x.object() != dst.x1().object {
+        return Err(Fail::Rejected);
+    }
+    let r = (located.x2.position - dst.x1().position).length();
+    // x1's `r_max` are the material's (`ExitPoint::new`), so this is `r_max_all`.
+    if r.is_nan() || r > dst.x1().r_max.max_element() {
         return Err(Fail::OutOfSupport);
     }
-    Ok(*x)
+    // `target` is finite and ≥ 0, so `<= 0` means "outside the support".
+    let target = dst.target_located(located, x);
+    if target <= 0.0 {
+        return Err(Fail::OutOfSupport);
+    }
+    Ok(target)
 }

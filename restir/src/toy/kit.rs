@@ -164,7 +164,7 @@ mod tests {
     use crate::toy::Supports;
     use crate::toy::shifts::{
         AsymmetricRejection, BackShiftBug, NoBackShift, Replay, Scaling, ScalingUnitJacobian,
-        Translation,
+        ShortcutBug, Translation, WrongShortcut,
     };
 
     fn correct_shifts() -> [(&'static str, &'static dyn Shift<ToyPixel>); 3] {
@@ -212,7 +212,7 @@ mod tests {
     #[test]
     fn broken_shifts_are_caught_by_named_checks() {
         let cfg = differing();
-        let broken: [(&str, &dyn Shift<ToyPixel>, &[CheckName]); 4] = [
+        let broken: [(&str, &dyn Shift<ToyPixel>, &[CheckName]); 6] = [
             (
                 "scaling with J = 1",
                 &ScalingUnitJacobian,
@@ -238,6 +238,16 @@ mod tests {
                 "asymmetric rejection",
                 &AsymmetricRejection,
                 &[CheckName::RoundTrip],
+            ),
+            (
+                "batched back-shift without the shift",
+                &WrongShortcut(ShortcutBug::UnshiftedBatch),
+                &[CheckName::PartitionOfUnity],
+            ),
+            (
+                "source target of the shifted point",
+                &WrongShortcut(ShortcutBug::SourceTargetOfShifted),
+                &[CheckName::PartitionOfUnity],
             ),
         ];
         for (name, shift, must_catch) in broken {

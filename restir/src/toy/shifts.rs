@@ -2,7 +2,7 @@
 //! broken ones that `restir::check` must detect (DESIGN §3, check 7).
 
 use super::{Point, ToyPixel};
-use crate::shift::{Domain, Fail, Shift, Shifted};
+use crate::shift::{Domain, Evaluated, Fail, Shift, Shifted};
 
 /// `y = x + (μ_dst − μ_src)`, `J = 1`; fails when `y` leaves Ω.
 #[derive(Clone, Copy, Debug, Default)]
@@ -114,6 +114,51 @@ impl<T: Shift<ToyPixel>> Shift<ToyPixel> for NoBackShift<T> {
                 Ok(back) => other.target(&back.y),
                 Err(_) => 0.0,
             },
+        }
+    }
+}
+
+/// How [`WrongShortcut`] breaks a shortcut resampling takes.
+#[derive(Clone, Copy, Debug)]
+pub enum ShortcutBug {
+    /// [`Shift::targets_from`] evaluates `y` in each domain without shifting it.
+    UnshiftedBatch,
+    /// [`Shift::shift_with_targets`] reports `p̂_src` of the shifted point, not of the input.
+    SourceTargetOfShifted,
+}
+
+/// Broken: translation whose plain evaluations are right but one shortcut is not (the bug an
+/// optimised override can bring; caught by check 4 (c) and, in the chain, by unbiasedness).
+#[derive(Clone, Copy, Debug)]
+pub struct WrongShortcut(pub ShortcutBug);
+
+impl Shift<ToyPixel> for WrongShortcut {
+    fn shift(&self, x: &Point, src: &ToyPixel, dst: &ToyPixel) -> Result<Shifted<Point>, Fail> {
+        Translation.shift(x, src, dst)
+    }
+    fn shift_with_targets(
+        &self,
+        x: &Point,
+        src: &ToyPixel,
+        dst: &ToyPixel,
+    ) -> Result<Evaluated<ToyPixel>, Fail> {
+        let shifted = self.shift(x, src, dst)?;
+        let source_target = match self.0 {
+            ShortcutBug::SourceTargetOfShifted => src.target(&shifted.y),
+            ShortcutBug::UnshiftedBatch => src.target(x),
+        };
+        Ok(Evaluated {
+            target: dst.target(&shifted.y),
+            shifted,
+            source_target,
+        })
+    }
+    fn targets_from(&self, y: &Point, receiver: &ToyPixel, others: &[&ToyPixel], out: &mut [f32]) {
+        for (t, other) in out.iter_mut().zip(others) {
+            *t = match self.0 {
+                ShortcutBug::UnshiftedBatch => other.target(y),
+                ShortcutBug::SourceTargetOfShifted => self.target_from(y, receiver, other),
+            };
         }
     }
 }

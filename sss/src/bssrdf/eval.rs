@@ -28,8 +28,7 @@ pub fn bssrdf(material: &Translucent, x1: &ExitPoint, x2: &EntryPoint, wi: Vec3)
 /// `S = R(‖x1 − x2‖)/π · F_t(n1·ωo) F_t(n2·ωi)` for a radial profile value `profile` per channel
 /// (any sign; the caller truncates), with x1's Fresnel transmittance [001 Eq. 2].
 pub fn bssrdf_of_profile(profile: Vec3, x1: &ExitPoint, x2: &EntryPoint, wi: Vec3) -> Vec3 {
-    let fresnel = x1.fresnel.eval(x1.shading_normal.dot(x1.view))
-        * x1.fresnel.eval(x2.shading_normal.dot(wi));
+    let fresnel = x1.fresnel_out * x1.fresnel.eval(x2.shading_normal.dot(wi));
     profile * (FRAC_1_PI * fresnel)
 }
 

@@ -1,5 +1,7 @@
 //! The exit point x1, the entry point x2 and the probe ray of BSSRDF IS (DESIGN §9 "Probe ray").
 
+use std::cell::Cell;
+
 use geometry::{Frame, Geometry, Hit, Ray};
 use glam::{Vec2, Vec3, Vec3A};
 
@@ -26,6 +28,29 @@ pub struct ExitPoint {
     pub r_max: Vec3,
     /// The material's normalised Fresnel transmittance `F_t`.
     pub fresnel: FresnelTransmission,
+    /// `F_t(n1·ωo)` of the shading normal and view above, which every BSSRDF value at this x1
+    /// multiplies by.
+    pub fresnel_out: f32,
+}
+
+/// The material's per-channel profiles and Fresnel transmittance (its `F_t` normalisation takes
+/// two logarithms). A scene has a few materials and a reuse pass builds millions of exit points,
+/// so each thread keeps the last material's: the same values, computed once per run of equal
+/// materials.
+fn derived(material: &Translucent) -> ([Burley; 3], FresnelTransmission) {
+    type Derived = (Translucent, [Burley; 3], FresnelTransmission);
+    thread_local! {
+        static LAST: Cell<Option<Derived>> = const { Cell::new(None) };
+    }
+    LAST.with(|last| match last.get() {
+        Some((m, profiles, fresnel)) if m == *material => (profiles, fresnel),
+        _ => {
+            let profiles = material.d().to_array().map(Burley::new);
+            let fresnel = material.fresnel();
+            last.set(Some((*material, profiles, fresnel)));
+            (profiles, fresnel)
+        }
+    })
 }
 
 impl ExitPoint {
@@ -38,14 +63,15 @@ impl ExitPoint {
         object: u32,
         material: &Translucent,
     ) -> ExitPoint {
+        let (profiles, fresnel) = derived(material);
         ExitPoint::with_profiles(
             position,
             geometric_normal,
             shading_normal,
             view,
             object,
-            std::array::from_fn(|c| material.channel(c)),
-            material.fresnel(),
+            profiles,
+            fresnel,
         )
     }
 
@@ -74,6 +100,7 @@ impl ExitPoint {
             profiles,
             r_max: Vec3::from_array(profiles.map(|p| p.r_max())),
             fresnel,
+            fresnel_out: fresnel.eval(shading_normal.dot(view)),
         }
     }
 

@@ -442,7 +442,7 @@ fn run_tests_the_plan_and_stops_on_request() {
         whole
             .rows
             .iter()
-            .all(|r| r.method == "pt" && r.equivalence.n == 4)
+            .all(|r| r.method == plan.method.name() && r.equivalence.n == 4)
     );
     assert_eq!(
         (whole.resolution.as_str(), whole.reference.profile.as_str()),

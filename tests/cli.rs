@@ -420,6 +420,11 @@ fn huge_sizes_in_files_are_one_line_errors() {
         "field `--reference-batches` = 100000: must be in 2..=65536",
     );
     bias(&["--frames", "0"], "field `--frames` = 0");
+    for delta in ["0", "-0.02", "NaN"] {
+        let needle =
+            format!("field `--delta` = {delta}: the tolerance must be a finite number > 0");
+        bias(&[&format!("--delta={delta}")], &needle);
+    }
     bias(
         &["--replicas", "65536", "--resolution", "1024x1024"],
         "field `--replicas` = 65536 replicas, 32 reference batches, 16 frames at 1024×1024: the \

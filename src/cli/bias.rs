@@ -2,31 +2,19 @@
 //! (the path tracer with the method's reference settings, `Method::reference`: the dipole
 //! profile for `image-space`); per region and colour channel (red, green, blue, luminance) the
 //! Welch test of zero bias (Holm across all of them) and the verdict "equivalent within ±δ at
-//! 1 − α", "biased" or "inconclusive" (`lab::bias`); what it prints: the overall verdict in words and the JSON of the test
-//! (schema `reshift-bias/2`, docs/results-schema.md).
+//! 1 − α", "biased" or "inconclusive" (`lab::bias::run`). Here: the options, parsed into a
+//! `lab::bias::BiasPlan`; what it prints: the table with the overall verdict in words, or the
+//! JSON of the outcome (schema `reshift-bias/2`, docs/results-schema.md).
 
 use clap::Args;
-use glam::DVec3;
-use lab::bias::{
-    BiasRow, Protocol, Table, bias_rows, overall, reference_images_with, replicas_needed,
-    summarize, test_bytes,
-};
-use lab::limits::MAX_REPLICAS;
-use lab::reference_cache::REFERENCE_SEED;
-use lab::regions::Regions;
+use lab::bias::{self, BiasOutcome, BiasPlan, BiasRow, PLANNED_POWER, Protocol, Table, overall};
 use methods::Method;
 use restir::stats::Verdict;
-use serde_json::{Value, json};
-use sss::limits::{self, MAX_SPP};
-use sss::scene::GBuffer;
 
 use super::common::{
-    BackendArgs, CliError, CliResult, command_line, interrupted, json_number, load_scene,
-    parse_resolution, progress, with_resolution,
+    BackendArgs, Bars, CliError, CliResult, command_line, load_scene, parse_resolution,
+    with_resolution,
 };
-
-/// The power for which `bias` plans the replicas a method needs.
-const PLANNED_POWER: f64 = 0.9;
 
 #[derive(Args, Clone, Debug)]
 pub struct BiasArgs {
@@ -57,149 +45,88 @@ pub struct BiasArgs {
     /// Samples per pixel of one reference batch.
     #[arg(long, default_value_t = 64)]
     pub reference_batch_spp: u32,
-    /// Print JSON (schema `reshift-bias/1`) instead of the table.
+    /// Print JSON (schema `reshift-bias/2`) instead of the table.
     #[arg(long)]
     pub json: bool,
     #[command(flatten)]
     pub backend: BackendArgs,
 }
 
+/// Runs `bias` and prints the table (or the JSON); a test stopped by Ctrl-C prints the
+/// replicas rendered so far and fails.
 pub fn command(args: &BiasArgs) -> CliResult<()> {
-    let method = Method::parse(&args.method)?;
-    let valid = args.delta > 0.0 && args.delta.is_finite() && args.alpha > 0.0 && args.alpha < 1.0;
-    if !valid {
-        return Err(CliError(format!(
-            "need δ > 0 and 0 < α < 1 (got --delta {} --alpha {})",
-            args.delta, args.alpha
-        )));
-    }
-    let resolution = check_sizes(args)?;
-    let backend = args.backend.open()?;
-    let loaded = load_scene(&args.scene)?;
-    let scene = with_resolution(loaded.scene, Some(resolution));
-    let frame = args.frames - 1;
-    let regions = Regions::classify(&scene, &GBuffer::render(&scene, frame), REFERENCE_SEED);
-    let reference_settings = method.reference();
-    let profile = reference_settings.profile.name();
-    let reference = reference_images_with(
-        &reference_settings,
-        &scene,
-        frame,
-        args.reference_batches,
-        args.reference_batch_spp,
-        REFERENCE_SEED,
-    )?;
-    let bar = progress(args.replicas as u64, &method.name());
-    let (mut images, mut nonfinite): (Vec<Vec<DVec3>>, u64) = (Vec::new(), 0);
-    for seed in 0..args.replicas as u64 {
-        if interrupted() {
-            break;
-        }
-        let rendered = method.render_on(&backend, &scene, args.frames, seed)?;
-        nonfinite += rendered.nonfinite;
-        images.push(rendered.image.pixels.iter().map(|p| p.as_dvec3()).collect());
-        bar.inc(1);
-    }
-    bar.finish_and_clear();
-    let stopped = images.len() < args.replicas as usize;
-    if images.len() < 2 {
-        return Err(CliError("interrupted before 2 replicas finished".into()));
-    }
-    let protocol = Protocol {
-        delta: args.delta,
-        alpha: args.alpha,
-    };
-    let rows = bias_rows(
-        &method.name(),
-        &summarize(&images, &regions),
-        &summarize(&reference.rgb, &regions),
-        &protocol,
-    );
-    let planned = replicas_needed(&rows, &protocol, PLANNED_POWER);
+    let plan = plan(args)?;
+    let outcome = bias::run(&plan, &mut Bars::default())?;
     if args.json {
-        let value = bias_json(
-            args,
-            &scene.name,
-            &rows,
-            planned.ok(),
-            profile,
-            [nonfinite, reference.nonfinite],
-            images.len(),
-            stopped,
-        );
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&value).expect("JSON values")
-        );
+        println!("{}", outcome.to_json_pretty());
     } else {
-        println!(
-            "# bias of {} on {} ({}, frame {frame}): N = {} replicas vs {} reference batches × {} spp ({profile} profile); per region and channel, δ = ±{}%, α = {} ({}% CIs, Holm across all rows)\n",
-            method,
-            scene.name,
-            args.resolution,
-            images.len(),
-            args.reference_batches,
-            args.reference_batch_spp,
-            100.0 * args.delta,
-            args.alpha,
-            100.0 * (1.0 - args.alpha)
-        );
-        println!("{}", Table(&rows));
-        println!(
-            "verdict: {}; non-finite values: {} in replicas, {} in the reference",
-            verdict_line(&rows, &protocol),
-            nonfinite,
-            reference.nonfinite
-        );
-        let goal = format!(
-            "every row equivalent within ±{}% with probability ≥ {PLANNED_POWER} if the method had no bias",
-            100.0 * args.delta
-        );
-        match planned {
-            Ok(n) => println!("planned: N = {n} for {goal} (from this run's per-replica CVs)"),
-            Err(why) => println!("planned: no N for {goal}: {why}"),
-        }
+        print_table(&plan, &outcome);
     }
-    if stopped {
+    if outcome.interrupted {
         return Err(CliError(format!(
             "interrupted after {} of {} replicas",
-            images.len(),
-            args.replicas
+            outcome.replicas, args.replicas
         )));
     }
     Ok(())
 }
 
-/// The resolution, once every count is within `sss::limits` (at least two replicas and two
-/// reference batches, for their standard errors) and the test fits the memory budget.
-fn check_sizes(args: &BiasArgs) -> CliResult<(u32, u32)> {
-    let line = command_line();
-    let count = |flag: &str, n: u32, min: u32, max: u32| {
-        limits::count(line, flag, n as u64, min as u64, max as u64)
+/// The plan of `args`, checked with errors that name the options.
+fn plan(args: &BiasArgs) -> CliResult<BiasPlan> {
+    let method = Method::parse(&args.method)?;
+    let resolution = parse_resolution(&args.resolution)?;
+    let loaded = load_scene(&args.scene)?;
+    let plan = BiasPlan {
+        scene: with_resolution(loaded.scene, Some(resolution)),
+        spec: args.method.clone(),
+        method,
+        replicas: args.replicas,
+        frames: args.frames,
+        protocol: Protocol {
+            delta: args.delta,
+            alpha: args.alpha,
+        },
+        reference_batches: args.reference_batches,
+        reference_batch_spp: args.reference_batch_spp,
+        backend: args.backend.open()?,
     };
-    count("--replicas", args.replicas, 2, MAX_REPLICAS)?;
-    count(
-        "--reference-batches",
-        args.reference_batches,
-        2,
-        MAX_REPLICAS,
-    )?;
-    count(
-        "--reference-batch-spp",
-        args.reference_batch_spp,
-        1,
-        MAX_SPP,
-    )?;
-    limits::frames(line, "--frames", args.frames)?;
-    let (width, height) = parse_resolution(&args.resolution)?;
-    let value = format!(
-        "{} replicas, {} reference batches, {} frames at {width}×{height}",
-        args.replicas, args.reference_batches, args.frames
+    plan.validate(command_line())?;
+    Ok(plan)
+}
+
+/// The test as a Markdown table between a header line (what ran) and the verdict and plan lines.
+fn print_table(plan: &BiasPlan, outcome: &BiasOutcome) {
+    let protocol = outcome.protocol();
+    let reference = &outcome.reference;
+    println!(
+        "# bias of {} on {} ({}, frame {}): N = {} replicas vs {} reference batches × {} spp ({} profile); per region and channel, δ = ±{}%, α = {} ({}% CIs, Holm across all rows)\n",
+        plan.method,
+        outcome.scene,
+        outcome.resolution,
+        outcome.frames - 1,
+        outcome.replicas,
+        reference.batches,
+        reference.spp_per_batch,
+        reference.profile,
+        100.0 * protocol.delta,
+        protocol.alpha,
+        100.0 * outcome.confidence
     );
-    let pixels = width as u64 * height as u64;
-    let needed = test_bytes(pixels, args.replicas, args.reference_batches, args.frames);
-    limits::memory(line, "--replicas", &value, needed, "the bias test")?;
-    Ok((width, height))
+    println!("{}", Table(&outcome.rows));
+    println!(
+        "verdict: {}; non-finite values: {} in replicas, {} in the reference",
+        verdict_line(&outcome.rows, &protocol),
+        outcome.nonfinite.replicas,
+        outcome.nonfinite.reference
+    );
+    let goal = format!(
+        "every row equivalent within ±{}% with probability ≥ {PLANNED_POWER} if the method had no bias",
+        100.0 * protocol.delta
+    );
+    match &outcome.planned.replicas {
+        Ok(n) => println!("planned: N = {n} for {goal} (from this run's per-replica CVs)"),
+        Err(why) => println!("planned: no N for {goal}: {why}"),
+    }
 }
 
 /// The overall verdict in words: `equivalent within ±δ at 99% in every region and channel`,
@@ -218,62 +145,4 @@ fn verdict_line(rows: &[BiasRow], protocol: &Protocol) -> String {
             rows.len()
         ),
     }
-}
-
-/// JSON of the bias test (schema `reshift-bias/2`, docs/results-schema.md).
-fn bias_json(
-    args: &BiasArgs,
-    scene: &str,
-    rows: &[BiasRow],
-    planned: Option<usize>,
-    profile: &str,
-    [replica_nonfinite, reference_nonfinite]: [u64; 2],
-    replicas: usize,
-    interrupted: bool,
-) -> Value {
-    let verdict = overall(rows);
-    let rows: Vec<Value> = rows
-        .iter()
-        .map(|r| {
-            let e = &r.equivalence;
-            json!({
-                "region": r.region.name(),
-                "channel": r.channel.name(),
-                "pixels": r.pixels,
-                "n": e.n,
-                "mean": json_number(r.estimate.mean),
-                "reference_mean": json_number(r.reference.mean),
-                "reference_std_err": json_number(r.reference.std_err),
-                "relative_bias": json_number(e.relative_bias),
-                "ci_low": json_number(e.ci_low),
-                "ci_high": json_number(e.ci_high),
-                "ci_half_width": json_number(r.ci_half_width()),
-                "p_zero_bias": json_number(e.p_zero_bias),
-                "holm_rejected": r.holm_rejected,
-                "verdict": r.verdict.name(),
-            })
-        })
-        .collect();
-    json!({
-        "schema": "reshift-bias/2",
-        "scene": scene,
-        "method": args.method,
-        "resolution": args.resolution,
-        "frames": args.frames,
-        "replicas": replicas,
-        "delta": args.delta,
-        "alpha": args.alpha,
-        "confidence": 1.0 - args.alpha,
-        "reference": {
-            "batches": args.reference_batches,
-            "spp_per_batch": args.reference_batch_spp,
-            "profile": profile,
-            "seed": REFERENCE_SEED,
-        },
-        "nonfinite": { "replicas": replica_nonfinite, "reference": reference_nonfinite },
-        "interrupted": interrupted,
-        "verdict": verdict.name(),
-        "planned": { "power": PLANNED_POWER, "replicas": planned },
-        "rows": rows,
-    })
 }

@@ -15,18 +15,24 @@
 //!   from its channel's row.
 //!
 //! Here: the channels and the test's rows ([`bias_rows`], [`paired_rows`], [`overall`]); the
-//! replicas' and reference batches' final frames in `render`; their reduction to region means
-//! in `summary`; the replicas a run needs in `planning`; the Markdown table in `table`.
+//! test as a job of a [`BiasPlan`] ([`run`]) in `run`, what it found ([`BiasOutcome`], the JSON
+//! of `reshift bias`) in `outcome`; the replicas' and reference batches' final frames in
+//! `render`; their reduction to region means in `summary`; the replicas a run needs in
+//! `planning`; the Markdown table in `table`.
 
+mod outcome;
 mod planning;
 mod render;
+mod run;
 mod summary;
 mod table;
 #[cfg(test)]
 mod tests;
 
+pub use outcome::{BiasOutcome, NonFinite, PLANNED_POWER, Planned, ReferenceEntry, SCHEMA};
 pub use planning::{Unplannable, replicas_needed};
 pub use render::{Images, reference_images, reference_images_with, replica_images, test_bytes};
+pub use run::{BiasPlan, run};
 pub use summary::{RegionSummary, region_mean, summarize};
 use summary::{channel_summary, region_means};
 pub use table::Table;

@@ -362,3 +362,134 @@ fn holm_guards_against_false_findings() {
     };
     assert_eq!(PROTOCOL.verdict(&inside, true), Verdict::Equivalent);
 }
+
+/// A plan of `pt` on an 8 × 6 half-shadow: 4 replicas of 1 frame against 2 batches × 2 spp.
+fn small_plan() -> BiasPlan {
+    let scene = Scene::builtin("half-shadow").expect("built-in");
+    BiasPlan {
+        scene: crate::scenes::with_resolution(scene, Some((8, 6))),
+        spec: "pt".into(),
+        method: methods::Method::parse("pt").expect("registered"),
+        replicas: 4,
+        frames: 1,
+        protocol: PROTOCOL,
+        reference_batches: 2,
+        reference_batch_spp: 2,
+        backend: engine::Backend::Cpu,
+    }
+}
+
+/// A tolerance that is not a finite number > 0, or a level outside (0, 1), is refused in one
+/// line naming the option and the value; `run` refuses it before rendering.
+#[test]
+fn a_bad_tolerance_or_level_is_refused() {
+    let origin = std::path::Path::new("(command line)");
+    for delta in [0.0, -0.02, f64::NAN, f64::INFINITY] {
+        let plan = BiasPlan {
+            protocol: Protocol { delta, ..PROTOCOL },
+            ..small_plan()
+        };
+        let line = plan.validate(origin).unwrap_err().to_string();
+        assert!(
+            line.contains(&format!("field `--delta` = {delta}:")),
+            "{line}"
+        );
+        assert_eq!(line.lines().count(), 1, "{line}");
+        let refused = run(&plan, &mut crate::progress::Silent);
+        assert!(matches!(refused, Err(crate::Error::Input(_))), "{delta}");
+    }
+    for alpha in [0.0, 1.0, f64::NAN] {
+        let plan = BiasPlan {
+            protocol: Protocol { alpha, ..PROTOCOL },
+            ..small_plan()
+        };
+        let line = plan.validate(origin).unwrap_err().to_string();
+        assert!(
+            line.contains(&format!("field `--alpha` = {alpha}:")),
+            "{line}"
+        );
+    }
+    assert!(small_plan().validate(origin).is_ok());
+}
+
+/// Asks to stop once `after` replicas are done.
+struct StopAfter {
+    after: u64,
+    done: u64,
+}
+
+impl crate::progress::Progress for StopAfter {
+    fn step(&mut self) {
+        self.done += 1;
+    }
+
+    fn stop_requested(&self) -> bool {
+        self.done >= self.after
+    }
+}
+
+/// `run` renders every replica, one row per non-empty region and channel; a stop request keeps
+/// the replicas rendered (an interrupted outcome) unless fewer than two are; the same plan gives
+/// the same outcome.
+#[test]
+fn run_tests_the_plan_and_stops_on_request() {
+    let plan = small_plan();
+    let whole = run(&plan, &mut crate::progress::Silent).expect("runs");
+    let regions = whole.rows.len() / 4;
+    assert!(regions >= 1 && whole.rows.len() == 4 * regions);
+    assert_eq!((whole.replicas, whole.interrupted), (4, false));
+    assert!(
+        whole
+            .rows
+            .iter()
+            .all(|r| r.method == plan.method.name() && r.equivalence.n == 4)
+    );
+    assert_eq!(
+        (whole.resolution.as_str(), whole.reference.profile.as_str()),
+        ("8x6", "burley")
+    );
+    let again = run(&plan, &mut crate::progress::Silent).expect("runs");
+    assert_eq!(again.to_json(), whole.to_json());
+    let stopped = run(&plan, &mut StopAfter { after: 3, done: 0 }).expect("3 replicas");
+    assert_eq!((stopped.replicas, stopped.interrupted), (3, true));
+    let early = run(&plan, &mut StopAfter { after: 1, done: 0 });
+    assert!(matches!(early, Err(crate::Error::Interrupted(_))));
+}
+
+/// The JSON carries every field of schema `reshift-bias/2` and writes a number that does not
+/// exist as `null`.
+#[test]
+fn the_outcome_serialises_to_the_schema() {
+    let mut outcome = run(&small_plan(), &mut crate::progress::Silent).expect("runs");
+    outcome.rows[0].estimate.mean = f64::NAN;
+    let json = outcome.to_json();
+    let mut keys: Vec<&str> = json
+        .as_object()
+        .unwrap()
+        .keys()
+        .map(String::as_str)
+        .collect();
+    keys.sort_unstable();
+    let expected = [
+        "alpha",
+        "confidence",
+        "delta",
+        "frames",
+        "interrupted",
+        "method",
+        "nonfinite",
+        "planned",
+        "reference",
+        "replicas",
+        "resolution",
+        "rows",
+        "scene",
+        "schema",
+        "verdict",
+    ];
+    assert_eq!(keys, expected);
+    assert_eq!(json["schema"], SCHEMA);
+    assert!(json["rows"][0]["mean"].is_null());
+    assert_eq!(json["rows"][0]["region"], outcome.rows[0].region.name());
+    assert_eq!(json["verdict"], outcome.verdict.name());
+}

@@ -4,8 +4,9 @@
 //! buffers and returns the pixel's new reservoir; it draws every random number from streams keyed
 //! by the receiving pixel, so the result does not depend on scheduling.
 
+use bytemuck::Zeroable;
 use glam::{Vec2, Vec3};
-use restir::mis::MisScheme;
+use restir::mis::{MAX_DOMAINS, MisScheme};
 use restir::resample::{Observed, ResampleError, Source, resample_observed};
 use restir::reservoir::{Reservoir, cap_confidence};
 use restir::rng::StreamKey;
@@ -89,6 +90,11 @@ impl<'a> PassInput<'a> {
     /// The domain of `pixel` in this pass's frame, `None` off translucent objects.
     pub fn domain(&self, pixel: u32) -> Option<(SssDomain<'a>, &'a GPixel)> {
         let g = self.gbuffer.pixels[pixel as usize].as_ref()?;
+        Some((self.domain_at(pixel, g)?, g))
+    }
+
+    /// [`PassInput::domain`] of `pixel` from its G-buffer pixel `g`, read by the caller.
+    pub fn domain_at(&self, pixel: u32, g: &GPixel) -> Option<SssDomain<'a>> {
         let domain = SssDomain::new(
             self.scene,
             g,
@@ -96,9 +102,8 @@ impl<'a> PassInput<'a> {
             self.gbuffer.frame,
             self.pass,
             self.seed,
-        )?
-        .with_target(self.target);
-        Some((domain, g))
+        )?;
+        Some(domain.with_target(self.target))
     }
 }
 
@@ -285,7 +290,12 @@ pub fn spatial(
     let radius = radius.radius_px(&input.scene.camera, frame, g.position, max_d(&receiver));
     let centre = Vec2::new((pixel % width) as f32 + 0.5, (pixel / width) as f32 + 0.5);
     let mut rng = StreamKey::new(pixel, frame, input.pass, purpose::NEIGHBOURS).stream(input.seed);
-    let mut taken = Vec::with_capacity(neighbours as usize);
+    // The neighbours' G-buffer pixels and reservoirs are read first and their domains built
+    // after: the reads of different neighbours do not depend on each other, so the CPU overlaps
+    // their cache misses (a 512² frame's buffers far exceed the caches), which building a
+    // domain between two reads would serialise. Same neighbours, same order.
+    let mut gathered = [(0, None, PixelReservoir::zeroed()); MAX_DOMAINS];
+    let mut count = 0;
     for _ in 0..neighbours {
         let offset = sample_uniform_disk(radius, rng.next_f32(), rng.next_f32());
         let q = centre + offset;
@@ -293,16 +303,28 @@ pub fn spatial(
             continue;
         }
         let q = q.y as u32 * width + q.x as u32;
-        if q == pixel {
+        if q == pixel || count == MAX_DOMAINS {
             continue;
         }
-        let Some((domain, g_q)) = input.domain(q) else {
+        let (g_q, reservoir) = (
+            input.gbuffer.pixels[q as usize],
+            input.reservoirs[q as usize],
+        );
+        gathered[count] = (q, g_q, reservoir);
+        count += 1;
+    }
+    let mut taken = Vec::with_capacity(count);
+    for (q, g_q, stored) in &gathered[..count] {
+        let Some(g_q) = g_q else {
+            continue;
+        };
+        let Some(domain) = input.domain_at(*q, g_q) else {
             continue;
         };
         if g_q.object != g.object {
             continue;
         }
-        let mut reservoir = input.reservoirs[q as usize].get();
+        let mut reservoir = stored.get();
         if let Some(cap) = cap {
             reservoir.confidence = cap_confidence(reservoir.confidence, canonical.confidence, cap);
         }

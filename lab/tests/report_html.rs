@@ -131,6 +131,7 @@ fn the_report_renders_in_a_browser() {
         backend: Backend::Cpu,
         // Every denoiser installed here (the built-in filter always): the denoised images are
         // part of the page.
+        video: true,
         denoise: Denoiser::ALL
             .into_iter()
             .filter(|d| d.available().is_ok())

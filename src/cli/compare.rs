@@ -215,6 +215,7 @@ fn plan(args: &CompareArgs) -> CliResult<Comparison> {
         frame_reference_spp: (frame_spp > 0).then_some(frame_spp),
         out,
         backend,
+        video: !args.no_video,
         denoise: Vec::new(),
     })
 }

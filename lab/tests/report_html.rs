@@ -44,10 +44,20 @@ fn chromium() -> Result<PathBuf, String> {
 
 /// Renders `page` headless into a PNG screenshot in `dir` and decodes it.
 fn screenshot(browser: &Path, page: &Path, dir: &Path) -> image::RgbImage {
-    let shot = dir.join(format!(
-        "{}.png",
-        page.file_stem().unwrap().to_string_lossy()
-    ));
+    screenshot_after(browser, page, dir, None)
+}
+
+/// [`screenshot`] `ms` milliseconds of virtual time after the page loaded.
+fn screenshot_at(browser: &Path, page: &Path, dir: &Path, ms: u32) -> image::RgbImage {
+    screenshot_after(browser, page, dir, Some(ms))
+}
+
+fn screenshot_after(browser: &Path, page: &Path, dir: &Path, ms: Option<u32>) -> image::RgbImage {
+    let stem = page.file_stem().unwrap().to_string_lossy();
+    let shot = dir.join(match ms {
+        Some(ms) => format!("{stem}-{ms}ms.png"),
+        None => format!("{stem}.png"),
+    });
     let profile = dir.join(format!(
         "profile-{}",
         page.file_stem().unwrap().to_string_lossy()
@@ -67,6 +77,7 @@ fn screenshot(browser: &Path, page: &Path, dir: &Path) -> image::RgbImage {
         .arg(format!("--user-data-dir={}", profile.display()))
         .arg(format!("--screenshot={}", shot.display()))
         .arg(format!("--window-size={},{}", WINDOW.0, WINDOW.1))
+        .args(ms.map(|ms| format!("--virtual-time-budget={ms}")))
         .arg(format!("file://{}", page.display()))
         .output()
         .expect("run chromium");
@@ -99,6 +110,66 @@ fn not_blank(shot: &image::RgbImage) -> Result<(), String> {
             100.0 * fraction
         ))
     }
+}
+
+/// Every frame of the animated PNG at `path`, as RGB bytes.
+fn apng_frames(path: &Path) -> Vec<Vec<u8>> {
+    let file = std::fs::File::open(path).unwrap();
+    let mut reader = png::Decoder::new(std::io::BufReader::new(file))
+        .read_info()
+        .unwrap();
+    let control = *reader.info().animation_control().expect("animated");
+    assert_eq!(control.num_plays, 0, "loops forever");
+    (0..control.num_frames)
+        .map(|_| {
+            let mut buffer = vec![0; reader.output_buffer_size().unwrap()];
+            reader.next_frame(&mut buffer).unwrap();
+            buffer
+        })
+        .collect()
+}
+
+/// The report's videos: each APNG holds every frame, no two consecutive alike, none of one
+/// colour; and the report's video figures, shown alone in Chromium, are not blank and move:
+/// screenshots at two times of the animation differ.
+fn videos_play(browser: &Path, out: &Path, html: &str, dir: &Path) {
+    let results: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    let videos = results["videos"].as_array().unwrap();
+    assert_eq!(videos.len(), 2);
+    for v in videos {
+        let frames = apng_frames(&out.join(v["apng"].as_str().unwrap()));
+        assert_eq!(frames.len(), 3);
+        assert!(frames.windows(2).all(|w| w[0] != w[1]), "{v}");
+        for f in &frames {
+            let distinct: std::collections::HashSet<&[u8]> = f.chunks(3).collect();
+            assert!(distinct.len() > 100, "{v}: {} colours", distinct.len());
+        }
+    }
+    // The report's own markup of the videos, enlarged, on a page of its own.
+    let start = html
+        .find("<figure class=\"video\">")
+        .expect("a video figure");
+    let end = html.rfind("</figure>").unwrap() + "</figure>".len();
+    let page = dir.join("videos.html");
+    std::fs::write(
+        &page,
+        format!(
+            "<!DOCTYPE html><html><head><style>body{{margin:0}}img{{width:1200px;\
+             image-rendering:pixelated}}</style></head><body>{}</body></html>",
+            &html[start..end]
+        ),
+    )
+    .unwrap();
+    // 8 frames per second: at 60 ms the first frame shows, at 300 ms the third.
+    let shots: Vec<image::RgbImage> = [60, 300]
+        .iter()
+        .map(|ms| screenshot_at(browser, &page, dir, *ms))
+        .collect();
+    for shot in &shots {
+        not_blank(shot).unwrap();
+    }
+    assert_ne!(shots[0], shots[1], "the videos do not move");
 }
 
 #[test]
@@ -151,18 +222,20 @@ fn the_report_renders_in_a_browser() {
         "self-contained, no script"
     );
     // The figure and the convergence plot, then per entry (2 methods, raw and through each
-    // denoiser) its frame and four maps.
+    // denoiser) its frame and four maps, and a video per method.
     let entries = 2 * (1 + plan.denoise.len());
     assert_eq!(
         html.matches("data:image/png;base64,").count(),
-        2 + 5 * entries
+        2 + 5 * entries + 2
     );
+    assert!(html.contains("Temporal stability (flicker)"));
     for d in &plan.denoise {
         assert!(html.contains(&format!("restir:hybrid+{d}")), "{d} rows");
     }
     let shot = screenshot(&browser, &page, &dir);
     assert_eq!(shot.dimensions(), WINDOW);
     not_blank(&shot).unwrap();
+    videos_play(&browser, &outcome.out, &html, &dir);
     // Negative control: a blank page fails the same check.
     let blank = dir.join("blank.html");
     std::fs::write(&blank, "<!DOCTYPE html><html><body></body></html>").unwrap();

@@ -134,6 +134,9 @@ pub fn command(args: &CompareArgs) -> CliResult<()> {
     for e in &outcome.denoise_errors {
         eprintln!("denoiser: {e}");
     }
+    for note in &written.results.video_notes {
+        eprintln!("note: videos: {note}");
+    }
     if args.json {
         println!("{}", written.results.to_json_pretty());
     } else {

@@ -1,8 +1,9 @@
-//! `report.html`: one self-contained page per comparison (every image embedded as a base64
-//! data URI, no script, no external resource) with the run's settings, the efficiency verdicts
-//! over the baseline, the inset figure, the convergence plot, the error maps, the trajectory
-//! videos (animated PNGs, which browsers play), the flicker table and the full table,
-//! all read from [`Results`] and the images it names.
+//! `report.html`: one page per comparison (every still image embedded as a base64 data URI, no
+//! script) with the run's settings, the efficiency verdicts over the baseline, the inset
+//! figure, the convergence plot, the error maps, the trajectory videos (animated PNGs, which
+//! browsers play), the flicker table and the full table, all read from [`Results`] and the
+//! images it names. The videos are linked, not embedded: they are files beside the page
+//! (`video/`), a few megabytes each, which base64 would make a third larger inside it.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -172,7 +173,7 @@ pub fn report(results: &Results, out: &Path) -> Result<String, Error> {
         );
     }
     page.push_str("</table>\n");
-    videos(&mut page, r, out)?;
+    videos(&mut page, r);
     flicker(&mut page, r);
     full_table(&mut page, r);
     page.push_str(
@@ -252,11 +253,11 @@ fn verdicts(page: &mut String, r: &Results, denoiser: Option<&str>) {
     page.push_str("</table>\n");
 }
 
-/// Each method's trajectory video, the animated PNG (and the MP4 where one was written), with
-/// a caption saying what its tiles show.
-fn videos(page: &mut String, r: &Results, out: &Path) -> Result<(), Error> {
+/// Each method's trajectory video, the animated PNG (and the MP4 where one was written), linked,
+/// with a caption saying what its tiles show.
+fn videos(page: &mut String, r: &Results) {
     if r.videos.is_empty() {
-        return Ok(());
+        return;
     }
     let _ = writeln!(
         page,
@@ -273,17 +274,15 @@ fn videos(page: &mut String, r: &Results, out: &Path) -> Result<(), Error> {
     for v in &r.videos {
         let _ = write!(
             page,
-            "<figure class=\"video\">{}",
-            image(out, &v.apng, &format!("{} trajectory", v.method))?
+            "<figure class=\"video\"><img src=\"{}\" alt=\"{} trajectory\">",
+            escape(&v.apng),
+            escape(&v.method)
         );
         if let Some(mp4) = &v.mp4 {
-            let path = out.join(mp4);
-            let bytes =
-                std::fs::read(&path).map_err(|e| Error::Io(format!("{}: {e}", path.display())))?;
             let _ = write!(
                 page,
-                "<br><video controls loop muted src=\"data:video/mp4;base64,{}\"></video>",
-                base64(&bytes)
+                "<br><video controls loop muted src=\"{}\"></video>",
+                escape(mp4)
             );
         }
         let _ = writeln!(
@@ -297,7 +296,6 @@ fn videos(page: &mut String, r: &Results, out: &Path) -> Result<(), Error> {
             }
         );
     }
-    Ok(())
 }
 
 /// The flicker of every entry that has one per area with its interval, under the references'

@@ -150,6 +150,7 @@ pub fn equal_time_comparison(
         )),
         out: out.to_path_buf(),
         backend: settings.backend.clone(),
+        video: false,
         denoise: Vec::new(),
     })
 }

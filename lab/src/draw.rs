@@ -1,6 +1,6 @@
 //! Drawing helpers shared by every image the lab writes: the bundled font ([`FONT`]), a PNG
 //! canvas drawn with `plotters` ([`png`]), pixel replication ([`upscale`]), the viridis-like
-//! colour ramp ([`ramp`]) and robust scale ([`quantile`]) of false-colour maps, and the
+//! colour ramp ([`ramp`], [`false_colour`]) and robust scale ([`quantile`]) of false-colour maps, and the
 //! false-colour map with its labelled colour bar ([`false_colour_map`]). Text uses the bundled
 //! DejaVu Sans (`lab/assets/fonts`).
 
@@ -20,7 +20,7 @@ pub const FONT: &str = "sans-serif";
 const FONT_BYTES: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
 
 /// Registers the bundled font once; plotters looks fonts up by family name.
-fn register_font() {
+pub fn register_font() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         // The font is compiled in and parses; a failure would leave text undrawn, not panic.
@@ -96,6 +96,20 @@ pub fn quantile(values: &[f64], q: f64) -> f64 {
     finite[at]
 }
 
+/// `values` as RGB bytes on the [`ramp`] from 0 to `max` (> 0); magenta: not finite.
+pub fn false_colour(values: &[f64], max: f64) -> Vec<u8> {
+    values
+        .iter()
+        .flat_map(|&v| {
+            if v.is_finite() {
+                ramp(v / max)
+            } else {
+                [255, 0, 255]
+            }
+        })
+        .collect()
+}
+
 /// A false-colour map (an error map, a sample-count map): `values` (row-major
 /// `width × height`) scaled up to at least 256 pixels wide, viridis from 0 to `max` ([`ramp`];
 /// magenta: not finite), `title` above and a colour bar with labelled ticks to the right.
@@ -120,17 +134,7 @@ pub fn false_colour_map(
     };
     let scale = 256u32.div_ceil(width).max(1);
     let (w, h) = (width * scale, height * scale);
-    let rgb: Vec<u8> = values
-        .iter()
-        .flat_map(|&v| {
-            if v.is_finite() {
-                ramp(v / max)
-            } else {
-                [255, 0, 255]
-            }
-        })
-        .collect();
-    let map = upscale(&rgb, width, height, scale);
+    let map = upscale(&false_colour(values, max), width, height, scale);
     let fail = draw_error(path);
     png(path, (w + 110, h + 34), |root| {
         root.fill(&WHITE).map_err(|e| fail(&e))?;

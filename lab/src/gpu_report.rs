@@ -479,6 +479,7 @@ fn compare_section(
         out: c.out.clone(),
         backend: backend.clone(),
         // Every denoiser installed: SVGF runs on the device, OIDN on the host's CPU.
+        video: false,
         denoise: Denoiser::ALL
             .into_iter()
             .filter(|d| d.available().is_ok())

@@ -13,6 +13,7 @@ pub mod chained;
 pub mod compare;
 pub mod draw;
 pub mod error;
+pub mod flicker;
 pub mod flip;
 pub mod gpu_report;
 pub mod limits;

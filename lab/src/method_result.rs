@@ -6,6 +6,7 @@
 use engine::Image;
 use engine::denoise::Denoiser;
 
+use crate::flicker::{AreaFlicker, flicker};
 use crate::metrics::{Area, AreaMetrics, area_metrics, tonemapped_mse};
 use crate::perceptual::{PerceptualMetrics, perceptual_metrics};
 use crate::reference_cache::FrameReference;
@@ -95,6 +96,9 @@ pub struct MethodResult {
     pub nonfinite: u64,
     /// The metrics at every measured frame, ascending; the last is [`MethodResult::metrics`].
     pub convergence: Vec<FrameMetrics>,
+    /// The change of the error from frame to frame per area ([`crate::flicker`]); empty unless
+    /// the measured frames are consecutive (a convergence record).
+    pub flicker: Vec<AreaFlicker>,
 }
 
 impl MethodResult {
@@ -133,6 +137,7 @@ impl MethodResult {
         let perceptual = perceptual_metrics(&finals, last_reference, last_regions)?;
         let seconds: Vec<f64> = replicas.iter().map(|r| r.seconds_per_frame).collect();
         let wall: Vec<f64> = replicas.iter().map(|r| r.wall_seconds_per_frame).collect();
+        let trajectories: Vec<&[Image]> = replicas.iter().map(|r| &r.frames[..]).collect();
         Some(MethodResult {
             method: method.to_string(),
             denoiser: None,
@@ -148,6 +153,7 @@ impl MethodResult {
             perceptual,
             nonfinite: replicas.iter().map(|r| r.nonfinite).sum(),
             convergence,
+            flicker: flicker(&trajectories, references).unwrap_or_default(),
         })
     }
 
@@ -191,6 +197,12 @@ impl MethodResult {
     /// FLIP and the low-frequency error of `area` at the last frame, if it is not empty.
     pub fn perceptual(&self, area: Area) -> Option<&PerceptualMetrics> {
         self.perceptual.iter().find(|m| m.area == area)
+    }
+
+    /// The flicker in `area`, if it was measured.
+    pub fn flicker(&self, area: Area) -> Option<Measured> {
+        let f = self.flicker.iter().find(|f| f.area == area)?;
+        Some(Measured::of(&f.flicker))
     }
 
     /// The metrics of `area` at the last frame, if it is not empty.

@@ -16,6 +16,7 @@ use lab::compare::{Comparison, parse_methods, run};
 use lab::progress::Silent;
 use lab::reference_cache::ReferenceSource;
 use lab::report;
+use lab::report::html::base64;
 use lab::scenes::with_resolution;
 use sss::scene::Scene;
 
@@ -101,6 +102,133 @@ fn not_blank(shot: &image::RgbImage) -> Result<(), String> {
     }
 }
 
+/// Every frame of the animated PNG at `path`, as RGB bytes.
+fn apng_frames(path: &Path) -> Vec<Vec<u8>> {
+    let file = std::fs::File::open(path).unwrap();
+    let mut reader = png::Decoder::new(std::io::BufReader::new(file))
+        .read_info()
+        .unwrap();
+    let control = *reader.info().animation_control().expect("animated");
+    assert_eq!(control.num_plays, 0, "loops forever");
+    (0..control.num_frames)
+        .map(|_| {
+            let mut buffer = vec![0; reader.output_buffer_size().unwrap()];
+            reader.next_frame(&mut buffer).unwrap();
+            buffer
+        })
+        .collect()
+}
+
+/// The report's videos: each APNG holds every frame, no two consecutive alike, none of one
+/// colour (decoded here); the report links each file; and Chromium's own image decoder (the
+/// WebCodecs `ImageDecoder` behind `<img>`) reads each as an animation that loops forever, with
+/// every frame, consecutive frames different and none blank. (Headless screenshots cannot show
+/// it play: they capture an animated image at its first frame whatever the time budget.)
+fn videos_play(browser: &Path, out: &Path, html: &str, dir: &Path) {
+    let results: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    let videos = results["videos"].as_array().unwrap();
+    assert_eq!(videos.len(), 2);
+    for (k, v) in videos.iter().enumerate() {
+        let file = v["apng"].as_str().unwrap();
+        assert!(
+            html.contains(&format!("<img src=\"{file}\"")),
+            "{file} is not linked"
+        );
+        let frames = apng_frames(&out.join(file));
+        assert_eq!(frames.len(), 3);
+        assert!(frames.windows(2).all(|w| w[0] != w[1]), "{v}");
+        for f in &frames {
+            let distinct: std::collections::HashSet<&[u8]> = f.chunks(3).collect();
+            assert!(distinct.len() > 100, "{v}: {} colours", distinct.len());
+        }
+        let seen = chromium_decodes(
+            browser,
+            &out.join(file),
+            &dir.join(format!("video{k}.html")),
+        );
+        let want =
+            "animated=true frames=3 repetition=Infinity consecutive_differ=true colours_min=";
+        assert!(seen.starts_with(want), "{file}: Chromium reads {seen:?}");
+        let colours: usize = seen[want.len()..].parse().unwrap();
+        assert!(
+            colours > 100,
+            "{file}: a frame of {colours} colours in Chromium"
+        );
+    }
+    // Control: a still PNG of the same report is read as one frame, not an animation.
+    let still = results["methods"][0]["images"]["final_png"].as_str();
+    let still = out.join(still.expect("a final frame in results.json"));
+    let seen = chromium_decodes(browser, &still, &dir.join("still.html"));
+    assert!(seen.starts_with("animated=false frames=1 "), "{seen}");
+}
+
+/// What Chromium's `ImageDecoder` reads of the PNG `file`: a line `animated=… frames=…
+/// repetition=… consecutive_differ=… colours_min=…` (the fewest distinct colours of a frame),
+/// from a page written to `page` and printed with `--dump-dom` once its script has run.
+fn chromium_decodes(browser: &Path, file: &Path, page: &Path) -> String {
+    let bytes = std::fs::read(file).unwrap();
+    let script = format!(
+        r#"(async () => {{
+  const out = document.getElementById("r");
+  try {{
+    const bin = atob("{}");
+    const data = Uint8Array.from(bin, c => c.charCodeAt(0));
+    const decoder = new ImageDecoder({{data, type: "image/png"}});
+    await decoder.tracks.ready;
+    await decoder.completed;
+    const track = decoder.tracks.selectedTrack;
+    let previous = null, differ = true, fewest = Infinity;
+    for (let i = 0; i < track.frameCount; i++) {{
+      const {{image}} = await decoder.decode({{frameIndex: i}});
+      const canvas = new OffscreenCanvas(image.displayWidth, image.displayHeight);
+      const context = canvas.getContext("2d");
+      context.drawImage(image, 0, 0);
+      const px = context.getImageData(0, 0, canvas.width, canvas.height).data;
+      const colours = new Set();
+      for (let j = 0; j < px.length; j += 4) colours.add((px[j] << 16) | (px[j + 1] << 8) | px[j + 2]);
+      fewest = Math.min(fewest, colours.size);
+      const text = px.join(",");
+      if (previous !== null && text === previous) differ = false;
+      previous = text;
+    }}
+    out.textContent = `animated=${{track.animated}} frames=${{track.frameCount}} ` +
+      `repetition=${{track.repetitionCount}} consecutive_differ=${{differ}} colours_min=${{fewest}}`;
+  }} catch (e) {{
+    out.textContent = "error " + e;
+  }}
+}})();"#,
+        base64(&bytes)
+    );
+    std::fs::write(
+        page,
+        format!("<!DOCTYPE html><html><body><pre id=\"r\">pending</pre><script>{script}</script></body></html>"),
+    )
+    .unwrap();
+    let output = Command::new(browser)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--no-first-run",
+        ])
+        .arg(format!(
+            "--user-data-dir={}",
+            page.with_extension("profile").display()
+        ))
+        .args(["--virtual-time-budget=10000", "--dump-dom"])
+        .arg(format!("file://{}", page.display()))
+        .output()
+        .expect("run chromium");
+    let dom = String::from_utf8_lossy(&output.stdout);
+    let start = dom
+        .find("<pre id=\"r\">")
+        .map(|i| i + "<pre id=\"r\">".len());
+    start
+        .and_then(|i| dom[i..].find("</pre>").map(|j| dom[i..i + j].to_string()))
+        .unwrap_or_else(|| format!("no result in the DOM: {}", &dom[..dom.len().min(300)]))
+}
+
 #[test]
 fn the_report_renders_in_a_browser() {
     let browser = match chromium() {
@@ -131,6 +259,7 @@ fn the_report_renders_in_a_browser() {
         backend: Backend::Cpu,
         // Every denoiser installed here (the built-in filter always): the denoised images are
         // part of the page.
+        video: true,
         denoise: Denoiser::ALL
             .into_iter()
             .filter(|d| d.available().is_ok())
@@ -147,21 +276,24 @@ fn the_report_renders_in_a_browser() {
     let html = std::fs::read_to_string(&page).unwrap();
     assert!(
         !html.contains("src=\"http") && !html.contains("<script"),
-        "self-contained, no script"
+        "no remote resource, no script"
     );
-    // The figure and the convergence plot, then per entry (2 methods, raw and through each
-    // denoiser) its frame and four maps.
+    // Embedded: the figure and the convergence plot, then per entry (2 methods, raw and through
+    // each denoiser) its frame and four maps; linked: a video per method, beside the page.
     let entries = 2 * (1 + plan.denoise.len());
     assert_eq!(
         html.matches("data:image/png;base64,").count(),
         2 + 5 * entries
     );
+    assert_eq!(html.matches("<img src=\"video/").count(), 2);
+    assert!(html.contains("Temporal stability (flicker)"));
     for d in &plan.denoise {
         assert!(html.contains(&format!("restir:hybrid+{d}")), "{d} rows");
     }
     let shot = screenshot(&browser, &page, &dir);
     assert_eq!(shot.dimensions(), WINDOW);
     not_blank(&shot).unwrap();
+    videos_play(&browser, &outcome.out, &html, &dir);
     // Negative control: a blank page fails the same check.
     let blank = dir.join("blank.html");
     std::fs::write(&blank, "<!DOCTYPE html><html><body></body></html>").unwrap();

@@ -75,6 +75,7 @@ fn comparison(dir: &std::path::Path, out: &str) -> Comparison {
         frame_reference_spp: None,
         out: dir.join(out),
         backend: Backend::Cpu,
+        video: false,
         denoise: Vec::new(),
     }
 }

@@ -1,6 +1,7 @@
 //! `reshift compare`: K replicas of several methods on one scene against cached references
 //! (`lab::compare`); writes `table.md`, `table.csv`, `convergence.csv`, `results.json`
-//! (docs/results-schema.md), images, `figure.png`, `convergence.png` and `report.html`, and
+//! (docs/results-schema.md), images, `figure.png`, `convergence.png`, the trajectory videos
+//! (`video/`) and `report.html`, and
 //! prints the table with the efficiency verdicts over the baseline, or the JSON.
 
 use std::path::PathBuf;
@@ -75,6 +76,11 @@ pub struct CompareArgs {
     /// where it is installed.
     #[arg(long, value_name = "DENOISERS", default_value = "auto")]
     pub denoise: String,
+    /// Write no trajectory videos (by default each method's replica-0 frames are written beside
+    /// the reference and the error as a looping animated PNG, and as MP4 where ffmpeg is on the
+    /// PATH, and played in report.html).
+    #[arg(long)]
+    pub no_video: bool,
     /// Print results.json to stdout instead of the table.
     #[arg(long)]
     pub json: bool,
@@ -127,6 +133,9 @@ pub fn command(args: &CompareArgs) -> CliResult<()> {
     let written = report::write(&plan, &outcome)?;
     for e in &outcome.denoise_errors {
         eprintln!("denoiser: {e}");
+    }
+    for note in &written.results.video_notes {
+        eprintln!("note: videos: {note}");
     }
     if args.json {
         println!("{}", written.results.to_json_pretty());
@@ -215,6 +224,7 @@ fn plan(args: &CompareArgs) -> CliResult<Comparison> {
         frame_reference_spp: (frame_spp > 0).then_some(frame_spp),
         out,
         backend,
+        video: !args.no_video,
         denoise: Vec::new(),
     })
 }

@@ -198,6 +198,7 @@ fn group_plan(
         frame_reference_spp: None,
         out: out.to_path_buf(),
         backend: settings.backend.clone(),
+        video: false,
         denoise: Vec::new(),
     })
 }

@@ -22,7 +22,9 @@ use sss::limits;
 use sss::scene::{GBuffer, Scene};
 
 use crate::error::Error;
+use crate::flicker::reference_change;
 use crate::method_result::{MethodResult, Replica};
+use crate::metrics::Area;
 use crate::output::output_dir;
 use crate::progress::Progress;
 use crate::reference_cache::{
@@ -78,6 +80,9 @@ pub struct Comparison {
     /// Each adds a row per method, measured like the raw one, with the denoiser's seconds per
     /// frame, which its efficiency counts at equal time (the reference is never denoised).
     pub denoise: Vec<Denoiser>,
+    /// Whether replica 0 of every method keeps its whole trajectory, for the videos of
+    /// [`crate::report::video`] ([`Outcome::video`]).
+    pub video: bool,
 }
 
 /// What a finished (or stopped) comparison measured.
@@ -98,10 +103,27 @@ pub struct Outcome {
     pub frame_references: Vec<Provenance>,
     /// The regions of the last frame.
     pub regions: Regions,
+    /// The references' own frame-to-frame change per area ([`crate::flicker::reference_change`]):
+    /// the scale of the rows' flicker; empty without a convergence record.
+    pub reference_flicker: Vec<(Area, f64)>,
+    /// Replica 0's trajectories and every frame's reference, with the plan's `video`.
+    pub video: Option<Video>,
     /// Whether a stop request ended the rendering before every replica was rendered.
     pub interrupted: bool,
     /// The output folder, created and checked before anything rendered.
     pub out: PathBuf,
+}
+
+/// What the videos show ([`crate::report::video`]): replica 0's every frame of each raw row,
+/// and the reference of each frame.
+pub struct Video {
+    /// Per frame of the trajectory, the reference mean: the frame's own where it was measured,
+    /// else the last frame's.
+    pub references: Vec<engine::Image>,
+    /// Whether every frame had its own reference (else some show the last frame's).
+    pub own_references: bool,
+    /// `(spec, replica 0's frames)` per raw row, in the order of [`Outcome::rows`].
+    pub trajectories: Vec<(String, Vec<engine::Image>)>,
 }
 
 /// Replica 0's last frame of one row: its method's spec and its denoiser (`None`: raw).
@@ -139,7 +161,8 @@ pub fn frame_reference_spp(spp: u32, batch_spp: u32) -> u32 {
 
 impl Comparison {
     /// The plan's counts within [`sss::limits`], [`crate::limits`] and [`engine::limits`], and the replicas' final frames (kept until the
-    /// table is made) and one run within the memory budget.
+    /// table is made), replica 0's trajectory with `video`, and one run within the memory
+    /// budget.
     fn check(&self) -> Result<(), Error> {
         let invalid = |reason: &str| Err(Error::Invalid(format!("comparison plan: {reason}")));
         if self.methods.is_empty() {
@@ -152,8 +175,10 @@ impl Comparison {
             return invalid("the equal-time budget must be a positive number of seconds");
         }
         let pixels = self.scene.camera.width() as u64 * self.scene.camera.height() as u64;
+        // With `video`, replica 0's every frame is kept too.
+        let video = if self.video { self.frames as u64 } else { 0 };
         let kept = (self.methods.len() as u64)
-            .checked_mul(self.replicas as u64)
+            .checked_mul(self.replicas as u64 + video)
             .and_then(|n| n.checked_mul(pixels * IMAGE_BYTES_PER_PIXEL));
         let needed = kept.zip(run_bytes(pixels, self.frames));
         let value = format!(
@@ -235,6 +260,8 @@ pub fn run(plan: &Comparison, progress: &mut dyn Progress) -> Result<Outcome, Er
         rows.push(row);
     }
     let denoised = denoised_rows(plan, &renders.runs, &references);
+    let reference_flicker = reference_change(&references);
+    let video = plan.video.then(|| video(plan, &renders.runs, &references));
     let (_, regions) = references.pop().expect("the last frame");
     let mut outcome = Outcome {
         rows,
@@ -244,6 +271,8 @@ pub fn run(plan: &Comparison, progress: &mut dyn Progress) -> Result<Outcome, Er
         reference,
         frame_references,
         regions,
+        reference_flicker,
+        video,
         interrupted,
         out,
     };
@@ -287,6 +316,42 @@ fn denoised_rows(
             (d, group)
         })
         .collect()
+}
+
+/// The [`Video`] of `runs`: replica 0's trajectory of every method that kept one, and per frame
+/// of the plan its reference among `references` (the last one's where it has none).
+fn video(
+    plan: &Comparison,
+    runs: &[MethodRuns],
+    references: &[(FrameReference, Regions)],
+) -> Video {
+    let (last, _) = references
+        .last()
+        .expect("the last frame always has a reference");
+    let image = |r: &FrameReference| engine::Image {
+        width: plan.scene.camera.width(),
+        height: plan.scene.camera.height(),
+        pixels: r.mean.iter().map(|p| p.as_vec3()).collect(),
+    };
+    let mut own = true;
+    let frames = (0..plan.frames)
+        .map(|f| match references.iter().find(|(r, _)| r.frame == f) {
+            Some((r, _)) => image(r),
+            None => {
+                own = false;
+                image(last)
+            }
+        })
+        .collect();
+    Video {
+        references: frames,
+        own_references: own,
+        trajectories: runs
+            .iter()
+            .filter(|r| !r.trajectory.is_empty())
+            .map(|r| (r.spec.clone(), r.trajectory.clone()))
+            .collect(),
+    }
 }
 
 /// Replica 0's last frame of every row of `outcome` that has one, from the `runs` it measured,

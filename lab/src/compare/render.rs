@@ -23,6 +23,8 @@ pub(super) struct MethodRuns {
     pub(super) replicas: Vec<Replica>,
     /// Per denoiser that denoised every replica so far, the denoised last frames.
     pub(super) denoised: Vec<(Denoiser, Vec<Replica>)>,
+    /// Replica 0's every frame, kept for the videos (empty without the plan's `video`).
+    pub(super) trajectory: Vec<engine::Image>,
 }
 
 /// What [`render_replicas`] rendered.
@@ -77,6 +79,7 @@ pub(super) fn render_replicas(
             },
             replicas: Vec::new(),
             denoised: plan.denoise.iter().map(|&d| (d, Vec::new())).collect(),
+            trajectory: Vec::new(),
         })
         .collect();
     progress.begin("replicas", runs.len() as u64 * plan.replicas as u64, 0);
@@ -113,6 +116,9 @@ pub(super) fn render_replicas(
                 }
             }
             runs[i].replicas.push(replica);
+            if seed == 0 && plan.video {
+                runs[i].trajectory = trajectory;
+            }
             progress.step();
         }
     }
@@ -129,6 +135,9 @@ impl MethodRuns {
         self.replicas.truncate(n);
         for (_, denoised) in &mut self.denoised {
             denoised.truncate(n);
+        }
+        if n == 0 {
+            self.trajectory.clear();
         }
     }
 }

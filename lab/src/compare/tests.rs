@@ -33,6 +33,7 @@ fn a_comparison_writes_its_outputs_and_reuses_the_reference() {
         frame_reference_spp: Some(8),
         out: dir.join("out"),
         backend: Backend::Cpu,
+        video: true,
         denoise: vec![Denoiser::Svgf],
     };
     let first = run(&plan, &mut Silent).unwrap();
@@ -119,6 +120,21 @@ fn a_comparison_writes_its_outputs_and_reuses_the_reference() {
         again.denoised[0].1[1].metrics,
         first.denoised[0].1[1].metrics
     );
+    // Videos: replica 0's every frame per raw row, each frame against its own reference; the
+    // flicker of every raw row (consecutive frames), none of the denoised rows (last frame).
+    let video = first.video.as_ref().unwrap();
+    assert!(video.own_references && video.references.len() == 3);
+    for ((spec, frames), row) in video.trajectories.iter().zip(&first.rows) {
+        assert_eq!((spec, frames.len()), (&row.method, 3));
+        assert!(!row.flicker.is_empty(), "{spec}");
+        assert!(row.flicker.iter().all(|f| f.flicker.value > 0.0), "{spec}");
+    }
+    assert!(denoised.iter().all(|r| r.flicker.is_empty()));
+    assert!(!first.reference_flicker.is_empty());
+    let videos = &first_written.results.videos;
+    assert_eq!(videos.len(), 2);
+    assert!(videos.iter().all(|v| first.out.join(&v.apng).is_file()));
+    assert!(first_written.markdown.contains("| pt:2 | image |"));
     let last_only = Comparison {
         frame_reference_spp: None,
         baseline: "none".into(),
@@ -131,11 +147,19 @@ fn a_comparison_writes_its_outputs_and_reuses_the_reference() {
     for (a, b) in last.rows.iter().zip(&first.rows) {
         assert_eq!(a.metrics, b.metrics, "{}", a.method);
         assert_eq!(a.convergence.len(), 1);
+        assert!(a.flicker.is_empty(), "one measured frame: no flicker");
     }
+    // Without earlier references the video still has every frame, against the last reference.
+    let video = last.video.as_ref().unwrap();
+    assert!(!video.own_references);
+    assert!(video.trajectories.iter().all(|(_, f)| f.len() == 3));
+    assert!(last_written.results.video_notes[0].contains("the last frame's"));
+    assert!(last_written.markdown.contains("Flicker: not measured"));
     // Equal time counts the denoiser: every denoised row's seconds are its rendering's plus
     // one figure shared by the denoiser's rows (the mean of its timings).
     let timed = Comparison {
         equal_time: Some(0.01),
+        video: false,
         denoise: vec![Denoiser::Svgf],
         ..last_only
     };
@@ -212,6 +236,7 @@ fn replicas_render_in_rounds_and_a_stop_keeps_whole_rounds() {
         frame_reference_spp: None,
         out: dir.join("out"),
         backend: Backend::Cpu,
+        video: false,
         denoise: Vec::new(),
     };
     let mut progress = StopAfter {

@@ -1,7 +1,8 @@
 //! A comparison's outputs ([`write`]): `table.md` (with verdicts over the baseline and a group
 //! per denoiser), `table.csv`, `convergence.csv`, `results.json` ([`Results`]), the reference and
 //! per-method images and maps ([`super::images`]), `figure.png` and `convergence.png`
-//! ([`super::plots`], [`super::figure`]) and `report.html` ([`super::html`]), from the
+//! ([`super::plots`], [`super::figure`]), the trajectory videos ([`super::video`]) and
+//! `report.html` ([`super::html`]), from the
 //! [`Outcome`] that [`crate::compare::run`] measured.
 
 use engine::clock::Clock;
@@ -13,7 +14,10 @@ use crate::method_result::MethodResult;
 use crate::output::write_text;
 
 use super::images::write_comparison_images;
-use super::results::{FrameReferenceEntry, MethodEntry, ReferenceEntry, Results, RunEntry};
+use super::results::{
+    FrameReferenceEntry, MethodEntry, ReferenceEntry, ReferenceFlickerEntry, Results, RunEntry,
+};
+use super::video::write_videos;
 use super::{figure, html, plots, tables};
 
 /// What [`write`] wrote that a caller prints.
@@ -44,6 +48,7 @@ pub fn write(plan: &Comparison, outcome: &Outcome) -> Result<Written, Error> {
     let finals: Vec<(&str, &engine::Image)> =
         labelled.iter().map(|(_, l, i)| (l.as_str(), *i)).collect();
     let (images, scale) = write_comparison_images(out, &finals, reference)?;
+    let scale_absolute = scale.absolute;
     let bands: Vec<figure::Band> = groups
         .iter()
         .map(|(denoiser, group)| figure::Band {
@@ -90,7 +95,7 @@ pub fn write(plan: &Comparison, outcome: &Outcome) -> Result<Written, Error> {
         .collect();
     let reference_entry =
         ReferenceEntry::new(reference, &outcome.reference.path, outcome.reference.cached);
-    let results = Results::new(
+    let mut results = Results::new(
         run,
         reference_entry,
         outcome
@@ -109,6 +114,19 @@ pub fn write(plan: &Comparison, outcome: &Outcome) -> Result<Written, Error> {
         outcome.denoise_errors.clone(),
         entries,
     );
+    results.reference_flicker = outcome
+        .reference_flicker
+        .iter()
+        .map(|(area, change)| ReferenceFlickerEntry {
+            area: area.name().to_string(),
+            change: *change,
+        })
+        .collect();
+    if let Some(video) = &outcome.video {
+        let videos = write_videos(out, video, scale_absolute)?;
+        results.videos = videos.entries;
+        results.video_notes = videos.notes;
+    }
     write_text(&out.join("results.json"), &results.to_json_pretty())?;
     write_text(&out.join("report.html"), &html::report(&results, out)?)?;
     Ok(Written { results, markdown })
@@ -155,6 +173,10 @@ fn table_texts(
     }
     let all_rows: Vec<MethodResult> = groups.iter().flat_map(|(_, g)| g.iter().cloned()).collect();
     markdown.push_str(&format!("\n{}", tables::perceptual(&all_rows)));
+    markdown.push_str(&format!(
+        "\n{}",
+        tables::flicker(&outcome.rows, &outcome.reference_flicker)
+    ));
     markdown.push_str(&format!(
         "\n{}\n",
         tables::time_note(Clock::of(&plan.backend))

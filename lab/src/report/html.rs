@@ -1,7 +1,9 @@
-//! `report.html`: one self-contained page per comparison (every image embedded as a base64
-//! data URI, no script, no external resource) with the run's settings, the efficiency verdicts
-//! over the baseline, the inset figure, the convergence plot, the error maps and the full table,
-//! all read from [`Results`] and the images it names.
+//! `report.html`: one page per comparison (every still image embedded as a base64 data URI, no
+//! script) with the run's settings, the efficiency verdicts over the baseline, the inset
+//! figure, the convergence plot, the error maps, the trajectory videos (animated PNGs, which
+//! browsers play), the flicker table and the full table, all read from [`Results`] and the
+//! images it names. The videos are linked, not embedded: they are files beside the page
+//! (`video/`), a few megabytes each, which base64 would make a third larger inside it.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -171,6 +173,8 @@ pub fn report(results: &Results, out: &Path) -> Result<String, Error> {
         );
     }
     page.push_str("</table>\n");
+    videos(&mut page, r);
+    flicker(&mut page, r);
     full_table(&mut page, r);
     page.push_str(
         "<p class=\"note\">Data: <a href=\"results.json\">results.json</a>, \
@@ -243,6 +247,89 @@ fn verdicts(page: &mut String, r: &Results, denoiser: Option<&str>) {
                 }
                 None => page.push_str("<td>-</td>"),
             }
+        }
+        page.push_str("</tr>\n");
+    }
+    page.push_str("</table>\n");
+}
+
+/// Each method's trajectory video, the animated PNG (and the MP4 where one was written), linked,
+/// with a caption saying what its tiles show.
+fn videos(page: &mut String, r: &Results) {
+    if r.videos.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        page,
+        "<h2>Trajectories (replica 0)</h2><p class=\"note\">Every frame 0–{} at {} frames per \
+         second, looping: the method's frame, the reference of the same frame, and the luminance \
+         of |I − R| on the absolute error maps' scale (0 to {}).</p>",
+        r.frames - 1,
+        super::video::FPS,
+        sig(r.error_map_scale.absolute)
+    );
+    for note in &r.video_notes {
+        let _ = writeln!(page, "<p class=\"note\">Videos: {}.</p>", escape(note));
+    }
+    for v in &r.videos {
+        let _ = write!(
+            page,
+            "<figure class=\"video\"><img src=\"{}\" alt=\"{} trajectory\">",
+            escape(&v.apng),
+            escape(&v.method)
+        );
+        if let Some(mp4) = &v.mp4 {
+            let _ = write!(
+                page,
+                "<br><video controls loop muted src=\"{}\"></video>",
+                escape(mp4)
+            );
+        }
+        let _ = writeln!(
+            page,
+            "<figcaption>{}: animated PNG{}</figcaption></figure>",
+            escape(&v.method),
+            if v.mp4.is_some() {
+                ", and H.264 MP4"
+            } else {
+                ""
+            }
+        );
+    }
+}
+
+/// The flicker of every entry that has one per area with its interval, under the references'
+/// own change.
+fn flicker(page: &mut String, r: &Results) {
+    if r.reference_flicker.is_empty() {
+        return;
+    }
+    let _ = write!(
+        page,
+        "<h2>Temporal stability (flicker)</h2><p>Mean over frames and pixels of \
+         |e<sub>t</sub> − e<sub>t−1</sub>|, e<sub>t</sub> = Y(I<sub>t</sub>) − Y(R<sub>t</sub>) the \
+         luminance error of frame t against its reference (lower: steadier), with its {}% interval \
+         over replicas. The reference row is its own change |Y(R<sub>t</sub>) − \
+         Y(R<sub>t−1</sub>)|: the camera's motion plus its noise.</p><table><tr><th>method</th>",
+        100.0 * r.confidence
+    );
+    for a in &r.reference_flicker {
+        let _ = write!(page, "<th>{}</th>", a.area);
+    }
+    page.push_str("</tr>\n<tr><td>reference</td>");
+    for a in &r.reference_flicker {
+        let _ = write!(page, "<td>{}</td>", sig(a.change));
+    }
+    page.push_str("</tr>\n");
+    for m in r.methods.iter().filter(|m| !m.flicker.is_empty()) {
+        let _ = write!(page, "<tr><td>{}</td>", escape(&label(m)));
+        for a in &r.reference_flicker {
+            let cell = m
+                .flicker
+                .iter()
+                .find(|f| f.area == a.area)
+                .and_then(|f| measured(Some(f.flicker), f.flicker_ci));
+            let _ = write!(page, "<td>{}</td>", with_ci(cell));
         }
         page.push_str("</tr>\n");
     }

@@ -60,6 +60,38 @@ pub struct Results {
     pub denoise_errors: Vec<String>,
     /// The raw entries, then each denoiser's.
     pub methods: Vec<MethodEntry>,
+    /// The references' own frame-to-frame change per area, the scale of the entries' `flicker`
+    /// (`lab::flicker`); empty without a convergence record.
+    pub reference_flicker: Vec<ReferenceFlickerEntry>,
+    /// The trajectory video of every raw entry (empty with `--no-video`).
+    pub videos: Vec<VideoEntry>,
+    /// What the videos leave out, one line each.
+    pub video_notes: Vec<String>,
+}
+
+/// One method's trajectory video (replica 0), relative to the output folder.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct VideoEntry {
+    pub method: String,
+    /// Animated PNG, looping.
+    pub apng: String,
+    /// H.264 MP4 (`null`: `ffmpeg` is not on the PATH).
+    pub mp4: Option<String>,
+}
+
+/// The references' mean frame-to-frame change of luminance in one area.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ReferenceFlickerEntry {
+    pub area: String,
+    pub change: f64,
+}
+
+/// One entry's flicker in one area, over replicas.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FlickerEntry {
+    pub area: String,
+    pub flicker: f64,
+    pub flicker_ci: Option<Interval>,
 }
 
 /// What was run, for [`Results::new`].
@@ -168,6 +200,9 @@ pub struct MethodEntry {
     pub areas: Vec<AreaEntry>,
     /// The MSE per area at every measured frame, ascending.
     pub convergence: Vec<ConvergenceEntry>,
+    /// The change of the error from frame to frame per area (`lab::flicker`); empty without a
+    /// convergence record and for denoised entries (their last frame only).
+    pub flicker: Vec<FlickerEntry>,
 }
 
 /// docs/results-schema.md explains each field.
@@ -256,6 +291,9 @@ impl Results {
             denoisers,
             denoise_errors,
             methods,
+            reference_flicker: Vec::new(),
+            videos: Vec::new(),
+            video_notes: Vec::new(),
         }
     }
 
@@ -352,6 +390,18 @@ impl MethodEntry {
                 .map(|m| AreaEntry::new(m, r, baseline))
                 .collect(),
             convergence: r.convergence.iter().map(ConvergenceEntry::new).collect(),
+            flicker: r
+                .flicker
+                .iter()
+                .map(|f| {
+                    let m = Measured::of(&f.flicker);
+                    FlickerEntry {
+                        area: f.area.name().to_string(),
+                        flicker: m.value,
+                        flicker_ci: m.ci,
+                    }
+                })
+                .collect(),
         }
     }
 }

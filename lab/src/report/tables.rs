@@ -199,6 +199,37 @@ pub fn perceptual(results: &[MethodResult]) -> String {
     out
 }
 
+/// The flicker of every row that has one ([`crate::flicker`]) per area with its interval, and
+/// the references' own frame-to-frame change (`reference`) as the scale; a line saying why
+/// when no row has one.
+pub fn flicker(results: &[MethodResult], reference: &[(Area, f64)]) -> String {
+    if results.iter().all(|r| r.flicker.is_empty()) {
+        return "Flicker: not measured (it needs every frame's reference: a convergence record).\n"
+            .into();
+    }
+    let mut out = String::from(
+        "Flicker: mean over frames and pixels of |e_t − e_{t−1}|, e_t = Y(I_t) − Y(R_t) the \
+         luminance error of frame t against its reference (lower: steadier), 95% CI over \
+         replicas; the reference row is its own change |Y(R_t) − Y(R_{t−1})|, the camera's \
+         motion plus its noise:\n\n| method | area | flicker [95% CI] |\n|---|---|---:|\n",
+    );
+    for (area, change) in reference {
+        let _ = writeln!(out, "| reference | {} | {} |", area.name(), sig(*change));
+    }
+    for r in results {
+        for f in &r.flicker {
+            let _ = writeln!(
+                out,
+                "| {} | {} | {} |",
+                r.label(),
+                f.area.name(),
+                with_ci(Some(Measured::of(&f.flicker)))
+            );
+        }
+    }
+    out
+}
+
 /// CSV cells of an optional measured number: value, lo, hi (empty when absent).
 fn cells(m: Option<Measured>) -> String {
     let cell = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:e}"));
@@ -281,6 +312,7 @@ pub fn convergence_csv(results: &[MethodResult]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::flicker::AreaFlicker;
     use crate::method_result::FrameMetrics;
     use crate::metrics::AreaMetrics;
     use crate::regions::Region;
@@ -319,7 +351,27 @@ mod tests {
             tonemapped_mse: Estimate::mean(&[0.25, 0.25]),
             perceptual: Vec::new(),
             nonfinite: 0,
+            flicker: vec![AreaFlicker {
+                area: Area::Image,
+                flicker: Estimate::mean(&[0.01, 0.03]),
+            }],
         }
+    }
+
+    #[test]
+    fn the_flicker_table_has_the_reference_and_every_measured_row() {
+        let text = flicker(&[result("pt", 0.1)], &[(Area::Image, 0.5)]);
+        assert!(text.contains("| reference | image | 0.500 |"), "{text}");
+        // Mean 0.02, s.e. 0.01, t_1(0.975) = 12.706.
+        assert!(
+            text.contains("| pt | image | 0.0200 [-0.107, 0.147] |"),
+            "{text}"
+        );
+        let none = MethodResult {
+            flicker: Vec::new(),
+            ..result("pt", 0.1)
+        };
+        assert!(flicker(&[none], &[]).starts_with("Flicker: not measured"));
     }
 
     #[test]

@@ -19,6 +19,7 @@
 //! them.
 
 mod estimator;
+pub mod per_sample;
 
 // Method registry: one `pub mod <name>;` line per method family, whose module defines
 // `pub const ENTRY: Entry` (only such lines, comments and blank lines go here).

@@ -7,18 +7,15 @@ use engine::{Backend, PipelineError};
 use sss::integrator::pt::HitPolicy;
 use sss::scene::Scene;
 
-use super::estimator::{Entry, Estimator, LastFrame, Method, parse_spp};
+use super::estimator::{Entry, LastFrame};
+use super::per_sample::{self, PerSample};
 use super::pt::path_trace;
 
 pub const ENTRY: Entry = Entry {
-    family: "pt-one-hit",
+    family: PtOneHit::FAMILY,
     usage: "pt-one-hit[:spp]",
     about: "path tracer keeping one probe hit per sample, weighted by the hit count [001 Eq. 9]",
-    build: |arg| {
-        Ok(Method::new(PtOneHit {
-            spp: parse_spp(arg)?,
-        }))
-    },
+    build: per_sample::build::<PtOneHit>,
 };
 
 /// The one-hit path tracer at `spp` samples per pixel.
@@ -27,34 +24,24 @@ pub struct PtOneHit {
     pub spp: u32,
 }
 
-impl Estimator for PtOneHit {
-    fn name(&self) -> String {
-        format!("pt-one-hit:{}", self.spp)
+impl PerSample for PtOneHit {
+    const FAMILY: &'static str = "pt-one-hit";
+
+    fn at(spp: u32) -> PtOneHit {
+        PtOneHit { spp }
     }
 
-    fn spp(&self) -> u32 {
+    fn samples(&self) -> u32 {
         self.spp
     }
 
-    fn with_spp(&self, spp: u32) -> Option<Method> {
-        Some(Method::new(PtOneHit { spp }))
-    }
-
-    /// Memoryless: only the last frame is rendered.
-    fn render(
+    fn render_frame(
         &self,
         backend: &Backend,
         scene: &Scene,
-        frames: u32,
+        frame: u32,
         seed: u64,
     ) -> Result<LastFrame, PipelineError> {
-        path_trace(
-            backend,
-            scene,
-            frames - 1,
-            seed,
-            self.spp,
-            HitPolicy::UniformOne,
-        )
+        path_trace(backend, scene, frame, seed, self.spp, HitPolicy::UniformOne)
     }
 }

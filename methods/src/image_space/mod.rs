@@ -28,19 +28,16 @@ use sss::profile::ProfileKind;
 use sss::scene::{GBuffer, Scene};
 
 use self::cpu::ImageSpaceSettings;
-use crate::estimator::{Entry, Estimator, LastFrame, Method, parse_spp};
+use crate::estimator::{Entry, LastFrame};
+use crate::per_sample::{self, PerSample};
 use crate::pt::to_image;
 
 pub const ENTRY: Entry = Entry {
-    family: "image-space",
+    family: ImageSpace::FAMILY,
     usage: "image-space[:spp]",
     about: "image-space dipole integration over the G-buffer [002], spp passes; \
             `bias` measures it against pt with the dipole profile",
-    build: |arg| {
-        Ok(Method::new(ImageSpace {
-            spp: parse_spp(arg)?,
-        }))
-    },
+    build: per_sample::build::<ImageSpace>,
 };
 
 /// `spp` passes of the image-space method with the default sample counts per pass
@@ -51,31 +48,28 @@ pub struct ImageSpace {
     pub spp: u32,
 }
 
-impl Estimator for ImageSpace {
-    fn name(&self) -> String {
-        format!("image-space:{}", self.spp)
+impl PerSample for ImageSpace {
+    const FAMILY: &'static str = "image-space";
+
+    fn at(spp: u32) -> ImageSpace {
+        ImageSpace { spp }
     }
 
-    fn spp(&self) -> u32 {
+    fn samples(&self) -> u32 {
         self.spp
     }
 
-    fn with_spp(&self, spp: u32) -> Option<Method> {
-        Some(Method::new(ImageSpace { spp }))
-    }
-
-    fn render(
+    fn render_frame(
         &self,
         backend: &Backend,
         scene: &Scene,
-        frames: u32,
+        frame: u32,
         seed: u64,
     ) -> Result<LastFrame, PipelineError> {
-        let last = frames - 1;
         let (image, nonfinite) = match backend.renderer() {
-            Some(mut renderer) => vulkan::render(&mut renderer, scene, last, seed, self.spp)?,
+            Some(mut renderer) => vulkan::render(&mut renderer, scene, frame, seed, self.spp)?,
             None => {
-                let gbuffer = GBuffer::render(scene, last);
+                let gbuffer = GBuffer::render(scene, frame);
                 let settings = ImageSpaceSettings::default();
                 let frame = cpu::render(scene, &gbuffer, &settings, seed, self.spp);
                 (to_image(&frame.image), frame.image.nonfinite)
@@ -89,7 +83,7 @@ impl Estimator for ImageSpace {
     }
 
     /// The path tracer with the dipole profile of the same materials.
-    fn reference(&self) -> PtSettings {
+    fn reference_settings(&self) -> PtSettings {
         PtSettings {
             profile: ProfileKind::Dipole,
             ..PtSettings::default()
@@ -100,6 +94,7 @@ impl Estimator for ImageSpace {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Method;
     use engine::vulkan::testing::backend_or_skip;
 
     fn scene(name: &str) -> Scene {

@@ -14,17 +14,14 @@ use engine::{Backend, PipelineError};
 use sss::integrator::pt::{self, HitPolicy, PtSettings};
 use sss::scene::{GBuffer, Scene};
 
-use super::estimator::{Entry, Estimator, LastFrame, Method, parse_spp};
+use crate::estimator::{Entry, LastFrame};
+use crate::per_sample::{self, PerSample};
 
 pub const ENTRY: Entry = Entry {
-    family: "pt",
+    family: Pt::FAMILY,
     usage: "pt[:spp]",
     about: "path-traced baseline, BSSRDF importance sampling, all probe hits (default 1 spp)",
-    build: |arg| {
-        Ok(Method::new(Pt {
-            spp: parse_spp(arg)?,
-        }))
-    },
+    build: per_sample::build::<Pt>,
 };
 
 /// The path tracer at `spp` samples per pixel.
@@ -33,27 +30,25 @@ pub struct Pt {
     pub spp: u32,
 }
 
-impl Estimator for Pt {
-    fn name(&self) -> String {
-        format!("pt:{}", self.spp)
+impl PerSample for Pt {
+    const FAMILY: &'static str = "pt";
+
+    fn at(spp: u32) -> Pt {
+        Pt { spp }
     }
 
-    fn spp(&self) -> u32 {
+    fn samples(&self) -> u32 {
         self.spp
     }
 
-    fn with_spp(&self, spp: u32) -> Option<Method> {
-        Some(Method::new(Pt { spp }))
-    }
-
-    fn render(
+    fn render_frame(
         &self,
         backend: &Backend,
         scene: &Scene,
-        frames: u32,
+        frame: u32,
         seed: u64,
     ) -> Result<LastFrame, PipelineError> {
-        path_trace(backend, scene, frames - 1, seed, self.spp, HitPolicy::All)
+        path_trace(backend, scene, frame, seed, self.spp, HitPolicy::All)
     }
 }
 
@@ -99,6 +94,7 @@ pub fn to_image(image: &pt::SampleMeans) -> Image {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Method;
 
     /// Replica seeds are independent draws, and a replica is a function of its seed: the same
     /// seed gives the same bits, another seed a different image (the negative control).

@@ -32,20 +32,17 @@ use sss::integrator::pt::{self, PtSettings};
 use sss::random_walk::{Medium, MeshBoundary, estimate_exitant};
 use sss::scene::{GBuffer, GPixel, Scene};
 
-use super::estimator::{Entry, Estimator, LastFrame, Method, parse_spp};
+use super::estimator::{Entry, LastFrame};
+use super::per_sample::{self, PerSample};
 
 /// `purpose` of the walks' streams and of the light-selection numbers of [`SceneLighting`].
 pub use engine::purpose::{WALK as PURPOSE_WALK, WALK_LIGHT as PURPOSE_WALK_LIGHT};
 
 pub const ENTRY: Entry = Entry {
-    family: "random-walk",
+    family: RandomWalk::FAMILY,
     usage: "random-walk[:spp]",
     about: "volumetric random walk on translucent pixels (another transport model than the BSSRDF)",
-    build: |arg| {
-        Ok(Method::new(RandomWalk {
-            spp: parse_spp(arg)?,
-        }))
-    },
+    build: per_sample::build::<RandomWalk>,
 };
 
 /// `spp` walks per translucent pixel, `spp` path-traced samples elsewhere.
@@ -54,31 +51,28 @@ pub struct RandomWalk {
     pub spp: u32,
 }
 
-impl Estimator for RandomWalk {
-    fn name(&self) -> String {
-        format!("random-walk:{}", self.spp)
+impl PerSample for RandomWalk {
+    const FAMILY: &'static str = "random-walk";
+
+    fn at(spp: u32) -> RandomWalk {
+        RandomWalk { spp }
     }
 
-    fn spp(&self) -> u32 {
+    fn samples(&self) -> u32 {
         self.spp
     }
 
-    fn with_spp(&self, spp: u32) -> Option<Method> {
-        Some(Method::new(RandomWalk { spp }))
-    }
-
-    fn render(
+    fn render_frame(
         &self,
         backend: &Backend,
         scene: &Scene,
-        frames: u32,
+        frame: u32,
         seed: u64,
     ) -> Result<LastFrame, PipelineError> {
-        let last = frames - 1;
         let (image, nonfinite) = match backend.renderer() {
-            Some(mut renderer) => vulkan::render(&mut renderer, scene, last, seed, self.spp)?,
+            Some(mut renderer) => vulkan::render(&mut renderer, scene, frame, seed, self.spp)?,
             None => {
-                let gbuffer = GBuffer::render(scene, last);
+                let gbuffer = GBuffer::render(scene, frame);
                 render(scene, &gbuffer, seed, self.spp)?
             }
         };

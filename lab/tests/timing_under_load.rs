@@ -1,23 +1,24 @@
 //! Equal-time figures do not depend on who else uses the machine: one small comparison run
 //! twice, once on its own and once beside a CPU-bound load on every core, gives efficiencies
-//! `1/(MSE·s)` of each method, and the efficiency ratio of a ReSTIR preset over `pt`, that
-//! agree within their 95% intervals.
+//! `1/(MSE·s)` of each method within a factor [`MOVE`] of each other, and efficiency ratios of a
+//! ReSTIR preset over `pt` that agree within their 95% intervals.
 //!
 //! The two runs render bit-identical images (the CPU backend is deterministic; asserted), so
 //! the MSEs and their spread are the same in both and only the timings differ. The renders are
 //! timed in the process's CPU time ([`engine::clock`]), which the background processes do not
 //! add to: their load takes cores away from the render (its wall time grew 2–4× in six runs
 //! on a 2-core machine) but not CPU time it spends. What the load can still change in that CPU
-//! time (caches shared with the other processes, context switches) measured +2–9% in those
-//! runs, against intervals about ±8% wide each (`pt`'s image efficiency, 8 replicas), which
-//! have to miss each other to fail.
+//! time (caches and hyperthread siblings shared with the other processes, context switches)
+//! measured +2–9% in those six runs and +22% in one CI run on a fresh clone, so a method's own
+//! efficiency is held only to [`MOVE`]; the ratio, whose two methods share the slowdown, to its
+//! interval.
 //!
 //! How it fails: with a clock that counts the time the render waits for a core. Timed in wall
 //! time (measured once, by making the CPU backend's clock the wall clock), `pt`'s image
-//! efficiency fell 4.4× under this load and left the quiet run's interval. The ratio alone would not show it: replicas are rendered in rounds of one seed and
-//! paired by seed, so a steady load slows both methods of a pair alike and mostly widens the
-//! ratio's interval. The load is separate processes: busy threads in this process would be
-//! counted in its CPU time.
+//! efficiency fell 4.4× under this load, beyond [`MOVE`]. The ratio alone would not show it:
+//! replicas are rendered in rounds of one seed and paired by seed, so a steady load slows both
+//! methods of a pair alike and mostly widens the ratio's interval. The load is separate
+//! processes: busy threads in this process would be counted in its CPU time.
 
 use std::process::{Child, Command};
 
@@ -29,6 +30,10 @@ use lab::progress::Silent;
 use lab::reference_cache::ReferenceSource;
 use lab::scenes::with_resolution;
 use sss::scene::Scene;
+
+/// How far a method's efficiency may move under the load: above the CPU clock's measured
+/// inflation (at most 1.22×), below the wall clock's 2–4.4× under the same load.
+const MOVE: f64 = 1.5;
 
 /// Busy-looping shells, one per core, killed (and reaped) when dropped, on a panic too.
 struct Load(Vec<Child>);
@@ -128,10 +133,18 @@ fn efficiencies_agree_beside_a_cpu_bound_load() {
             "{what}: quiet {:.4} [{:.4}, {:.4}], loaded {:.4} [{:.4}, {:.4}]",
             q.value, qi.lo, qi.hi, l.value, li.lo, li.hi
         );
-        assert!(
-            qi.lo <= li.hi && li.lo <= qi.hi,
-            "{what}: the efficiency moved with the load: quiet {q:?}, loaded {l:?}"
-        );
+        if what.contains(" / ") {
+            assert!(
+                qi.lo <= li.hi && li.lo <= qi.hi,
+                "{what}: the ratio moved with the load: quiet {q:?}, loaded {l:?}"
+            );
+        } else {
+            let moved = (q.value / l.value).max(l.value / q.value);
+            assert!(
+                moved <= MOVE,
+                "{what}: the efficiency moved {moved:.2}× with the load: quiet {q:?}, loaded {l:?}"
+            );
+        }
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }

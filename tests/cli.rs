@@ -1252,3 +1252,83 @@ fn compare_on_the_vulkan_backend_validates() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The per-area MSE and reference mean of every entry of a `compare` JSON: its deterministic
+/// measurements (the timings are not).
+fn measured(results: &Value) -> Vec<(String, String, Value, Value)> {
+    let mut rows = Vec::new();
+    for method in results["methods"].as_array().unwrap() {
+        for area in method["areas"].as_array().unwrap() {
+            rows.push((
+                method["method"].to_string(),
+                area["area"].to_string(),
+                area["mse"].clone(),
+                area["reference_mean"].clone(),
+            ));
+        }
+    }
+    rows
+}
+
+/// `compare --trajectory` replays a camera path: `bumpy`'s own two poses written as a
+/// trajectory file measure the same MSEs bit for bit as the scene camera, the frames come from
+/// the file, and the reference is cached under its own key; control: the same file with the
+/// last eye moved measures other MSEs. A bad file is refused in one line naming it.
+#[test]
+fn compare_replays_a_trajectory_file() {
+    use sss::scene::Trajectory;
+    let dir = scratch("trajectory");
+    let cache = dir.join("cache");
+    let camera = Scene::builtin("bumpy").unwrap().camera;
+    let own = Trajectory::of_camera(&camera, 2);
+    let mut moved = own.clone();
+    moved.poses[1].eye.x += 0.05;
+    let mut results = Vec::new();
+    for (name, path) in [
+        ("scene", None),
+        ("own", Some(&own)),
+        ("moved", Some(&moved)),
+    ] {
+        let out = dir.join(name);
+        let mut args = small_compare("bumpy", "pt:2,restir:hybrid", &out, &cache);
+        if let Some(path) = path {
+            let file = dir.join(format!("{name}.toml"));
+            std::fs::write(&file, path.to_toml()).unwrap();
+            let at = args.iter().position(|a| a == "--frames").unwrap();
+            args.drain(at..at + 2);
+            args.extend(["--trajectory".into(), file.display().to_string()]);
+        }
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let args: Vec<&str> = args.into_iter().chain(["--json", "--no-video"]).collect();
+        let printed: Value = serde_json::from_str(&ok(&reshift(&args))).expect(name);
+        assert_eq!(printed["frames"], 2, "{name}");
+        results.push(printed);
+    }
+    assert_eq!(measured(&results[0]), measured(&results[1]));
+    assert!(measured(&results[0]) != measured(&results[2]), "control");
+    let reference = |r: &Value| r["reference"]["path"].as_str().unwrap().to_string();
+    assert!(
+        reference(&results[1]).contains("-path-"),
+        "{}",
+        reference(&results[1])
+    );
+    assert!(reference(&results[1]) != reference(&results[2]));
+    let bad = dir.join("bad.toml");
+    std::fs::write(&bad, "schema = \"reshift-trajectory/1\"\n").unwrap();
+    fails_with(
+        &["compare", "--trajectory", bad.to_str().unwrap()],
+        "bad.toml",
+    );
+    fails_with(
+        &[
+            "render",
+            "--scene",
+            "bumpy",
+            "--method",
+            "pt",
+            "--trajectory",
+            bad.to_str().unwrap(),
+        ],
+        "`pose` = 0",
+    );
+}

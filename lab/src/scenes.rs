@@ -10,6 +10,7 @@ use sss::InputError;
 use sss::limits::MAX_SCENE_FILE_BYTES;
 use sss::material::MEASURED_NAMES;
 use sss::scene::Scene;
+use sss::scene::trajectory::{MAX_TRAJECTORY_FILE_BYTES, Trajectory};
 
 /// A scene as named by the user, with its cache key.
 pub struct LoadedScene {
@@ -121,6 +122,23 @@ edge_u = [2.0, 0.0, 0.0]
 edge_v = [0.0, 0.0, 2.0]
 radiance = [8.0, 8.0, 8.0]
 "#;
+
+impl LoadedScene {
+    /// The scene with its camera on the trajectory file at `path` (`--trajectory`), keyed
+    /// `<key>-path-<FNV-1a of the file>` so that a cached reference of one camera path is never
+    /// taken for another's; with the trajectory's pose count, the frames that replay it.
+    pub fn on_trajectory(self, path: &Path) -> Result<(LoadedScene, u32), InputError> {
+        let text = read_file(path, MAX_TRAJECTORY_FILE_BYTES)?;
+        let trajectory = Trajectory::load(path)?;
+        let frames = trajectory.poses.len() as u32;
+        let scene = Scene {
+            camera: self.scene.camera.with_trajectory(&trajectory),
+            ..self.scene
+        };
+        let key = format!("{}-path-{:016x}", self.key, fnv1a(&text));
+        Ok((LoadedScene { scene, key }, frames))
+    }
+}
 
 /// The scene with the camera at `resolution` (`None`: the scene file's own).
 pub fn with_resolution(scene: Scene, resolution: Option<(u32, u32)>) -> Scene {

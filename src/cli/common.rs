@@ -12,6 +12,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use sss::InputError;
 use sss::error::{MAX_MESSAGE_CHARS, one_line};
 use sss::limits::{self, MAX_IMAGE_SIDE};
+use sss::scene::FRAMES;
 
 pub use lab::scenes::{LoadedScene, load_scene, with_resolution};
 
@@ -218,4 +219,24 @@ impl lab::progress::Progress for Bars {
 /// `serde_json` number or `null` for a non-finite value.
 pub fn json_number(v: f64) -> serde_json::Value {
     serde_json::Number::from_f64(v).map_or(serde_json::Value::Null, serde_json::Value::Number)
+}
+
+/// The scene of `--scene`, on the camera path of `--trajectory` if given, and the frames to
+/// render: `--frames`, else the trajectory's poses, else the scene camera's [`FRAMES`]; checked
+/// against the frame limit.
+pub fn scene_and_frames(
+    loaded: LoadedScene,
+    trajectory: Option<&Path>,
+    frames: Option<u32>,
+) -> CliResult<(LoadedScene, u32)> {
+    let (loaded, poses) = match trajectory {
+        Some(path) => {
+            let (loaded, poses) = loaded.on_trajectory(path)?;
+            (loaded, Some(poses))
+        }
+        None => (loaded, None),
+    };
+    let frames = frames.or(poses).unwrap_or(FRAMES);
+    limits::frames(command_line(), "--frames", frames)?;
+    Ok((loaded, frames))
 }

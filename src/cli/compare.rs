@@ -15,11 +15,9 @@ use lab::output::file_stem;
 use lab::reference_cache::ReferenceSource;
 use lab::report;
 
-use sss::limits;
-
 use super::common::{
     BackendArgs, Bars, CliError, CliResult, LoadedScene, command_line, load_scene,
-    parse_resolution, with_resolution,
+    parse_resolution, scene_and_frames, with_resolution,
 };
 
 #[derive(Args, Clone, Debug)]
@@ -37,9 +35,13 @@ pub struct CompareArgs {
     #[arg(long, default_value_t = 8)]
     pub replicas: u32,
     /// Frames of the camera trajectory; the tables measure the last one, the convergence record
-    /// every one.
-    #[arg(long, default_value_t = 16)]
-    pub frames: u32,
+    /// every one [default: 16, or the poses of --trajectory].
+    #[arg(long)]
+    pub frames: Option<u32>,
+    /// Replay this camera path (a trajectory file, e.g. recorded by `reshift view --record`)
+    /// instead of the scene camera's.
+    #[arg(long, value_name = "FILE")]
+    pub trajectory: Option<PathBuf>,
     /// Every method at its own samples per pixel (the default).
     #[arg(long, conflicts_with = "equal_time")]
     pub equal_spp: bool,
@@ -173,7 +175,6 @@ fn plan(args: &CompareArgs) -> CliResult<Comparison> {
         return Err(CliError("--methods: no method given".into()));
     }
     lab::limits::replicas(command_line(), "--replicas", args.replicas)?;
-    limits::frames(command_line(), "--frames", args.frames)?;
     if let Some(t) = args.equal_time
         && !(t.is_finite() && t > 0.0)
     {
@@ -207,7 +208,11 @@ fn plan(args: &CompareArgs) -> CliResult<Comparison> {
     };
     let resolution = parse_resolution(&args.resolution)?;
     let backend = args.backend.open()?;
-    let LoadedScene { scene, key } = load_scene(&args.scene)?;
+    let (LoadedScene { scene, key }, frames) = scene_and_frames(
+        load_scene(&args.scene)?,
+        args.trajectory.as_deref(),
+        args.frames,
+    )?;
     let out = args
         .out
         .clone()
@@ -218,7 +223,7 @@ fn plan(args: &CompareArgs) -> CliResult<Comparison> {
         methods,
         baseline: args.baseline.clone(),
         replicas: args.replicas,
-        frames: args.frames,
+        frames,
         equal_time: args.equal_time,
         reference,
         frame_reference_spp: (frame_spp > 0).then_some(frame_spp),

@@ -12,10 +12,8 @@ use lab::output::{file_stem, output_dir};
 use methods::Method;
 use serde_json::json;
 
-use sss::limits;
-
 use super::common::{
-    BackendArgs, CliResult, command_line, json_number, load_scene, parse_resolution,
+    BackendArgs, CliResult, json_number, load_scene, parse_resolution, scene_and_frames,
     with_resolution,
 };
 
@@ -27,9 +25,14 @@ pub struct RenderArgs {
     /// The method, e.g. pt:16 or restir:hybrid (see `reshift methods`).
     #[arg(long)]
     pub method: String,
-    /// Frames of the camera trajectory; the last one is written.
-    #[arg(long, default_value_t = 16)]
-    pub frames: u32,
+    /// Frames of the camera trajectory; the last one is written [default: 16, or the poses of
+    /// --trajectory].
+    #[arg(long)]
+    pub frames: Option<u32>,
+    /// Render along this camera path (a trajectory file, e.g. recorded by `reshift view
+    /// --record`) instead of the scene camera's.
+    #[arg(long, value_name = "FILE")]
+    pub trajectory: Option<PathBuf>,
     /// Image size WxH [default: the scene's].
     #[arg(long)]
     pub resolution: Option<String>,
@@ -47,9 +50,12 @@ pub struct RenderArgs {
 }
 
 pub fn command(args: &RenderArgs) -> CliResult<()> {
-    limits::frames(command_line(), "--frames", args.frames)?;
     let method = Method::parse(&args.method)?;
-    let loaded = load_scene(&args.scene)?;
+    let (loaded, frames) = scene_and_frames(
+        load_scene(&args.scene)?,
+        args.trajectory.as_deref(),
+        args.frames,
+    )?;
     let resolution = args
         .resolution
         .as_deref()
@@ -58,7 +64,7 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
     let scene = with_resolution(loaded.scene, resolution);
     let out = output_dir(&args.out)?;
     let backend = args.backend.open()?;
-    let rendered = method.render_on(&backend, &scene, args.frames, args.seed)?;
+    let rendered = method.render_on(&backend, &scene, frames, args.seed)?;
     let stem = format!("{}-{}", file_stem(&loaded.key), file_stem(&method.name()));
     let (exr, png) = (
         out.join(format!("{stem}.exr")),
@@ -84,7 +90,7 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
             "backend": backend.to_string(),
             "width": rendered.image.width,
             "height": rendered.image.height,
-            "frames": args.frames,
+            "frames": frames,
             "frames_rendered": rendered.frames_rendered,
             "seed": args.seed,
             "clock": Clock::of(&backend).name(),
@@ -107,8 +113,8 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
             scene.name,
             rendered.image.width,
             rendered.image.height,
-            args.frames - 1,
-            args.frames,
+            frames - 1,
+            frames,
             backend,
             1e3 * rendered.seconds_per_frame,
             Clock::of(&backend).name(),

@@ -1,28 +1,45 @@
-//! Pinhole camera on a linear 16-frame trajectory with per-frame sub-pixel jitter (DESIGN §4).
+//! Pinhole camera on a linear 16-frame trajectory, or on a trajectory of one pose per frame
+//! ([`Trajectory`], a recorded camera path), with per-frame sub-pixel jitter (DESIGN §4).
 //!
 //! Pixel coordinates are continuous: pixel `(px, py)` covers `[px, px+1) × [py, py+1)`, row 0 is
 //! the top of the image, and its centre is `(px + 0.5, py + 0.5)`. Frame `f` renders through
 //! `(px + 0.5, py + 0.5) + jitter(f)`; [`Camera::project`] is the unjittered projection, so the
 //! hit point of [`Camera::ray`] projects back to the jittered sample position.
 
+use std::sync::Arc;
+
 use geometry::Ray;
 use glam::{Vec2, Vec3, Vec3A};
+
+use super::trajectory::{Pose, Trajectory};
 
 /// Frames of the camera trajectory (paper 001 §6 records the temporal history over 16 frames).
 pub const FRAMES: u32 = 16;
 
 /// A pinhole camera whose eye and target move linearly from their start to their end positions
-/// over frames `0..FRAMES`; later frames stay at the end position (the jitter keeps cycling).
+/// over frames `0..FRAMES`, or follow a trajectory's poses frame by frame; later frames stay at
+/// the last pose (the jitter keeps cycling).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Camera {
     width: u32,
     height: u32,
     /// `tan(vfov / 2)`.
     tan_half_fov: f32,
-    eye: [Vec3; 2],
-    target: [Vec3; 2],
-    up: Vec3,
+    path: Path,
     jitter: bool,
+}
+
+/// Where the camera is at each frame.
+#[derive(Clone, Debug, PartialEq)]
+enum Path {
+    /// Eye and target from their start `[0]` to their end `[1]` over frames `0..FRAMES`.
+    Linear {
+        eye: [Vec3; 2],
+        target: [Vec3; 2],
+        up: Vec3,
+    },
+    /// Pose `f` at frame `f`; the last pose after the end.
+    Poses(Arc<[Pose]>),
 }
 
 /// The camera's orthonormal basis at one frame.
@@ -49,10 +66,51 @@ impl Camera {
             width: resolution[0],
             height: resolution[1],
             tan_half_fov: (0.5 * vfov_degrees.to_radians()).tan(),
-            eye,
-            target,
-            up: up.normalize(),
+            path: Path::Linear {
+                eye,
+                target,
+                up: up.normalize(),
+            },
             jitter,
+        }
+    }
+
+    /// The same camera on `trajectory`'s poses (and its field of view, when it gives one); the
+    /// resolution and jitter are kept. A trajectory of this camera's own poses
+    /// ([`Trajectory::of_camera`]) renders the same bits.
+    pub fn with_trajectory(&self, trajectory: &Trajectory) -> Camera {
+        let poses: Vec<Pose> = trajectory
+            .poses
+            .iter()
+            .map(|p| Pose {
+                up: p.up.normalize(),
+                ..*p
+            })
+            .collect();
+        Camera {
+            tan_half_fov: trajectory
+                .vfov
+                .map_or(self.tan_half_fov, |v| (0.5 * v.to_radians()).tan()),
+            path: Path::Poses(poses.into()),
+            ..self.clone()
+        }
+    }
+
+    /// The pose at `frame`: eye, target and (unit) up.
+    pub fn pose(&self, frame: u32) -> Pose {
+        match &self.path {
+            Path::Linear { eye, target, up } => {
+                let t = Self::progress(frame);
+                Pose {
+                    eye: eye[0].lerp(eye[1], t),
+                    target: target[0].lerp(target[1], t),
+                    up: *up,
+                }
+            }
+            Path::Poses(poses) => {
+                let last = poses.len().saturating_sub(1);
+                poses[(frame as usize).min(last)]
+            }
         }
     }
 
@@ -68,9 +126,13 @@ impl Camera {
     /// The same camera at rest at its trajectory's end pose for every frame (the pose of frame
     /// `FRAMES − 1`, so that frame renders as before); the jitter is kept.
     pub fn at_rest(&self) -> Camera {
+        let end = self.pose(FRAMES - 1);
         Camera {
-            eye: [self.eye[1]; 2],
-            target: [self.target[1]; 2],
+            path: Path::Linear {
+                eye: [end.eye; 2],
+                target: [end.target; 2],
+                up: end.up,
+            },
             ..self.clone()
         }
     }
@@ -107,11 +169,9 @@ impl Camera {
     }
 
     fn basis(&self, frame: u32) -> Basis {
-        let t = Self::progress(frame);
-        let eye = self.eye[0].lerp(self.eye[1], t);
-        let target = self.target[0].lerp(self.target[1], t);
+        let Pose { eye, target, up } = self.pose(frame);
         let forward = (target - eye).normalize();
-        let right = forward.cross(self.up).normalize();
+        let right = forward.cross(up).normalize();
         let up = right.cross(forward);
         Basis {
             eye,

@@ -10,7 +10,7 @@ use glam::{Affine3A, Quat, Vec3};
 
 use super::format::{
     BoundaryDesc, CameraDesc, FitDesc, LightDesc, ManyLightsDesc, MaterialDesc, ObjectDesc,
-    ScaleDesc, ShapeDesc, TransformDesc,
+    ScaleDesc, SceneFile, ShapeDesc, TransformDesc,
 };
 use super::light::{Light, Lights};
 use super::many_lights::ManyLights;
@@ -23,7 +23,7 @@ use crate::profile::ScaleFit;
 
 /// Parses and builds a scene; `origin` names the file in errors and anchors relative mesh paths.
 pub fn scene_from_toml(text: &str, origin: &Path) -> Result<Scene, InputError> {
-    let file = parse(text, origin)?;
+    let file: SceneFile = parse(text, origin)?;
     let ctx = Ctx { file: origin };
     let camera = ctx.camera(&file.camera)?;
     let (materials, material_ids) = ctx.materials(&file.materials)?;
@@ -77,8 +77,8 @@ pub fn scene_from_toml(text: &str, origin: &Path) -> Result<Scene, InputError> {
 }
 
 /// Validation context: the file named in every error.
-struct Ctx<'a> {
-    file: &'a Path,
+pub(super) struct Ctx<'a> {
+    pub(super) file: &'a Path,
 }
 
 fn finite3(v: [f32; 3]) -> bool {
@@ -90,7 +90,7 @@ fn within_coordinates(v: [f32; 3]) -> bool {
 }
 
 impl Ctx<'_> {
-    fn err(
+    pub(super) fn err(
         &self,
         field: impl Into<String>,
         value: impl Into<String>,
@@ -100,7 +100,7 @@ impl Ctx<'_> {
     }
 
     /// A finite 3-vector within [`MAX_COORDINATE`] or an error at `field`.
-    fn vec3(&self, field: &str, v: [f32; 3]) -> Result<Vec3, InputError> {
+    pub(super) fn vec3(&self, field: &str, v: [f32; 3]) -> Result<Vec3, InputError> {
         if finite3(v) && within_coordinates(v) {
             Ok(Vec3::from_array(v))
         } else {
@@ -110,6 +110,28 @@ impl Ctx<'_> {
                 format!("must be finite, each |component| ≤ {MAX_COORDINATE:e}"),
             ))
         }
+    }
+
+    /// A view from `eye` to `target` (the error at `field`, the target's) that a camera with `up`
+    /// can frame: not zero, not parallel to `up`; `up` itself non-zero (an error at `up_field`).
+    pub(super) fn view(
+        &self,
+        field: &str,
+        eye: Vec3,
+        target: Vec3,
+        up: Vec3,
+    ) -> Result<(), InputError> {
+        let view = target - eye;
+        if view.cross(up.normalize()).length() <= 1e-6 * view.length()
+            || view.length_squared() == 0.0
+        {
+            return Err(self.err(
+                field,
+                format!("{target}"),
+                format!("view direction from eye {eye} is zero or parallel to up {up}"),
+            ));
+        }
+        Ok(())
     }
 
     /// A positive number (a length) no larger than [`MAX_COORDINATE`], or an error at `field`.
@@ -161,19 +183,7 @@ impl Ctx<'_> {
             return Err(self.err("camera.up", format!("{up}"), "must be non-zero"));
         }
         for (end, field) in [(0, "camera.target"), (1, "camera.target_end")] {
-            let view = target[end] - eye[end];
-            if view.cross(up.normalize()).length() <= 1e-6 * view.length()
-                || view.length_squared() == 0.0
-            {
-                return Err(self.err(
-                    field,
-                    format!("{}", target[end]),
-                    format!(
-                        "view direction from eye {} is zero or parallel to up {}",
-                        eye[end], up
-                    ),
-                ));
-            }
+            self.view(field, eye[end], target[end], up)?;
         }
         Ok(Camera::new(
             c.resolution,

@@ -10,6 +10,7 @@ mod light;
 mod load;
 mod many_lights;
 mod parse;
+pub mod trajectory;
 
 use std::path::{Path, PathBuf};
 
@@ -17,6 +18,7 @@ pub use camera::{Camera, FRAMES};
 pub use gbuffer::{GBuffer, GPixel, REPROJECTION_DEPTH_TOLERANCE, REPROJECTION_NORMAL_COSINE};
 pub use light::{DIRECTIONAL_DISTANCE, Light, LightSample, Lights};
 pub use many_lights::ManyLights;
+pub use trajectory::{Pose, Trajectory};
 
 use geometry::Geometry;
 use geometry::limits::read_file;

@@ -1,19 +1,21 @@
-//! Scene TOML text → [`SceneFile`], with errors a reader can act on: a syntax error names the
+//! Scene (and trajectory) TOML text → [`SceneFile`] (or any file type), with errors a reader can act on: a syntax error names the
 //! line and column and shows the text around it; a type or unknown-field error names the field
 //! path and shows the value found there, on one line.
 
 use std::path::Path;
 
-use super::format::SceneFile;
+use serde::de::DeserializeOwned;
+
 use crate::InputError;
 use crate::error::{MAX_MESSAGE_CHARS, one_line};
 
 /// Characters of a TOML source line shown on either side of a syntax error.
 const EXCERPT_RADIUS: usize = 40;
 
-/// TOML text → [`SceneFile`]. Syntax errors name the line; type and unknown-field errors name the
-/// field path (via `serde_path_to_error`) and show the value found there.
-pub(super) fn parse(text: &str, origin: &Path) -> Result<SceneFile, InputError> {
+/// TOML text → `T` (a [`super::format::SceneFile`], a trajectory file). Syntax errors name the
+/// line; type and unknown-field errors name the field path (via `serde_path_to_error`) and show
+/// the value found there.
+pub(super) fn parse<T: DeserializeOwned>(text: &str, origin: &Path) -> Result<T, InputError> {
     let table: toml::Table = toml::from_str(text).map_err(|e| {
         let (field, value) = match e.span() {
             Some(span) => {
@@ -36,7 +38,7 @@ pub(super) fn parse(text: &str, origin: &Path) -> Result<SceneFile, InputError> 
         )
     })?;
     let root = toml::Value::Table(table);
-    serde_path_to_error::deserialize::<_, SceneFile>(root.clone()).map_err(|e| {
+    serde_path_to_error::deserialize::<_, T>(root.clone()).map_err(|e| {
         let path = e.path().to_string();
         let value = value_at(&root, e.path()).map_or_else(|| "(missing)".to_string(), render_value);
         InputError::new(origin, path, value, e.inner().message().trim().to_string())

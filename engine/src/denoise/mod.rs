@@ -120,6 +120,25 @@ pub fn denoise(
     guides: &[Guide],
     frames: &[Image],
 ) -> Result<Denoised, DenoiseError> {
+    let (guides, last) = validate(denoiser, guides, frames)?;
+    let watch = Stopwatch::start(backend);
+    let image = match denoiser {
+        Denoiser::Oidn => oidn::denoise(guides.last().expect("checked"), last)?,
+        Denoiser::Svgf => svgf::denoise_on(backend, guides, frames, &svgf::Params::default())?,
+    };
+    Ok(Denoised {
+        image,
+        timing: watch.read(),
+    })
+}
+
+/// The guides of `frames` (the last `frames.len()` of `guides`) and the last frame, if every
+/// frame `denoiser` reads is finite and of its guide's size.
+fn validate<'a>(
+    denoiser: Denoiser,
+    guides: &'a [Guide],
+    frames: &'a [Image],
+) -> Result<(&'a [Guide], &'a Image), DenoiseError> {
     let Some(last) = frames.last() else {
         return Err(DenoiseError::Mismatch("no frame to denoise".into()));
     };
@@ -152,15 +171,32 @@ pub fn denoise(
             });
         }
     }
-    let watch = Stopwatch::start(backend);
-    let image = match denoiser {
-        Denoiser::Oidn => oidn::denoise(guides.last().expect("checked"), last)?,
-        Denoiser::Svgf => svgf::denoise_on(backend, guides, frames, &svgf::Params::default())?,
-    };
-    Ok(Denoised {
-        image,
-        timing: watch.read(),
-    })
+    Ok((guides, last))
+}
+
+/// Every frame of a trajectory as [`denoise`] gives it when that frame is the last one rendered:
+/// frame `t` denoised from `frames[..=t]` guided by `guides[..=t]` (`guides` those of the
+/// trajectory from frame 0, as many as frames) — what a viewer of the denoised stream sees at each frame, for the
+/// trajectory videos. SVGF on the CPU filters the trajectory once ([`svgf::filter_every`]);
+/// elsewhere a temporal filter runs once per prefix (`T(T + 1)/2` frame passes for `T` frames).
+/// The last output is bit-identical to [`denoise`] of the whole trajectory.
+pub fn denoise_every_frame(
+    denoiser: Denoiser,
+    backend: &Backend,
+    guides: &[Guide],
+    frames: &[Image],
+) -> Result<Vec<Image>, DenoiseError> {
+    if guides.len() != frames.len() {
+        let why = format!("{} frames but {} guides", frames.len(), guides.len());
+        return Err(DenoiseError::Mismatch(why));
+    }
+    if denoiser == Denoiser::Svgf && backend.renderer().is_none() {
+        validate(denoiser, guides, frames)?;
+        return Ok(svgf::filter_every(guides, frames, &svgf::Params::default()));
+    }
+    (1..=frames.len())
+        .map(|n| Ok(denoise(denoiser, backend, &guides[..n], &frames[..n])?.image))
+        .collect()
 }
 
 #[cfg(test)]
@@ -193,5 +229,40 @@ mod tests {
         }
         let e = denoise(Denoiser::Svgf, &Backend::Cpu, &guides[..1], &frames).unwrap_err();
         assert!(matches!(e, DenoiseError::Mismatch(_)), "{e}");
+    }
+
+    /// Every frame of a trajectory denoised: frame `t` is the denoised last frame of the first
+    /// `t + 1` frames, the last one the whole trajectory's (SVGF, temporal); control: the first
+    /// frame differs from the last (the filter sees the history).
+    #[test]
+    fn every_frame_is_the_denoised_last_frame_of_its_prefix() {
+        let scene = sss::scene::Scene::builtin("bumpy").unwrap();
+        let scene = sss::scene::Scene {
+            camera: scene.camera.with_resolution(16, 12),
+            ..scene
+        };
+        let frames: Vec<Image> = (0..3)
+            .map(|f| {
+                let pixels =
+                    (0..16 * 12).map(|p| Vec3::splat(((p * 7 + f * 13) % 11) as f32 / 11.0));
+                Image {
+                    width: 16,
+                    height: 12,
+                    pixels: pixels.collect(),
+                }
+            })
+            .collect();
+        let guides = Guide::trajectory(&scene, 3);
+        let every = denoise_every_frame(Denoiser::Svgf, &Backend::Cpu, &guides, &frames).unwrap();
+        assert_eq!(every.len(), 3);
+        for t in 0..3 {
+            let alone = denoise(Denoiser::Svgf, &Backend::Cpu, &guides[..=t], &frames[..=t]);
+            assert_eq!(every[t].pixels, alone.unwrap().image.pixels, "frame {t}");
+        }
+        let whole = denoise(Denoiser::Svgf, &Backend::Cpu, &guides, &frames)
+            .unwrap()
+            .image;
+        assert_eq!(every[2].pixels, whole.pixels);
+        assert!(every[0].pixels != every[2].pixels, "control");
     }
 }

@@ -102,9 +102,23 @@ pub fn denoise_on(
 
 /// The filtered last frame of `frames` (at least one; as many guides, same sizes) on the CPU.
 pub fn filter(guides: &[Guide], frames: &[Image], params: &Params) -> Image {
+    let mut filtered = filter_frames(guides, frames, params, false);
+    filtered.pop().expect("at least one frame")
+}
+
+/// Every frame of `frames` filtered as [`filter`] filters the last one when it is the last: the
+/// à-trous iterations of a frame do not feed the history past the first [SVGF §4.3], so running
+/// them all on every frame leaves the history, and the last frame, bit for bit as [`filter`]
+/// has them.
+pub fn filter_every(guides: &[Guide], frames: &[Image], params: &Params) -> Vec<Image> {
+    filter_frames(guides, frames, params, true)
+}
+
+/// The filtered frames of `frames`: every one with `every`, else the last one only.
+fn filter_frames(guides: &[Guide], frames: &[Image], params: &Params, every: bool) -> Vec<Image> {
     let last = frames.len() - 1;
     let mut history: Vec<SvgfHistory> = Vec::new();
-    let mut filtered = Vec::new();
+    let mut out = Vec::new();
     for (f, (guide, frame)) in guides.iter().zip(frames).enumerate() {
         let size = Size {
             width: guide.width,
@@ -116,14 +130,15 @@ pub fn filter(guides: &[Guide], frames: &[Image], params: &Params) -> Image {
             .into_par_iter()
             .map(|p| stages::temporal(&pixels[p], colour[p], &history, params))
             .collect();
-        filtered = (0..pixels.len())
+        let mut filtered: Vec<Filtered> = (0..pixels.len())
             .into_par_iter()
             .map(|p| Filtered {
                 colour: Vec3::from_array(current[p].colour),
                 variance: stages::variance(size, p, &pixels, &current, params),
             })
             .collect();
-        let iterations = if f == last { params.iterations } else { 1 };
+        let shown = every || f == last;
+        let iterations = if shown { params.iterations } else { 1 };
         for i in 0..iterations {
             filtered = (0..pixels.len())
                 .into_par_iter()
@@ -136,11 +151,13 @@ pub fn filter(guides: &[Guide], frames: &[Image], params: &Params) -> Image {
                 }
             }
         }
+        if shown {
+            let colour: Vec<Vec3> = filtered.iter().map(|f| f.colour).collect();
+            out.push(remodulate(guide, &colour));
+        }
         history = current;
     }
-    let guide = &guides[last];
-    let colour: Vec<Vec3> = filtered.iter().map(|f| f.colour).collect();
-    remodulate(guide, &colour)
+    out
 }
 
 /// The colour of `frame` divided, channel by channel, by the guide's albedo where it is positive.

@@ -122,8 +122,17 @@ pub struct Video {
     pub references: Vec<engine::Image>,
     /// Whether every frame had its own reference (else some show the last frame's).
     pub own_references: bool,
-    /// `(spec, replica 0's frames)` per raw row, in the order of [`Outcome::rows`].
-    pub trajectories: Vec<(String, Vec<engine::Image>)>,
+    /// Replica 0's frames per raw row, in the order of [`Outcome::rows`].
+    pub trajectories: Vec<VideoTrajectory>,
+}
+
+/// One method's frames in a [`Video`]: as rendered, and through each denoiser of the
+/// comparison (every frame as the denoiser gives it when that frame is the last,
+/// [`engine::denoise::denoise_every_frame`]), or why that failed.
+pub struct VideoTrajectory {
+    pub spec: String,
+    pub frames: Vec<engine::Image>,
+    pub denoised: Vec<(Denoiser, Result<Vec<engine::Image>, String>)>,
 }
 
 /// Replica 0's last frame of one row: its method's spec and its denoiser (`None`: raw).
@@ -349,7 +358,11 @@ fn video(
         trajectories: runs
             .iter()
             .filter(|r| !r.trajectory.is_empty())
-            .map(|r| (r.spec.clone(), r.trajectory.clone()))
+            .map(|r| VideoTrajectory {
+                spec: r.spec.clone(),
+                frames: r.trajectory.clone(),
+                denoised: r.denoised_trajectory.clone(),
+            })
             .collect(),
     }
 }

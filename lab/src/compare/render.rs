@@ -25,6 +25,9 @@ pub(super) struct MethodRuns {
     pub(super) denoised: Vec<(Denoiser, Vec<Replica>)>,
     /// Replica 0's every frame, kept for the videos (empty without the plan's `video`).
     pub(super) trajectory: Vec<engine::Image>,
+    /// Replica 0's every frame through each denoiser that denoised it, for the videos (or why
+    /// that failed).
+    pub(super) denoised_trajectory: Vec<(Denoiser, Result<Vec<engine::Image>, String>)>,
 }
 
 /// What [`render_replicas`] rendered.
@@ -80,6 +83,7 @@ pub(super) fn render_replicas(
             replicas: Vec::new(),
             denoised: plan.denoise.iter().map(|&d| (d, Vec::new())).collect(),
             trajectory: Vec::new(),
+            denoised_trajectory: Vec::new(),
         })
         .collect();
     progress.begin("replicas", runs.len() as u64 * plan.replicas as u64, 0);
@@ -117,6 +121,15 @@ pub(super) fn render_replicas(
             }
             runs[i].replicas.push(replica);
             if seed == 0 && plan.video {
+                let denoisers: Vec<Denoiser> = runs[i].denoised.iter().map(|(d, _)| *d).collect();
+                runs[i].denoised_trajectory = denoisers
+                    .into_iter()
+                    .map(|d| {
+                        let every =
+                            denoise::denoise_every_frame(d, &plan.backend, &guides, &trajectory);
+                        (d, every.map_err(|e| e.to_string()))
+                    })
+                    .collect();
                 runs[i].trajectory = trajectory;
             }
             progress.step();
@@ -138,6 +151,7 @@ impl MethodRuns {
         }
         if n == 0 {
             self.trajectory.clear();
+            self.denoised_trajectory.clear();
         }
     }
 }

@@ -124,8 +124,14 @@ fn a_comparison_writes_its_outputs_and_reuses_the_reference() {
     // flicker of every raw row (consecutive frames), none of the denoised rows (last frame).
     let video = first.video.as_ref().unwrap();
     assert!(video.own_references && video.references.len() == 3);
-    for ((spec, frames), row) in video.trajectories.iter().zip(&first.rows) {
-        assert_eq!((spec, frames.len()), (&row.method, 3));
+    for (trajectory, row) in video.trajectories.iter().zip(&first.rows) {
+        let spec = &trajectory.spec;
+        assert_eq!((spec, trajectory.frames.len()), (&row.method, 3));
+        // Every frame through the comparison's denoiser, as it denoises the last frame.
+        let [(d, Ok(denoised))] = &trajectory.denoised[..] else {
+            panic!("{spec}: one denoiser's frames");
+        };
+        assert_eq!((*d, denoised.len()), (first.denoised[0].0, 3));
         assert!(!row.flicker.is_empty(), "{spec}");
         assert!(row.flicker.iter().all(|f| f.flicker.value > 0.0), "{spec}");
     }
@@ -152,7 +158,7 @@ fn a_comparison_writes_its_outputs_and_reuses_the_reference() {
     // Without earlier references the video still has every frame, against the last reference.
     let video = last.video.as_ref().unwrap();
     assert!(!video.own_references);
-    assert!(video.trajectories.iter().all(|(_, f)| f.len() == 3));
+    assert!(video.trajectories.iter().all(|t| t.frames.len() == 3));
     assert!(last_written.results.video_notes[0].contains("the last frame's"));
     assert!(last_written.markdown.contains("Flicker: not measured"));
     // Equal time counts the denoiser: every denoised row's seconds are its rendering's plus

@@ -1,6 +1,7 @@
 //! Videos of a comparison's trajectory ([`write_videos`]): per method, replica 0's every frame
 //! side by side with that frame's reference and the luminance of its absolute error (the error
-//! maps' colour ramp and scale, [`crate::draw::false_colour`]), one labelled strip per frame, at
+//! maps' colour ramp and scale, [`crate::draw::false_colour`]), then the same frame through each
+//! denoiser of the comparison with its error, one labelled strip per frame, at
 //! [`FPS`] frames per second, looping. Each is written as an animated PNG (APNG: browsers play
 //! it natively, nothing need be installed), and as H.264 MP4 through `ffmpeg` where it is on
 //! the PATH (else one note says so). Tiles are at the comparison's resolution: a pixel of noise
@@ -13,7 +14,7 @@ use std::process::{Command, Stdio};
 use plotters::prelude::*;
 use rayon::prelude::*;
 
-use crate::compare::Video;
+use crate::compare::{Video, VideoTrajectory};
 use crate::draw::{FONT, draw_error, false_colour, register_font};
 use crate::error::Error;
 use crate::metrics::error_maps;
@@ -68,18 +69,26 @@ fn write_videos_with(
                 .to_string(),
         );
     }
+    for t in &video.trajectories {
+        for (d, failed) in &t.denoised {
+            if let Err(e) = failed {
+                notes.push(format!("{}: no {d} frames in its video: {e}", t.spec));
+            }
+        }
+    }
     // Strips in parallel per method; each file's bytes depend on its method alone.
     let strips: Vec<(String, (u32, u32), Vec<Vec<u8>>)> = video
         .trajectories
         .par_iter()
-        .map(|(spec, frames)| {
-            let strips = frames
-                .iter()
-                .zip(&video.references)
-                .enumerate()
-                .map(|(t, (image, reference))| strip(spec, t, image, reference, max))
+        .map(|trajectory| {
+            let spec = &trajectory.spec;
+            let strips = (0..trajectory.frames.len())
+                .map(|t| strip(trajectory, t, &video.references[t], max))
                 .collect::<Result<Vec<_>, Error>>()?;
-            let size = frames.first().map_or((0, 0), |f| strip_size(f));
+            let size = trajectory
+                .frames
+                .first()
+                .map_or((0, 0), |f| strip_size(f, tile_count(trajectory)));
             let stem = file_stem(spec);
             write_apng(&dir.join(format!("{stem}.png")), &strips, size)?;
             Ok((spec.clone(), size, strips))
@@ -105,32 +114,57 @@ fn write_videos_with(
     Ok(Videos { entries, notes })
 }
 
-/// Width and height of one frame's strip of 3 tiles of `image`'s size under the labels.
-fn strip_size(image: &Image) -> (u32, u32) {
-    (3 * image.width, image.height + LABEL_HEIGHT)
+/// Tiles of a strip of `trajectory`: frame, reference and error, and a frame and its error per
+/// denoiser that denoised it.
+fn tile_count(trajectory: &VideoTrajectory) -> u32 {
+    let denoised = trajectory
+        .denoised
+        .iter()
+        .filter(|(_, d)| d.is_ok())
+        .count();
+    3 + 2 * denoised as u32
 }
 
-/// Frame `t` of `spec` as RGB bytes: `[frame | reference | |I − R|]` under their labels.
+/// Width and height of one frame's strip of `tiles` tiles of `image`'s size under the labels.
+fn strip_size(image: &Image, tiles: u32) -> (u32, u32) {
+    (tiles * image.width, image.height + LABEL_HEIGHT)
+}
+
+/// Frame `t` of `trajectory` as RGB bytes, each tile under its label: `[frame | reference |
+/// |I − R|]`, then `[denoised | |D − R|]` per denoiser.
 fn strip(
-    spec: &str,
+    trajectory: &VideoTrajectory,
     t: usize,
-    image: &Image,
     reference: &Image,
     max: f64,
 ) -> Result<Vec<u8>, Error> {
+    let spec = &trajectory.spec;
+    let image = &trajectory.frames[t];
     let (w, h) = (image.width as usize, image.height as usize);
     let reference_mean: Vec<glam::DVec3> = reference.pixels.iter().map(|p| p.as_dvec3()).collect();
-    let (absolute, _) = error_maps(image, &reference_mean).ok_or_else(|| {
-        Error::Invalid(format!(
-            "{spec}: frame {t} differs in size from its reference"
-        ))
-    })?;
-    let tiles = [
-        image.pixels.iter().flat_map(|&p| tonemap(p)).collect(),
-        reference.pixels.iter().flat_map(|&p| tonemap(p)).collect(),
-        false_colour(&absolute, max),
+    let error = |image: &Image| {
+        error_maps(image, &reference_mean)
+            .map(|(absolute, _)| false_colour(&absolute, max))
+            .ok_or_else(|| {
+                Error::Invalid(format!(
+                    "{spec}: frame {t} differs in size from its reference"
+                ))
+            })
+    };
+    let shown = |image: &Image| image.pixels.iter().flat_map(|&p| tonemap(p)).collect();
+    let mut tiles: Vec<Vec<u8>> = vec![shown(image), shown(reference), error(image)?];
+    let mut labels = vec![
+        format!("{spec}, frame {t}"),
+        "reference".to_string(),
+        format!("|I − R| (0 to {max:.2e})"),
     ];
-    let (sw, sh) = strip_size(image);
+    for (d, frames) in &trajectory.denoised {
+        if let Ok(frames) = frames {
+            tiles.extend([shown(&frames[t]), error(&frames[t])?]);
+            labels.extend([format!("{d}"), format!("|{d} − R|")]);
+        }
+    }
+    let (sw, sh) = strip_size(image, tiles.len() as u32);
     let mut rgb = vec![255u8; sw as usize * sh as usize * 3];
     for (i, tile) in tiles.iter().enumerate() {
         for y in 0..h {
@@ -139,11 +173,6 @@ fn strip(
             rgb[at..at + 3 * w].copy_from_slice(row);
         }
     }
-    let labels = [
-        format!("{spec}, frame {t}"),
-        "reference".to_string(),
-        format!("|I − R| (0 to {max:.2e})"),
-    ];
     register_font();
     let path = Path::new(spec);
     let fail = draw_error(path);
@@ -239,6 +268,7 @@ fn write_mp4(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use engine::denoise::Denoiser;
     use glam::Vec3;
 
     /// A 2-frame video of a method that is the reference plus a moving bright pixel.
@@ -258,7 +288,11 @@ mod tests {
         Video {
             references: vec![reference.clone(), reference],
             own_references: true,
-            trajectories: vec![("pt:2".into(), frames)],
+            trajectories: vec![VideoTrajectory {
+                spec: "pt:2".into(),
+                frames,
+                denoised: Vec::new(),
+            }],
         }
     }
 
@@ -291,6 +325,37 @@ mod tests {
             frames.push(buffer);
         }
         assert_ne!(frames[0], frames[1]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A denoiser's frames add a frame and an error tile to every strip; one that failed adds
+    /// none and leaves one note naming the method and the denoiser.
+    #[test]
+    fn denoised_frames_widen_the_strip_and_a_failure_is_a_note() {
+        let dir = std::env::temp_dir().join(format!("reshift-video-d-{}", std::process::id()));
+        let mut video = video();
+        let frames = video.trajectories[0].frames.clone();
+        video.trajectories[0].denoised = vec![
+            (Denoiser::Svgf, Ok(frames)),
+            (Denoiser::Oidn, Err("not installed".into())),
+        ];
+        let written = write_videos_with(&dir, &video, 1.0, "reshift-no-such-ffmpeg").unwrap();
+        assert!(
+            written
+                .notes
+                .iter()
+                .any(|n| n == "pt:2: no oidn frames in its video: not installed"),
+            "{:?}",
+            written.notes
+        );
+        let file = std::fs::File::open(dir.join(&written.entries[0].apng)).unwrap();
+        let reader = png::Decoder::new(std::io::BufReader::new(file))
+            .read_info()
+            .unwrap();
+        assert_eq!(
+            (reader.info().width, reader.info().height),
+            (30, 4 + LABEL_HEIGHT)
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

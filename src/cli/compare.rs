@@ -78,8 +78,8 @@ pub struct CompareArgs {
     /// where it is installed.
     #[arg(long, value_name = "DENOISERS", default_value = "auto")]
     pub denoise: String,
-    /// Write no trajectory videos (by default each method's replica-0 frames are written beside
-    /// the reference and the error as a looping animated PNG, and as MP4 where ffmpeg is on the
+    /// Write no trajectory videos (by default each method's replica-0 frames, raw and through
+    /// each denoiser, are written beside the reference and the error as a looping animated PNG, and as MP4 where ffmpeg is on the
     /// PATH, and played in report.html).
     #[arg(long)]
     pub no_video: bool,

@@ -24,6 +24,7 @@ mod outcome;
 mod planning;
 mod render;
 mod run;
+pub mod shard;
 mod summary;
 mod table;
 #[cfg(test)]
@@ -34,7 +35,7 @@ pub use planning::{Unplannable, replicas_needed};
 pub use render::{Images, reference_images, reference_images_with, replica_images, test_bytes};
 pub use run::{BiasPlan, run};
 pub use summary::{RegionSummary, region_mean, summarize};
-use summary::{channel_summary, region_means};
+use summary::{channel_summary, region_means, summaries};
 pub use table::Table;
 
 use std::fmt;

@@ -18,7 +18,8 @@
 //! test as a job of a [`BiasPlan`] ([`run`]) in `run`, what it found ([`BiasOutcome`], the JSON
 //! of `reshift bias`) in `outcome`; the replicas' and reference batches' final frames in
 //! `render`; their reduction to region means in `summary`; the replicas a run needs in
-//! `planning`; the Markdown table in `table`.
+//! `planning`; the Markdown table in `table`; a test split over seeds and merged again in
+//! [`shard`].
 
 mod outcome;
 mod planning;

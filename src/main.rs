@@ -38,8 +38,8 @@ enum Command {
     Bias(cli::bias::BiasArgs),
     /// Progressive path-traced reference with checkpoint/resume and shards.
     Reference(cli::reference::ReferenceArgs),
-    /// Merge reference shards (bit-identical to an unsharded run).
-    Merge(cli::reference::MergeArgs),
+    /// Merge the shards of a reference, a bias test or a comparison (bit-identical to one run).
+    Merge(cli::merge::MergeArgs),
     /// Named reproductions of paper 001's figures.
     Experiment(cli::experiment::ExperimentArgs),
     /// On the Vulkan device: device and limits, GPU parity, time of every pass at each size,
@@ -69,7 +69,7 @@ fn main() -> ExitCode {
         Command::Compare(args) => cli::compare::command(args),
         Command::Bias(args) => cli::bias::command(args),
         Command::Reference(args) => cli::reference::command(args),
-        Command::Merge(args) => cli::reference::merge(args),
+        Command::Merge(args) => cli::merge::command(args),
         Command::Experiment(args) => cli::experiment::command(args),
         Command::GpuReport(args) => cli::gpu_report::command(args),
         Command::Toy => toy::run().map_err(CliError::from),

@@ -534,6 +534,65 @@ fn sharded_reference_merges_bit_identically() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A bias test in 3 shards (`--shard i/n`) merges, from a folder or from files in any order,
+/// into what one run prints, table and JSON byte for byte; a shard of another plan, a missing or
+/// duplicated shard and a shard index out of range are one-line errors naming what is wrong.
+#[test]
+fn bias_shards_merge_into_one_run_and_refuse_other_plans() {
+    let dir = scratch("bias-shards");
+    let folder = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let test = |method: &str, extra: &[&str]| {
+        let base = [
+            "bias",
+            "--method",
+            method,
+            "--replicas",
+            "5",
+            "--frames",
+            "2",
+            "--resolution",
+            "16x12",
+            "--reference-batches",
+            "4",
+            "--reference-batch-spp",
+            "2",
+        ];
+        ok(&reshift(&[&base[..], extra].concat()))
+    };
+    let one_json = test("pt", &["--json"]);
+    let one_table = test("pt", &[]);
+    for i in 0..3 {
+        test("pt", &["--shard", &format!("{i}/3"), "--out", &folder("a")]);
+    }
+    test("restir:hybrid", &["--shard", "1/3", "--out", &folder("b")]);
+    let shard = |set: &str, i: u32| format!("{}/shard-{i}-of-3.json", folder(set));
+    assert_eq!(ok(&reshift(&["merge", &folder("a"), "--json"])), one_json);
+    let reversed = [shard("a", 2), shard("a", 1), shard("a", 0)];
+    let files: Vec<&str> = reversed.iter().map(String::as_str).collect();
+    assert_eq!(ok(&reshift(&[&["merge"], &files[..]].concat())), one_table);
+    fails_with(
+        &["merge", &shard("a", 0), &shard("b", 1), &shard("a", 2)],
+        "shard-1-of-3.json: field 'method' is \"restir:hybrid\", ",
+    );
+    fails_with(
+        &["merge", &shard("a", 0), &shard("a", 2)],
+        "shard 1 of 3 (shard-1-of-3.json) is missing; 2 of 3 given",
+    );
+    fails_with(
+        &["merge", &shard("a", 0), &folder("a")],
+        "are both shard 0 of 3",
+    );
+    fails_with(
+        &["merge", &folder("a"), "--out", &folder("c")],
+        "bias shards merge into the printed outcome",
+    );
+    fails_with(
+        &["bias", "--method", "pt", "--shard", "3/3"],
+        "field `--shard` = \"3/3\": need 0 ≤ i < n",
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// The JSON Schema blocks of docs/results-schema.md: compare, then bias.
 fn schemas() -> Vec<Value> {
     let doc = include_str!("../docs/results-schema.md");

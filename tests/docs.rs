@@ -135,3 +135,17 @@ fn the_citation_checks_reject_what_does_not_exist() {
         ["001", "000", "003"]
     );
 }
+
+/// docs/cluster.md quotes the job array script that CI runs (scripts/slurm-test) verbatim.
+#[test]
+fn the_cluster_doc_quotes_the_array_script_verbatim() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let script = std::fs::read_to_string(root.join("scripts/cluster/bias-array.sh")).unwrap();
+    let doc = std::fs::read_to_string(root.join("docs/cluster.md")).unwrap();
+    assert!(
+        doc.contains(&format!("```bash\n{script}```")),
+        "docs/cluster.md must quote scripts/cluster/bias-array.sh verbatim in a ```bash block"
+    );
+    let runner = std::fs::read_to_string(root.join("scripts/slurm-test")).unwrap();
+    assert!(runner.contains("scripts/cluster/bias-array.sh"));
+}

@@ -27,6 +27,7 @@ pub mod reference_cache;
 pub mod regions;
 pub mod report;
 pub mod scenes;
+pub mod shard;
 pub mod telemetry;
 pub mod uncertainty;
 

@@ -6,10 +6,16 @@
 //! `lab::bias::BiasPlan`; what it prints: the table with the overall verdict in words, or the
 //! JSON of the outcome (schema `reshift-bias/2`, docs/results-schema.md).
 
+use std::path::PathBuf;
+
 use clap::Args;
+use lab::bias::shard::{BiasShard, run_shard};
 use lab::bias::{self, BiasOutcome, BiasPlan, BiasRow, PLANNED_POWER, Protocol, Table, overall};
+use lab::output::{output_dir, write_text};
+use lab::shard::{Shard, file_name};
 use methods::Method;
 use restir::stats::Verdict;
+use serde_json::Value;
 
 use super::common::{
     BackendArgs, Bars, CliError, CliResult, command_line, load_scene, parse_resolution,
@@ -48,20 +54,28 @@ pub struct BiasArgs {
     /// Print JSON (schema `reshift-bias/2`) instead of the table.
     #[arg(long)]
     pub json: bool,
+    /// Render only shard i of n (0-based, i < n): the replicas of seeds ⌊i·N/n⌋..⌊(i+1)·N/n⌋
+    /// (shard 0 also the reference), written to <out>/shard-i-of-n.json; `reshift merge` of
+    /// all n prints what one run prints, bit for bit (docs/cluster.md).
+    #[arg(long, value_name = "i/n")]
+    pub shard: Option<String>,
+    /// With --shard: the folder of the shard file.
+    #[arg(long, requires = "shard", default_value = "out/bias-shards")]
+    pub out: PathBuf,
     #[command(flatten)]
     pub backend: BackendArgs,
 }
 
-/// Runs `bias` and prints the table (or the JSON); a test stopped by Ctrl-C prints the
-/// replicas rendered so far and fails.
+/// Runs `bias` and prints the table (or the JSON), or with `--shard` writes the shard file; a
+/// test stopped by Ctrl-C prints the replicas rendered so far and fails.
 pub fn command(args: &BiasArgs) -> CliResult<()> {
-    let plan = plan(args)?;
-    let outcome = bias::run(&plan, &mut Bars::default())?;
-    if args.json {
-        println!("{}", outcome.to_json_pretty());
-    } else {
-        print_table(&plan, &outcome);
+    let (plan, scene_key) = plan(args)?;
+    if let Some(text) = &args.shard {
+        let shard = Shard::parse(text, "--shard")?;
+        return write_shard(args, &plan, &scene_key, shard);
     }
+    let outcome = bias::run(&plan, &mut Bars::default())?;
+    print(&plan, &outcome, args.json);
     if outcome.interrupted {
         return Err(CliError(format!(
             "interrupted after {} of {} replicas",
@@ -71,8 +85,44 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
     Ok(())
 }
 
-/// The plan of `args`, checked with errors that name the options.
-fn plan(args: &BiasArgs) -> CliResult<BiasPlan> {
+/// The table (or the JSON) of `outcome`.
+fn print(plan: &BiasPlan, outcome: &BiasOutcome, json: bool) {
+    if json {
+        println!("{}", outcome.to_json_pretty());
+    } else {
+        print_table(plan, outcome);
+    }
+}
+
+/// Renders `shard` of `plan` and writes its file into `--out`.
+fn write_shard(args: &BiasArgs, plan: &BiasPlan, scene_key: &str, shard: Shard) -> CliResult<()> {
+    let part = run_shard(plan, scene_key, &args.scene, shard, &mut Bars::default())?;
+    let path = output_dir(&args.out)?.join(file_name(shard));
+    let text = serde_json::to_string_pretty(&part).expect("plain data serializes");
+    write_text(&path, &text)?;
+    println!(
+        "shard {}/{} of {} replicas: written to {}",
+        shard.index,
+        shard.count,
+        args.replicas,
+        path.display()
+    );
+    Ok(())
+}
+
+/// `reshift merge` of bias shard files (their JSON): prints what one run prints.
+pub fn merge(files: Vec<(PathBuf, Value)>, json: bool) -> CliResult<()> {
+    let parts = files
+        .into_iter()
+        .map(|(path, value)| Ok((path.clone(), lab::shard::parse::<BiasShard>(&path, value)?)))
+        .collect::<Result<Vec<_>, lab::Error>>()?;
+    let (plan, outcome) = bias::shard::merge(parts)?;
+    print(&plan, &outcome, json);
+    Ok(())
+}
+
+/// The plan of `args`, checked with errors that name the options, and the scene's cache key.
+fn plan(args: &BiasArgs) -> CliResult<(BiasPlan, String)> {
     let method = Method::parse(&args.method)?;
     let resolution = parse_resolution(&args.resolution)?;
     let loaded = load_scene(&args.scene)?;
@@ -91,7 +141,7 @@ fn plan(args: &BiasArgs) -> CliResult<BiasPlan> {
         backend: args.backend.open()?,
     };
     plan.validate(command_line())?;
-    Ok(plan)
+    Ok((plan, loaded.key))
 }
 
 /// The test as a Markdown table between a header line (what ran) and the verdict and plan lines.

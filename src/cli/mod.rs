@@ -5,6 +5,7 @@ pub mod common;
 pub mod compare;
 pub mod experiment;
 pub mod gpu_report;
+pub mod merge;
 pub mod reference;
 pub mod render;
 

@@ -1,6 +1,7 @@
-//! `reshift reference` and `reshift merge`: progressive references with checkpoint/resume and
-//! shards `i/n` (e.g. one per Slurm array task), merged bit-identically to an unsharded run
-//! (`sss::integrator::reference` sums exactly).
+//! `reshift reference` and the merge of its checkpoints (for `reshift merge`, `super::merge`):
+//! progressive references with checkpoint/resume and shards `i/n` (e.g. one per Slurm array
+//! task), merged bit-identically to an unsharded run (`sss::integrator::reference` sums
+//! exactly).
 
 use std::path::{Path, PathBuf};
 
@@ -46,19 +47,6 @@ pub struct ReferenceArgs {
     #[arg(long)]
     pub max_batches: Option<u32>,
     /// Checkpoint file; the mean is also written to <out>.exr when complete.
-    #[arg(long)]
-    pub out: PathBuf,
-    /// Print a JSON summary.
-    #[arg(long)]
-    pub json: bool,
-}
-
-#[derive(Args, Clone, Debug)]
-pub struct MergeArgs {
-    /// Complete shard checkpoints of one reference, in any order.
-    #[arg(required = true)]
-    pub shards: Vec<PathBuf>,
-    /// The merged checkpoint; the mean is also written to <out>.exr.
     #[arg(long)]
     pub out: PathBuf,
     /// Print a JSON summary.
@@ -197,20 +185,21 @@ pub fn command(args: &ReferenceArgs) -> CliResult<()> {
     Ok(())
 }
 
-pub fn merge(args: &MergeArgs) -> CliResult<()> {
-    let parts = args
-        .shards
+/// `reshift merge` of reference checkpoints: the merged checkpoint at `out` and its mean beside
+/// it.
+pub fn merge(shards: &[PathBuf], out: &Path, json: bool) -> CliResult<()> {
+    let parts = shards
         .iter()
         .map(|p| Ok((p.clone(), Reference::load(p)?)))
         .collect::<Result<Vec<_>, CliError>>()?;
     let merged = Reference::merge(parts)?;
-    if let Some(parent) = args.out.parent().filter(|p| !p.as_os_str().is_empty()) {
+    if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
         output_dir(parent)?;
     }
     merged
-        .save(&args.out)
-        .map_err(|e| CliError(format!("{}: {e}", args.out.display())))?;
-    let exr = write_mean(&merged, &args.out)?;
-    summary(&merged, &args.out, Some(&exr), args.json);
+        .save(out)
+        .map_err(|e| CliError(format!("{}: {e}", out.display())))?;
+    let exr = write_mean(&merged, out)?;
+    summary(&merged, out, Some(&exr), json);
     Ok(())
 }

@@ -18,12 +18,14 @@
 //! test as a job of a [`BiasPlan`] ([`run`]) in `run`, what it found ([`BiasOutcome`], the JSON
 //! of `reshift bias`) in `outcome`; the replicas' and reference batches' final frames in
 //! `render`; their reduction to region means in `summary`; the replicas a run needs in
-//! `planning`; the Markdown table in `table`.
+//! `planning`; the Markdown table in `table`; a test split over seeds and merged again in
+//! [`shard`].
 
 mod outcome;
 mod planning;
 mod render;
 mod run;
+pub mod shard;
 mod summary;
 mod table;
 #[cfg(test)]
@@ -34,7 +36,7 @@ pub use planning::{Unplannable, replicas_needed};
 pub use render::{Images, reference_images, reference_images_with, replica_images, test_bytes};
 pub use run::{BiasPlan, run};
 pub use summary::{RegionSummary, region_mean, summarize};
-use summary::{channel_summary, region_means};
+use summary::{channel_summary, region_means, summaries};
 pub use table::Table;
 
 use std::fmt;

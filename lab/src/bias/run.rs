@@ -2,6 +2,7 @@
 //! path tracer with the method's reference settings, per region and channel; the job of
 //! `reshift bias`.
 
+use std::ops::Range;
 use std::path::Path;
 
 use engine::Backend;
@@ -13,7 +14,7 @@ use sss::scene::{GBuffer, Scene};
 
 use super::outcome::{BiasOutcome, NonFinite, PLANNED_POWER, Planned, ReferenceEntry, SCHEMA};
 use super::{Images, Protocol, bias_rows, overall, reference_images_with, replicas_needed};
-use super::{summarize, test_bytes};
+use super::{RegionSummary, summarize, test_bytes};
 use crate::error::Error;
 use crate::limits::MAX_REPLICAS;
 use crate::progress::Progress;
@@ -100,21 +101,11 @@ impl BiasPlan {
 /// before two.
 pub fn run(plan: &BiasPlan, progress: &mut dyn Progress) -> Result<BiasOutcome, Error> {
     plan.validate(Path::new("(bias plan)"))?;
-    let scene = &plan.scene;
-    let frame = plan.frames - 1;
-    let regions = Regions::classify(scene, &GBuffer::render(scene, frame), REFERENCE_SEED);
-    let settings = plan.method.reference();
-    let reference = reference_images_with(
-        &settings,
-        scene,
-        frame,
-        plan.reference_batches,
-        plan.reference_batch_spp,
-        REFERENCE_SEED,
-    )?;
+    let regions = tested_regions(plan);
+    let reference = reference(plan)?;
     let name = plan.method.name();
     progress.begin(&name, plan.replicas as u64, 0);
-    let replicas = render_replicas(plan, progress);
+    let replicas = render_replicas(plan, 0..plan.replicas as u64, progress);
     progress.end();
     let replicas = replicas?;
     if replicas.rgb.len() < 2 {
@@ -122,50 +113,97 @@ pub fn run(plan: &BiasPlan, progress: &mut dyn Progress) -> Result<BiasOutcome, 
             "interrupted before 2 replicas finished".into(),
         ));
     }
+    let tested = Tested {
+        replicas: summarize(&replicas.rgb, &regions),
+        count: replicas.rgb.len(),
+        reference: summarize(&reference.rgb, &regions),
+        nonfinite: NonFinite {
+            replicas: replicas.nonfinite,
+            reference: reference.nonfinite,
+        },
+    };
+    Ok(outcome(plan, tested))
+}
+
+/// The regions of the tested frame, the last.
+pub(super) fn tested_regions(plan: &BiasPlan) -> Regions {
+    let scene = &plan.scene;
+    Regions::classify(
+        scene,
+        &GBuffer::render(scene, plan.frames - 1),
+        REFERENCE_SEED,
+    )
+}
+
+/// The reference batches of `plan` at the tested frame, with the method's reference settings.
+pub(super) fn reference(plan: &BiasPlan) -> Result<Images, Error> {
+    Ok(reference_images_with(
+        &plan.method.reference(),
+        &plan.scene,
+        plan.frames - 1,
+        plan.reference_batches,
+        plan.reference_batch_spp,
+        REFERENCE_SEED,
+    )?)
+}
+
+/// What a test measured: the region summaries of its `count` replicas and of its reference.
+pub(super) struct Tested {
+    pub(super) replicas: Vec<RegionSummary>,
+    pub(super) count: usize,
+    pub(super) reference: Vec<RegionSummary>,
+    pub(super) nonfinite: NonFinite,
+}
+
+/// The outcome of `plan` from what it measured: the rows, their verdicts and the plan for
+/// the next run; interrupted when fewer replicas than planned were measured.
+pub(super) fn outcome(plan: &BiasPlan, tested: Tested) -> BiasOutcome {
+    let scene = &plan.scene;
     let protocol = plan.protocol;
     let rows = bias_rows(
-        &name,
-        &summarize(&replicas.rgb, &regions),
-        &summarize(&reference.rgb, &regions),
+        &plan.method.name(),
+        &tested.replicas,
+        &tested.reference,
         &protocol,
     );
-    Ok(BiasOutcome {
+    BiasOutcome {
         schema: SCHEMA,
         scene: scene.name.clone(),
         method: plan.spec.clone(),
         resolution: format!("{}x{}", scene.camera.width(), scene.camera.height()),
         frames: plan.frames,
-        replicas: replicas.rgb.len(),
+        replicas: tested.count,
         delta: protocol.delta,
         alpha: protocol.alpha,
         confidence: 1.0 - protocol.alpha,
         reference: ReferenceEntry {
             batches: plan.reference_batches,
             spp_per_batch: plan.reference_batch_spp,
-            profile: settings.profile.name().to_string(),
+            profile: plan.method.reference().profile.name().to_string(),
             seed: REFERENCE_SEED,
         },
-        nonfinite: NonFinite {
-            replicas: replicas.nonfinite,
-            reference: reference.nonfinite,
-        },
-        interrupted: replicas.rgb.len() < plan.replicas as usize,
+        nonfinite: tested.nonfinite,
+        interrupted: tested.count < plan.replicas as usize,
         verdict: overall(&rows),
         planned: Planned {
             power: PLANNED_POWER,
             replicas: replicas_needed(&rows, &protocol, PLANNED_POWER),
         },
         rows,
-    })
+    }
 }
 
-/// The final frames of replicas `0..plan.replicas` until a stop request, one step each.
-fn render_replicas(plan: &BiasPlan, progress: &mut dyn Progress) -> Result<Images, Error> {
+/// The final frames of the replicas of `seeds` until a stop request, one step each.
+pub(super) fn render_replicas(
+    plan: &BiasPlan,
+    seeds: Range<u64>,
+    progress: &mut dyn Progress,
+) -> Result<Images, Error> {
     let mut images = Images {
         rgb: Vec::new(),
         nonfinite: 0,
     };
-    for seed in 0..plan.replicas as u64 {
+    for seed in seeds {
         if progress.stop_requested() {
             break;
         }

@@ -74,7 +74,12 @@ pub(super) fn channel_summary(means: &[DVec3], channel: Channel) -> Summary {
 /// row-major like `regions`); empty regions are left out. An image of the wrong size counts as
 /// a NaN replica, which the tests reject as a defect.
 pub fn summarize(images: &[Vec<DVec3>], regions: &Regions) -> Vec<RegionSummary> {
-    region_means(images, regions)
+    summaries(region_means(images, regions))
+}
+
+/// Per region, the summaries of its per-image means ([`region_means`]), in their order.
+pub(super) fn summaries(means: Vec<(Region, usize, Vec<DVec3>)>) -> Vec<RegionSummary> {
+    means
         .into_iter()
         .map(|(region, pixels, means)| RegionSummary {
             region,

@@ -7,6 +7,7 @@ pub mod experiment;
 pub mod gpu_report;
 pub mod reference;
 pub mod render;
+pub mod view;
 
 use clap::Args;
 use methods::{REGISTRY, restir as restir_method};

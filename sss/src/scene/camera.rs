@@ -126,6 +126,16 @@ impl Camera {
         self.basis(frame).eye
     }
 
+    /// The point aimed at, at `frame`.
+    pub fn target(&self, frame: u32) -> Vec3 {
+        self.target[0].lerp(self.target[1], Self::progress(frame))
+    }
+
+    /// The up vector the basis is built from (unit length; not orthogonal to the view).
+    pub fn up(&self) -> Vec3 {
+        self.up
+    }
+
     /// Unit view direction at `frame`.
     pub fn forward(&self, frame: u32) -> Vec3 {
         self.basis(frame).forward

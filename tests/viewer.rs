@@ -10,6 +10,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::{Duration, Instant};
 
 /// Image size of every window test, and the screen pixels per image pixel.
@@ -132,9 +133,12 @@ struct Xvfb {
 
 impl Xvfb {
     fn start() -> Xvfb {
-        // Pid-spread numbers so parallel test processes rarely race for one.
+        // Pid-spread numbers so test processes rarely race for one; the tests of this process
+        // take turns through `NEXT`. A server is ours when its lock file names its pid.
+        static NEXT: AtomicU32 = AtomicU32::new(0);
         let first = 100 + (std::process::id() % 400);
-        for n in (first..first + 100).chain(100..first) {
+        for _ in 0..100 {
+            let n = first + NEXT.fetch_add(1, Ordering::SeqCst) % 400;
             let (socket, lock) = (format!("/tmp/.X11-unix/X{n}"), format!("/tmp/.X{n}-lock"));
             if Path::new(&socket).exists() || Path::new(&lock).exists() {
                 continue;
@@ -158,7 +162,9 @@ impl Xvfb {
             };
             let started = Instant::now();
             while started.elapsed() < Duration::from_secs(20) {
-                if Path::new(&socket).exists() {
+                let owner = std::fs::read_to_string(&lock).ok();
+                let ours = owner.is_some_and(|pid| pid.trim() == server.child.id().to_string());
+                if ours && Path::new(&socket).exists() {
                     return server;
                 }
                 if server.child.try_wait().ok().flatten().is_some() {

@@ -8,6 +8,7 @@
 //! do; it has no renderer of its own.
 
 mod camera;
+mod capture;
 mod input;
 mod panel;
 mod record;
@@ -23,6 +24,11 @@ use methods::Method;
 use sss::scene::{Camera, Scene};
 
 pub use record::TRAJECTORY_SCHEMA;
+
+/// A Vulkan failure of the window's presentation (`swapchain`, `capture`), as one line.
+fn vulkan_failure(what: &'static str) -> impl Fn(ash::vk::Result) -> String {
+    move |e| format!("window presentation: {what}: {e}")
+}
 
 /// What `reshift view` was asked for.
 pub struct Options {

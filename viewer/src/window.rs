@@ -20,12 +20,13 @@ use winit::window::{Window, WindowId};
 
 use crate::Options;
 use crate::camera::{Controls, Mode};
+use crate::capture::Capture;
 use crate::input::{Command, key_command};
 use crate::panel::{PANEL_WIDTH, Panel, Status};
 use crate::record::Recorder;
 use crate::script::Script;
 use crate::session::Session;
-use crate::swapchain::{Capture, Presented, Presenter};
+use crate::swapchain::{Presented, Presenter};
 
 /// How often an idle loop wakes to look at the Ctrl-C flag.
 const POLL: Duration = Duration::from_millis(50);

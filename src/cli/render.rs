@@ -14,10 +14,7 @@ use serde_json::json;
 
 use sss::limits;
 
-use super::common::{
-    BackendArgs, CliResult, command_line, json_number, load_scene, parse_resolution,
-    with_resolution,
-};
+use super::common::{BackendArgs, CliResult, command_line, json_number, load_scene_at};
 
 #[derive(Args, Clone, Debug)]
 pub struct RenderArgs {
@@ -49,13 +46,8 @@ pub struct RenderArgs {
 pub fn command(args: &RenderArgs) -> CliResult<()> {
     limits::frames(command_line(), "--frames", args.frames)?;
     let method = Method::parse(&args.method)?;
-    let loaded = load_scene(&args.scene)?;
-    let resolution = args
-        .resolution
-        .as_deref()
-        .map(parse_resolution)
-        .transpose()?;
-    let scene = with_resolution(loaded.scene, resolution);
+    let loaded = load_scene_at(&args.scene, args.resolution.as_deref())?;
+    let scene = loaded.scene;
     let out = output_dir(&args.out)?;
     let backend = args.backend.open()?;
     let rendered = method.render_on(&backend, &scene, args.frames, args.seed)?;

@@ -8,9 +8,7 @@ use clap::Args;
 use methods::Method;
 use sss::limits;
 
-use super::common::{
-    CliError, CliResult, command_line, interrupted, load_scene, parse_resolution, with_resolution,
-};
+use super::common::{CliError, CliResult, command_line, interrupted, load_scene_at};
 
 #[derive(Args, Clone, Debug)]
 pub struct ViewArgs {
@@ -55,13 +53,7 @@ const MAX_SCALE: u32 = 16;
 pub fn command(args: &ViewArgs) -> CliResult<()> {
     limits::frames(command_line(), "--window", args.window)?;
     let method = Method::parse(&args.method)?;
-    let loaded = load_scene(&args.scene)?;
-    let resolution = args
-        .resolution
-        .as_deref()
-        .map(parse_resolution)
-        .transpose()?;
-    let scene = with_resolution(loaded.scene, resolution);
+    let scene = load_scene_at(&args.scene, args.resolution.as_deref())?.scene;
     let scale = match args.scale {
         Some(s) if (1..=MAX_SCALE).contains(&s) => s,
         Some(s) => {

@@ -86,7 +86,7 @@ fn without_a_vulkan_device_it_says_so_in_one_line() {
         .env("VK_DRIVER_FILES", "/nonexistent/icd.json")
         .output()
         .expect("run reshift");
-    fails_in_one_line(&o, "");
+    fails_in_one_line(&o, "Vulkan");
 }
 
 /// Lavapipe's ICD file: the window tests render and present on it.

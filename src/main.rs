@@ -1,5 +1,5 @@
 //! The `reshift` command line (DESIGN §7): render, reference/merge, compare, bias, experiment,
-//! gpu-report, scenes, methods, shifts, and the toy GRIS bias table. Errors print one line `reshift: …` and exit 1.
+//! gpu-report, view, scenes, methods, shifts, and the toy GRIS bias table. Errors print one line `reshift: …` and exit 1.
 
 mod cli;
 mod toy;
@@ -45,6 +45,9 @@ enum Command {
     /// On the Vulkan device: device and limits, GPU parity, time of every pass at each size,
     /// equal-time comparison; one markdown file for docs/performance.md.
     GpuReport(cli::gpu_report::GpuReportArgs),
+    /// An interactive window on the Vulkan backend: fly or orbit the camera, switch methods,
+    /// see the error against a progressive reference; --script drives it, --record writes it.
+    View(cli::view::ViewArgs),
     /// The toy GRIS chains: bias of every shift × MIS scheme against closed-form integrals.
     Toy,
 }
@@ -72,6 +75,7 @@ fn main() -> ExitCode {
         Command::Merge(args) => cli::merge::command(args),
         Command::Experiment(args) => cli::experiment::command(args),
         Command::GpuReport(args) => cli::gpu_report::command(args),
+        Command::View(args) => cli::view::command(args),
         Command::Toy => toy::run().map_err(CliError::from),
     };
     match result {

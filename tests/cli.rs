@@ -85,6 +85,7 @@ fn every_subcommand_has_help() {
         "reference",
         "merge",
         "experiment",
+        "view",
         "toy",
     ] {
         let text = ok(&reshift(&[sub, "--help"]));

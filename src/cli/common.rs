@@ -115,6 +115,17 @@ pub fn parse_resolution(text: &str) -> CliResult<(u32, u32)> {
     parse_size("--resolution", text)
 }
 
+/// The scene `spec` (built-in name or file) at `--resolution` `resolution` (`None`: the
+/// scene's own).
+pub fn load_scene_at(spec: &str, resolution: Option<&str>) -> CliResult<LoadedScene> {
+    let loaded = load_scene(spec)?;
+    let resolution = resolution.map(parse_resolution).transpose()?;
+    Ok(LoadedScene {
+        scene: with_resolution(loaded.scene, resolution),
+        ..loaded
+    })
+}
+
 /// Parses the `WxH` of `flag` within `sss::limits` (sides, pixels).
 pub fn parse_size(flag: &str, text: &str) -> CliResult<(u32, u32)> {
     let bad = |reason: &str| {

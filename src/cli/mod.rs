@@ -8,6 +8,7 @@ pub mod gpu_report;
 pub mod merge;
 pub mod reference;
 pub mod render;
+pub mod view;
 
 use clap::Args;
 use methods::{REGISTRY, restir as restir_method};

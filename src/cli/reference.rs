@@ -13,9 +13,7 @@ use sss::integrator::pt::PtSettings;
 use sss::integrator::{Reference, ReferenceConfig, Shard};
 use sss::scene::FRAMES;
 
-use super::common::{
-    Bars, CliError, CliResult, interrupted, load_scene, parse_resolution, with_resolution,
-};
+use super::common::{Bars, CliError, CliResult, interrupted, load_scene_at};
 
 #[derive(Args, Clone, Debug)]
 pub struct ReferenceArgs {
@@ -110,13 +108,7 @@ fn summary(reference: &Reference, path: &Path, exr: Option<&Path>, json: bool) {
 }
 
 pub fn command(args: &ReferenceArgs) -> CliResult<()> {
-    let loaded = load_scene(&args.scene)?;
-    let resolution = args
-        .resolution
-        .as_deref()
-        .map(parse_resolution)
-        .transpose()?;
-    let scene = with_resolution(loaded.scene, resolution);
+    let scene = load_scene_at(&args.scene, args.resolution.as_deref())?.scene;
     if args.batch_spp == 0 || !args.spp.is_multiple_of(args.batch_spp) || args.spp < args.batch_spp
     {
         return Err(CliError(format!(

@@ -12,10 +12,7 @@ use lab::output::{file_stem, output_dir};
 use methods::Method;
 use serde_json::json;
 
-use super::common::{
-    BackendArgs, CliResult, json_number, load_scene, parse_resolution, scene_and_frames,
-    with_resolution,
-};
+use super::common::{BackendArgs, CliResult, json_number, load_scene_at, scene_and_frames};
 
 #[derive(Args, Clone, Debug)]
 pub struct RenderArgs {
@@ -52,16 +49,11 @@ pub struct RenderArgs {
 pub fn command(args: &RenderArgs) -> CliResult<()> {
     let method = Method::parse(&args.method)?;
     let (loaded, frames) = scene_and_frames(
-        load_scene(&args.scene)?,
+        load_scene_at(&args.scene, args.resolution.as_deref())?,
         args.trajectory.as_deref(),
         args.frames,
     )?;
-    let resolution = args
-        .resolution
-        .as_deref()
-        .map(parse_resolution)
-        .transpose()?;
-    let scene = with_resolution(loaded.scene, resolution);
+    let scene = loaded.scene;
     let out = output_dir(&args.out)?;
     let backend = args.backend.open()?;
     let rendered = method.render_on(&backend, &scene, frames, args.seed)?;

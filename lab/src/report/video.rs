@@ -190,7 +190,7 @@ fn strip(
 
 /// Writes `frames` (RGB bytes of `size` each) to `path` as an animated PNG at [`FPS`], looping
 /// forever.
-fn write_apng(path: &Path, frames: &[Vec<u8>], (w, h): (u32, u32)) -> Result<(), Error> {
+pub fn write_apng(path: &Path, frames: &[Vec<u8>], (w, h): (u32, u32)) -> Result<(), Error> {
     let fail = |e: &dyn std::fmt::Display| Error::Io(format!("{}: {e}", path.display()));
     let file = std::fs::File::create(path).map_err(|e| fail(&e))?;
     let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), w, h);

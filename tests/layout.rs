@@ -26,7 +26,9 @@ fn crate_sources() -> Vec<PathBuf> {
         .expect("workspace members");
     let mut out = vec![root.join("src")];
     for member in members {
-        let src = root.join(member.as_str().expect("a member path")).join("src");
+        let src = root
+            .join(member.as_str().expect("a member path"))
+            .join("src");
         assert!(src.is_dir(), "{} has no src/", src.display());
         out.push(src);
     }

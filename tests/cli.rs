@@ -594,6 +594,57 @@ fn bias_shards_merge_into_one_run_and_refuse_other_plans() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A comparison in 2 shards (`compare --shard i/n`) merges from its folder into a report
+/// folder with the tables and results.json; `--shard` with `--equal-time` is a one-line
+/// refusal. (That the merged figures are one run's bit for bit is tested in lab::compare::shard.)
+#[test]
+fn compare_shards_merge_into_a_report() {
+    let dir = scratch("compare-shards");
+    let path = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let base = [
+        "compare",
+        "--methods",
+        "pt:1,restir:hybrid",
+        "--baseline",
+        "pt:1",
+        "--replicas",
+        "3",
+        "--frames",
+        "2",
+        "--resolution",
+        "16x12",
+        "--reference-spp",
+        "16",
+        "--reference-batch-spp",
+        "8",
+        "--denoise",
+        "none",
+        "--no-video",
+    ];
+    let (cache, shards) = (path("cache"), path("shards"));
+    for i in 0..2 {
+        let shard = format!("{i}/2");
+        let extra = ["--shard", &shard, "--cache", &cache, "--out", &shards];
+        let printed = ok(&reshift(&[&base[..], &extra[..]].concat()));
+        assert!(
+            printed.contains(&format!("shard-{i}-of-2.json")),
+            "{printed}"
+        );
+    }
+    let report = path("report");
+    let table = ok(&reshift(&["merge", &shards, "--out", &report]));
+    assert!(table.contains("restir:hybrid"), "{table}");
+    for file in ["results.json", "table.md", "report.html"] {
+        assert!(dir.join("report").join(file).is_file(), "{file}");
+    }
+    let extra = ["--shard", "0/2", "--equal-time", "0.01", "--cache", &cache];
+    fails_with(
+        &[&base[..], &extra[..]].concat(),
+        "--equal-time with --shard: the budget is calibrated by one process's clock",
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// The JSON Schema blocks of docs/results-schema.md: compare, then bias.
 fn schemas() -> Vec<Value> {
     let doc = include_str!("../docs/results-schema.md");

@@ -2,18 +2,23 @@
 //! (`lab::compare`); writes `table.md`, `table.csv`, `convergence.csv`, `results.json`
 //! (docs/results-schema.md), images, `figure.png`, `convergence.png`, the trajectory videos
 //! (`video/`) and `report.html`, and
-//! prints the table with the efficiency verdicts over the baseline, or the JSON.
+//! prints the table with the efficiency verdicts over the baseline, or the JSON. With
+//! `--shard i/n` it writes one shard's files instead, which `reshift merge` makes the report of.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use clap::Args;
 use engine::denoise::Denoiser;
+use lab::compare::shard::{CompareShard, payload_path, run_shard};
 use lab::compare::{
-    self, Comparison, DEFAULT_BASELINE, DEFAULT_METHODS, frame_reference_spp, parse_methods,
+    self, Comparison, DEFAULT_BASELINE, DEFAULT_METHODS, Outcome, frame_reference_spp,
+    parse_methods,
 };
 use lab::output::file_stem;
 use lab::reference_cache::ReferenceSource;
 use lab::report;
+use lab::shard::Shard;
+use serde_json::Value;
 
 use super::common::{
     BackendArgs, Bars, CliError, CliResult, LoadedScene, command_line, load_scene,
@@ -86,6 +91,12 @@ pub struct CompareArgs {
     /// Print results.json to stdout instead of the table.
     #[arg(long)]
     pub json: bool,
+    /// Render only shard i of n (0-based, i < n): the replicas of seeds ⌊i·N/n⌋..⌊(i+1)·N/n⌋
+    /// of every method, written to <out>/shard-i-of-n.json and .bin after obtaining the
+    /// references from --cache; `reshift merge` of all n writes the report of one run, every
+    /// measured figure and image bit for bit (docs/cluster.md). Not with --equal-time.
+    #[arg(long, value_name = "i/n")]
+    pub shard: Option<String>,
     #[command(flatten)]
     pub backend: BackendArgs,
 }
@@ -123,37 +134,30 @@ pub fn parse_denoise(text: &str) -> CliResult<(Vec<Denoiser>, bool)> {
     }
 }
 
-/// Runs `compare` and prints the table (or the JSON); a comparison stopped by Ctrl-C prints
-/// its partial results and fails.
+/// Runs `compare` and prints the table (or the JSON), or with `--shard` writes the shard's
+/// files; a comparison stopped by Ctrl-C prints its partial results and fails.
 pub fn command(args: &CompareArgs) -> CliResult<()> {
     let (denoise, named) = parse_denoise(&args.denoise)?;
     let plan = Comparison {
         denoise,
         ..plan(args)?
     };
-    let outcome = compare::run(&plan, &mut Bars::default())?;
-    let written = report::write(&plan, &outcome)?;
-    for e in &outcome.denoise_errors {
-        eprintln!("denoiser: {e}");
-    }
-    for note in &written.results.video_notes {
-        eprintln!("note: videos: {note}");
-    }
-    if args.json {
-        println!("{}", written.results.to_json_pretty());
-    } else {
-        println!("{}", written.markdown);
-        if written.results.baseline.is_none() {
-            println!(
-                "No efficiency ratios: the baseline {:?} is not among the methods.",
-                args.baseline
-            );
-        }
+    if let Some(text) = &args.shard {
+        let shard = Shard::parse(text, "--shard")?;
+        let trajectory = args.trajectory.as_deref();
+        let path = run_shard(&plan, &args.scene, trajectory, shard, &mut Bars::default())?;
         println!(
-            "report.html, figure.png, convergence.png, tables, images and results.json are in {}",
-            outcome.out.display()
+            "shard {}/{} of {} replicas: written to {} (and {})",
+            shard.index,
+            shard.count,
+            args.replicas,
+            path.display(),
+            payload_path(&path).display()
         );
+        return Ok(());
     }
+    let outcome = compare::run(&plan, &mut Bars::default())?;
+    write_report(&plan, &outcome, args.json)?;
     if outcome.interrupted {
         return Err(CliError("interrupted: partial results written".into()));
     }
@@ -166,6 +170,54 @@ pub fn command(args: &CompareArgs) -> CliResult<()> {
         )));
     }
     Ok(())
+}
+
+/// Writes the report of `outcome` into its folder and prints the table (or the JSON) and the
+/// denoisers' and videos' notes.
+fn write_report(plan: &Comparison, outcome: &Outcome, json: bool) -> CliResult<()> {
+    let written = report::write(plan, outcome)?;
+    for e in &outcome.denoise_errors {
+        eprintln!("denoiser: {e}");
+    }
+    for note in &written.results.video_notes {
+        eprintln!("note: videos: {note}");
+    }
+    if json {
+        println!("{}", written.results.to_json_pretty());
+    } else {
+        println!("{}", written.markdown);
+        if written.results.baseline.is_none() {
+            println!(
+                "No efficiency ratios: the baseline {:?} is not among the methods.",
+                plan.baseline
+            );
+        }
+        println!(
+            "report.html, figure.png, convergence.png, tables, images and results.json are in {}",
+            outcome.out.display()
+        );
+    }
+    Ok(())
+}
+
+/// `reshift merge` of compare shards (their header files' JSON): writes the report one run
+/// writes into `out` (default: the first shard's folder) and prints its table (or the JSON).
+pub fn merge(files: Vec<(PathBuf, Value)>, out: Option<PathBuf>, json: bool) -> CliResult<()> {
+    let parts = files
+        .into_iter()
+        .map(|(path, value)| {
+            Ok((
+                path.clone(),
+                lab::shard::parse::<CompareShard>(&path, value)?,
+            ))
+        })
+        .collect::<Result<Vec<_>, lab::Error>>()?;
+    let out = out.unwrap_or_else(|| {
+        let folder = parts[0].0.parent().map(Path::to_path_buf);
+        folder.unwrap_or_default()
+    });
+    let (plan, outcome) = compare::shard::merge(parts, out, &mut Bars::default())?;
+    write_report(&plan, &outcome, json)
 }
 
 /// The plan of `args`, checked with errors that name the flags.

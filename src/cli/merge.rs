@@ -1,25 +1,30 @@
 //! `reshift merge`: the shards of one run, in any order, merged into what one run would have
 //! given, bit for bit: reference checkpoints (`reshift reference --shard`) into one checkpoint,
-//! bias shard files (`reshift bias --shard`) into the printed outcome (docs/cluster.md). The kind
+//! bias shard files (`reshift bias --shard`) into the printed outcome, compare shards
+//! (`reshift compare --shard`) into the report of one run (docs/cluster.md). The kind
 //! is read from the files: JSON shard files name their schema, anything else is a checkpoint.
 
 use std::path::{Path, PathBuf};
 
 use clap::Args;
 use lab::bias::shard::SHARD_SCHEMA as BIAS_SHARD;
+use lab::compare::shard::SHARD_SCHEMA as COMPARE_SHARD;
 
 use super::common::{CliError, CliResult};
 
 #[derive(Args, Clone, Debug)]
 pub struct MergeArgs {
     /// The shards of one run, in any order: files, or folders whose shard-*-of-*.json files are
-    /// taken (from `reshift bias --shard`), or reference checkpoints (`reshift reference --shard`).
+    /// taken (from `reshift bias --shard` or `reshift compare --shard`), or reference checkpoints
+    /// (`reshift reference --shard`).
     #[arg(required = true)]
     pub shards: Vec<PathBuf>,
-    /// Reference checkpoints: the merged checkpoint (the mean is also written to <out>.exr).
+    /// Reference checkpoints: the merged checkpoint (the mean is also written to <out>.exr);
+    /// compare shards: the report's folder [default: the first shard's folder].
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Print JSON: the bias outcome (as `reshift bias --json`) or the reference's summary.
+    /// Print JSON: the bias outcome (as `reshift bias --json`), the comparison's results.json or
+    /// the reference's summary.
     #[arg(long)]
     pub json: bool,
 }
@@ -57,8 +62,9 @@ pub fn command(args: &MergeArgs) -> CliResult<()> {
             }
             super::bias::merge(values, args.json)
         }
+        COMPARE_SHARD => super::compare::merge(values, args.out.clone(), args.json),
         other => Err(CliError(format!(
-            "{}: schema {other:?} is not a shard file's ({BIAS_SHARD})",
+            "{}: schema {other:?} is not a shard file's ({BIAS_SHARD}, {COMPARE_SHARD})",
             first.display()
         ))),
     }

@@ -12,6 +12,7 @@
 //! `results.json`, images, figures and `report.html` into its folder.
 
 mod render;
+pub mod shard;
 
 use std::path::{Path, PathBuf};
 
@@ -34,7 +35,7 @@ use crate::regions::Regions;
 use methods::{Method, MethodError};
 
 pub use render::equal_time_method;
-use render::{MethodRuns, render_replicas};
+use render::{MethodRuns, Renders, render_replicas};
 
 /// The default method list: the path tracer, the four main presets [001 §5.1], and reshift's
 /// best measured configuration, reconnection with Rao-Blackwellised shading and 2 neighbours
@@ -228,18 +229,51 @@ impl Comparison {
 }
 
 /// Runs the comparison of `plan`, reporting to `progress` (phases `reference frame F` and
-/// `replicas`). A stop request ends it after the current replica with the whole rounds of
-/// replicas rendered so far (seeds `0..k` of every method, `render`; [`Outcome::interrupted`]),
-/// or, while a reference renders, with [`Error::Interrupted`].
+/// `replicas`): [`references`], the replicas of seeds `0..K` (`render`) and [`reduce`]. A stop
+/// request ends it after the current replica with the whole rounds of replicas rendered so far
+/// (seeds `0..k` of every method, `render`; [`Outcome::interrupted`]), or, while a reference
+/// renders, with [`Error::Interrupted`].
 pub fn run(plan: &Comparison, progress: &mut dyn Progress) -> Result<Outcome, Error> {
     plan.check()?;
     let out = output_dir(&plan.out)?;
+    let references = references(plan, progress)?;
+    let renders = render_replicas(
+        plan,
+        &references.frames(),
+        0..plan.replicas as u64,
+        progress,
+    )?;
+    let interrupted = progress.stop_requested();
+    reduce(plan, references, renders, interrupted, out)
+}
+
+/// A comparison's references: the last frame's, and each measured frame's with its regions.
+struct References {
+    /// The reference of the last frame.
+    reference: Obtained,
+    /// The provenance of every measured frame's reference, in frame order.
+    provenance: Vec<Provenance>,
+    /// Every measured frame's reference and regions, in frame order (the last frame last).
+    measured: Vec<(FrameReference, Regions)>,
+}
+
+impl References {
+    /// The measured frames, ascending (the last frame last).
+    fn frames(&self) -> Vec<u32> {
+        self.measured.iter().map(|(r, _)| r.frame).collect()
+    }
+}
+
+/// The references of `plan` from its source ([`crate::reference_cache::obtain`]: read from the
+/// cache, or rendered into it): the last frame's first, then the earlier frames' of the
+/// convergence record.
+fn references(plan: &Comparison, progress: &mut dyn Progress) -> Result<References, Error> {
     let scene = &plan.scene;
     // The last frame's reference first: it is the one that matters most, and an interrupted
     // comparison leaves its checkpoint.
     let last_frame = plan.frames - 1;
-    let mut references = Vec::new();
-    let mut frame_references = Vec::new();
+    let mut measured = Vec::new();
+    let mut provenance = Vec::new();
     let mut last: Option<Obtained> = None;
     for frame in std::iter::once(last_frame).chain(0..last_frame) {
         let Some(source) = plan.reference_of(frame) else {
@@ -247,19 +281,35 @@ pub fn run(plan: &Comparison, progress: &mut dyn Progress) -> Result<Outcome, Er
         };
         let obtained = reference_cache::obtain(&source, scene, &plan.scene_key, frame, progress)?;
         let regions = Regions::classify(scene, &GBuffer::render(scene, frame), REFERENCE_SEED);
-        frame_references.push(obtained.provenance());
-        references.push((FrameReference::new(&obtained.reference), regions));
+        provenance.push(obtained.provenance());
+        measured.push((FrameReference::new(&obtained.reference), regions));
         if frame == last_frame {
             last = Some(obtained);
         }
     }
-    references.rotate_left(1);
-    frame_references.rotate_left(1);
-    let reference = last.expect("the last frame always has a reference");
-    let frames: Vec<u32> = references.iter().map(|(r, _)| r.frame).collect();
-    let renders = render_replicas(plan, &frames, progress)?;
-    let interrupted = progress.stop_requested();
+    measured.rotate_left(1);
+    provenance.rotate_left(1);
+    Ok(References {
+        reference: last.expect("the last frame always has a reference"),
+        provenance,
+        measured,
+    })
+}
 
+/// The [`Outcome`] of `renders` (replicas in seed order) against `references`: the rows, the
+/// denoised rows, the references' flicker, the video and the final frames.
+fn reduce(
+    plan: &Comparison,
+    references: References,
+    renders: Renders,
+    interrupted: bool,
+    out: PathBuf,
+) -> Result<Outcome, Error> {
+    let References {
+        reference,
+        provenance,
+        measured: mut references,
+    } = references;
     let mut rows = Vec::new();
     for r in renders.runs.iter().filter(|r| !r.replicas.is_empty()) {
         let row = MethodResult::from_replicas(&r.spec, r.method.spp(), &r.replicas, &references)
@@ -275,10 +325,10 @@ pub fn run(plan: &Comparison, progress: &mut dyn Progress) -> Result<Outcome, Er
     let mut outcome = Outcome {
         rows,
         denoised,
-        denoise_errors: renders.denoise_errors,
+        denoise_errors: renders.denoise_errors.into_iter().map(|f| f.line).collect(),
         finals: Vec::new(),
         reference,
-        frame_references,
+        frame_references: provenance,
         regions,
         reference_flicker,
         video,

@@ -4,8 +4,11 @@
 //! Every replica is timed on every frame it renders, on its backend's clock
 //! ([`engine::clock`]: process CPU time on the CPU backend) and on the wall clock.
 
+use std::ops::Range;
+
 use engine::Backend;
 use engine::denoise::{self, DenoiseError, Denoiser, Guide};
+use serde::{Deserialize, Serialize};
 use sss::scene::Scene;
 
 use super::{Comparison, EQUAL_TIME_SPEC};
@@ -33,13 +36,24 @@ pub(super) struct MethodRuns {
 /// What [`render_replicas`] rendered.
 pub(super) struct Renders {
     pub(super) runs: Vec<MethodRuns>,
-    pub(super) denoise_errors: Vec<String>,
+    pub(super) denoise_errors: Vec<DenoiseFailure>,
 }
 
-/// The replicas of every method, in the plan's order, each with its images at `frames`
-/// (ascending, the last frame last) and its last frame through each denoiser of the plan.
+/// A denoiser that failed, and the line that says so: on every method (`method: None`: it is
+/// not installed) or on one method's replica (its denoised row is left out).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub(super) struct DenoiseFailure {
+    pub(super) method: Option<String>,
+    pub(super) denoiser: String,
+    pub(super) line: String,
+}
+
+/// The replicas of `seeds` (of `0..K`: all of them, or a shard's,
+/// [`crate::compare::shard`]) of every method, in the plan's order, each with its images at
+/// `frames` (ascending, the last frame last) and its last frame through each denoiser of the
+/// plan; the seed-0 replica also keeps its whole trajectory with the plan's `video`.
 ///
-/// Replicas are rendered in rounds: seed 0 of every method, then seed 1, and so on, so the
+/// Replicas are rendered in rounds: the first seed of every method, then the next, and so on, so the
 /// replicas of one seed, which the intervals pair ([`crate::uncertainty`]), are timed close
 /// together. After a stop request the current replica finishes and the round it belongs to is
 /// dropped unless it is whole: every method keeps the same seeds, the rounds finished. A
@@ -48,6 +62,7 @@ pub(super) struct Renders {
 pub(super) fn render_replicas(
     plan: &Comparison,
     frames: &[u32],
+    seeds: Range<u64>,
     progress: &mut dyn Progress,
 ) -> Result<Renders, Error> {
     let seconds_per_spp = match plan.equal_time {
@@ -86,12 +101,12 @@ pub(super) fn render_replicas(
             denoised_trajectory: Vec::new(),
         })
         .collect();
-    progress.begin("replicas", runs.len() as u64 * plan.replicas as u64, 0);
-    'rounds: for seed in 0..plan.replicas as u64 {
+    progress.begin("replicas", runs.len() as u64 * (seeds.end - seeds.start), 0);
+    'rounds: for seed in seeds.clone() {
         for i in 0..runs.len() {
             if progress.stop_requested() {
                 for run in &mut runs {
-                    run.truncate(seed as usize);
+                    run.truncate((seed - seeds.start) as usize);
                 }
                 break 'rounds;
             }
@@ -110,13 +125,21 @@ pub(super) fn render_replicas(
                     for run in &mut runs {
                         run.denoised.retain(|(x, _)| *x != d);
                     }
-                    denoise_errors.push(format!("{d}: {e}; its rows are left out"));
+                    denoise_errors.push(DenoiseFailure {
+                        method: None,
+                        denoiser: d.to_string(),
+                        line: format!("{d}: {e}; its rows are left out"),
+                    });
                 } else {
                     runs[i].denoised.retain(|(x, _)| *x != d);
-                    denoise_errors.push(format!(
-                        "{}, replica {seed}: {e}; its {d} row is left out",
-                        runs[i].spec
-                    ));
+                    denoise_errors.push(DenoiseFailure {
+                        method: Some(runs[i].spec.clone()),
+                        denoiser: d.to_string(),
+                        line: format!(
+                            "{}, replica {seed}: {e}; its {d} row is left out",
+                            runs[i].spec
+                        ),
+                    });
                 }
             }
             runs[i].replicas.push(replica);

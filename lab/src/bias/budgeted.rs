@@ -156,6 +156,60 @@ impl Prices {
     }
 }
 
+/// The per-replica CV of row `row` (region-major, channels in [`Channel::ALL`] order) and the
+/// relative standard error of its reference; NaN where either side has no spread.
+fn spread(replicas: &Replicas, reference: &[RegionSummary], row: usize) -> (f64, f64) {
+    let e = replicas.summary(row, replicas.len());
+    let r = reference[row / 4].channel(Channel::ALL[row % 4]);
+    if e.no_spread() || r.no_spread() {
+        return (f64::NAN, f64::NAN);
+    }
+    (e.variance.sqrt() / e.mean.abs(), r.std_err / r.mean.abs())
+}
+
+/// The rows to plan for, with their `N_max` and reference batches: cheapest first (each row's
+/// cost alone), while the chosen rows' `N_max` (planned for all of them together) and largest
+/// reference fit in `left` seconds beyond the `batches` and replicas already rendered.
+fn choose(
+    replicas: &Replicas,
+    reference: &[RegionSummary],
+    prices: &Prices,
+    batches: u32,
+    left: f64,
+) -> (Vec<usize>, usize, u32) {
+    let rows = 4 * replicas.means.len();
+    let mut order: Vec<(usize, f64)> = (0..rows)
+        .filter_map(|row| {
+            let (cv, rho) = spread(replicas, reference, row);
+            Some((row, prices.cost(cv, rho, batches)?.seconds))
+        })
+        .collect();
+    order.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+    let mut chosen: (Vec<usize>, usize, u32) = (Vec::new(), 0, batches);
+    for (row, _) in order {
+        let candidate: Vec<usize> = chosen.0.iter().copied().chain([row]).collect();
+        let planned: Vec<(EquivalencePlan, f64, u32)> = candidate
+            .iter()
+            .filter_map(|&r| {
+                let (cv, rho) = spread(replicas, reference, r);
+                prices.plan(cv, rho, batches)
+            })
+            .collect();
+        let tests: Vec<(EquivalencePlan, f64)> = planned.iter().map(|p| (p.0, p.1)).collect();
+        let Some(n) = replicas_for(&tests, PLANNED_POWER, MAX_REPLICAS as usize) else {
+            break;
+        };
+        let b = planned.iter().map(|p| p.2).max().unwrap_or(batches);
+        let seconds = (b - batches) as f64 * prices.per_batch
+            + n.saturating_sub(replicas.len()) as f64 * prices.per_replica;
+        if seconds > left {
+            break;
+        }
+        chosen = (candidate, n, b);
+    }
+    chosen
+}
+
 /// Runs the budgeted test of `plan` (see the module's header).
 pub(super) fn run(
     plan: &BiasPlan,
@@ -199,58 +253,13 @@ pub(super) fn run(
         delta: protocol.delta,
         last_level: Schedule::last_level(protocol.alpha),
     };
-    let rows = 4 * replicas.means.len();
-    let spread = |replicas: &Replicas, reference: &[RegionSummary], row: usize| {
-        let e = replicas.summary(row, replicas.len());
-        let r = reference[row / 4].channel(Channel::ALL[row % 4]);
-        let relative = |x: f64, mean: f64| {
-            if e.no_spread() || r.no_spread() {
-                f64::NAN
-            } else {
-                x / mean.abs()
-            }
-        };
-        (
-            relative(e.variance.sqrt(), e.mean),
-            relative(r.std_err, r.mean),
-        )
-    };
-
-    // Which rows fit: cheapest first, while the family's N_max and largest B fit.
     let summaries = summarize(&reference.rgb, &setup.regions);
-    let batches = plan.reference_batches;
-    let mut order: Vec<(usize, f64)> = (0..rows)
-        .filter_map(|row| {
-            let (cv, rho) = spread(&replicas, &summaries, row);
-            Some((row, prices.cost(cv, rho, batches)?.seconds))
-        })
-        .collect();
-    order.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
     let left = budget - watch.read().seconds;
-    let mut planned_rows: Vec<usize> = Vec::new();
-    let (mut n_max, mut batches_max) = (0, batches);
-    for (row, _) in order {
-        let candidate: Vec<usize> = planned_rows.iter().copied().chain([row]).collect();
-        let planned: Vec<(EquivalencePlan, f64, u32)> = candidate
-            .iter()
-            .filter_map(|&r| {
-                let (cv, rho) = spread(&replicas, &summaries, r);
-                prices.plan(cv, rho, batches)
-            })
-            .collect();
-        let tests: Vec<(EquivalencePlan, f64)> = planned.iter().map(|p| (p.0, p.1)).collect();
-        let Some(n) = replicas_for(&tests, PLANNED_POWER, MAX_REPLICAS as usize) else {
-            break;
-        };
-        let b = planned.iter().map(|p| p.2).max().unwrap_or(batches);
-        let seconds = (b - batches) as f64 * per_batch
-            + n.saturating_sub(replicas.len()) as f64 * prices.per_replica;
-        if seconds > left {
-            break;
-        }
-        (planned_rows, n_max, batches_max) = (candidate, n, b);
-    }
+    let batches = plan.reference_batches;
+    let (mut planned_rows, n_max, batches_max) =
+        choose(&replicas, &summaries, &prices, batches, left);
     planned_rows.sort_unstable();
+    let rows = 4 * replicas.means.len();
     if batches_max > batches {
         let more = extend_reference(batches..batches_max)?;
         reference.rgb.extend(more.rgb);

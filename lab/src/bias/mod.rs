@@ -19,7 +19,8 @@
 //! the group-sequential design of `sequential` planned and run by `budgeted`; what it found
 //! ([`BiasOutcome`], the JSON of `reshift bias`) in `outcome`; the replicas' and reference batches' final frames in
 //! `render`; their reduction to region means in `summary`; the replicas a run needs in
-//! `planning`; the Markdown table in `table`.
+//! `planning`; the Markdown table in `table`; a tinted method, the negative control of a colour
+//! bias, in `tinted`.
 
 mod budgeted;
 mod outcome;
@@ -31,6 +32,7 @@ mod summary;
 mod table;
 #[cfg(test)]
 mod tests;
+mod tinted;
 
 pub use budgeted::{CV_MARGIN, PILOT};
 pub use outcome::{
@@ -45,6 +47,7 @@ pub use run::{BiasPlan, Replicas, run};
 pub use summary::{RegionSummary, region_mean, summarize};
 use summary::{channel_summary, region_means};
 pub use table::Table;
+pub use tinted::Tinted;
 
 use std::fmt;
 

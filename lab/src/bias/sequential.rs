@@ -89,7 +89,6 @@ pub struct RowState {
     /// The test at the look that decided the row, or at the last look taken.
     pub test: Option<Equivalence>,
     pub estimate: Option<Summary>,
-    pub reference: Option<Summary>,
     /// Whether Holm rejected zero bias at that look.
     pub holm_rejected: bool,
     pub verdict: Verdict,
@@ -122,7 +121,6 @@ pub fn looks(
         RowState {
             test: None,
             estimate: None,
-            reference: None,
             holm_rejected: false,
             verdict: Verdict::Inconclusive,
             decided_at: None,
@@ -164,7 +162,6 @@ pub fn looks(
             state[r] = RowState {
                 test: Some(test),
                 estimate: Some(all[r].0),
-                reference: Some(all[r].1),
                 holm_rejected: rejected[r],
                 verdict,
                 decided_at: (verdict != Verdict::Inconclusive).then_some(k),

@@ -28,7 +28,11 @@
 //!   Vulkan chain's plan (see Backends), which the CPU tests share. Planned power to detect a
 //!   +3% bias in any one row: ≥ 0.9995. `power_plan_detects_3pct_in_any_row` prints the plan;
 //!   each table prints the measured CVs beside the planned ones.
-//! * Cost: the whole file (CPU and Vulkan tests, controls, references) took 562 CPU-s (user)
+//! * Cost: since the CPU tests and the controls against the reference run `lab::bias::run`, each
+//!   renders its own replicas and reference (≈ 12 CPU-s per reference; before, one reference per
+//!   design and one set of CPU replicas per preset served the CPU test, the Vulkan chain and the
+//!   tint control): the whole file took 1432 s wall on 2 cores shared with other tests and builds
+//!   (load 4–6; CPU time not measured). Before that change it took 562 CPU-s (user)
 //!   and 12 min 44 s wall on 2 cores shared with two builds and a fuzz campaign (load 5–8),
 //!   with the CPU's N raised 1.29× for the Vulkan chain; before that, 328–500 CPU-s for the CPU
 //!   tests and 54 CPU-s for the four paired Vulkan tests. Per replica 0.02 (reconnection) – 0.05

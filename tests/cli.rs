@@ -421,6 +421,14 @@ fn huge_sizes_in_files_are_one_line_errors() {
         "field `--reference-batches` = 100000: must be in 2..=65536",
     );
     bias(&["--frames", "0"], "field `--frames` = 0");
+    bias(
+        &["--budget", "0m"],
+        "field `--budget` = 0s: the time budget must be > 0",
+    );
+    bias(
+        &["--budget", "10"],
+        "field `--budget` = \"10\": expected a time such as 90s, 10m or 1.5h",
+    );
     for delta in ["0", "-0.02", "NaN"] {
         let needle =
             format!("field `--delta` = {delta}: the tolerance must be a finite number > 0");
@@ -947,6 +955,35 @@ fn bias_runs_on_every_builtin_scene_and_validates() {
         let mut out = Vec::new();
         violations(schema, &broken, "$", &mut out);
         assert_eq!(out.len(), 1, "negative control: {out:?}");
+    }
+}
+
+/// `bias` by default (the group-sequential design) within a 3-second budget at 16×12, 2 frames:
+/// exits 0, its JSON validates with a `sequential` object whose rows match the table's, and every
+/// row is decided at a look or says what it would need.
+#[test]
+fn bias_budgeted_validates() {
+    let json: Value = serde_json::from_str(&ok(&reshift(&[
+        "bias",
+        "--method",
+        "restir:hybrid",
+        "--budget",
+        "3s",
+        "--frames",
+        "2",
+        "--resolution",
+        "16x12",
+        "--json",
+    ])))
+    .expect("JSON");
+    assert_valid(&schemas()[1], &json, "bias --budget 3s");
+    let rows = json["rows"].as_array().unwrap();
+    let designs = json["sequential"]["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), designs.len());
+    for (row, design) in rows.iter().zip(designs) {
+        let decided = row["verdict"] != "inconclusive";
+        assert_eq!(design["look"].is_null(), !decided, "{design}");
+        assert_eq!(design["needs"].is_null(), decided, "{design}");
     }
 }
 

@@ -5,7 +5,10 @@
 //!
 //! * Test: per region and channel (red, green, blue, luminance) the 99% CI of the relative bias
 //!   of the region mean must lie inside ±δ, δ = 2% ("equivalent within ±2% at 99%"); Holm across
-//!   all rows at α = 0.01 decides "biased". Replica `i` runs with seed `i`.
+//!   all rows at α = 0.01 decides "biased". Replica `i` runs with seed `i`. Every CPU test and
+//!   every control against the reference is `lab::bias::run` with a fixed N
+//!   (`Replicas::Fixed`, the job of `reshift bias --replicas N`): its own reference batches and
+//!   regions, with the seeds of `lab::bias`.
 //! * Scenes ([`BUMPY`], [`HALF_SHADOW`]), 32 × 32 pixels, [`FRAMES`] = 3 frames (two chained
 //!   temporal reuses; the last frame is tested):
 //!   - `bumpy` framed on the top of the curved object: lit and penumbra pixels, no shadowed one
@@ -25,7 +28,11 @@
 //!   Vulkan chain's plan (see Backends), which the CPU tests share. Planned power to detect a
 //!   +3% bias in any one row: ≥ 0.9995. `power_plan_detects_3pct_in_any_row` prints the plan;
 //!   each table prints the measured CVs beside the planned ones.
-//! * Cost: the whole file (CPU and Vulkan tests, controls, references) took 562 CPU-s (user)
+//! * Cost: since the CPU tests and the controls against the reference run `lab::bias::run`, each
+//!   renders its own replicas and reference (≈ 12 CPU-s per reference; before, one reference per
+//!   design and one set of CPU replicas per preset served the CPU test, the Vulkan chain and the
+//!   tint control): the whole file took 1432 s wall on 2 cores shared with other tests and builds
+//!   (load 4–6; CPU time not measured). Before that change it took 562 CPU-s (user)
 //!   and 12 min 44 s wall on 2 cores shared with two builds and a fuzz campaign (load 5–8),
 //!   with the CPU's N raised 1.29× for the Vulkan chain; before that, 328–500 CPU-s for the CPU
 //!   tests and 54 CPU-s for the four paired Vulkan tests. Per replica 0.02 (reconnection) – 0.05
@@ -33,7 +40,8 @@
 //!   each Vulkan test's 32 lavapipe replicas 11–37 s wall under that load.
 //! * Negative controls, same protocol and N as the preset they break: near δ, delayed
 //!   reconnection with J · 1.03 (`broken::DelayedJacobianOff`: +4.8% … +6.1% on bumpy, the error
-//!   compounds over reuse passes) and the hybrid preset with its blue channel × 1.03 ([`tinted`]:
+//!   compounds over reuse passes) and the hybrid preset with its blue channel × 1.03
+//!   (`lab::bias::Tinted`:
 //!   blue +2.8% … +3.1% Biased while the luminance, +0.2% … +0.4%, stays equivalent); far from
 //!   δ, delayed reconnection with J = 1 (bumpy), without its visibility test and a hybrid ignoring
 //!   its criterion (half-shadow). Each must be Biased in at least one row.
@@ -85,11 +93,13 @@ use engine::vulkan::testing::backend_or_skip;
 use engine::{Backend, Preset, Shade, ShiftKind};
 use glam::{DVec3, Vec3};
 use lab::bias::{
-    BiasRow, Channel, Images, Protocol, RegionSummary, Table, bias_rows, paired_rows,
-    reference_images, region_mean, replica_images, summarize,
+    BiasOutcome, BiasPlan, BiasRow, Channel, Images, Protocol, RegionSummary, Replicas, Table,
+    Tinted, bias_rows, paired_rows, reference_images, region_mean, replica_images, summarize,
 };
 use lab::chained::chained_rows;
 use lab::regions::{Region, Regions};
+use methods::Method;
+use methods::restir::Restir;
 use restir::stats::{EquivalencePlan, Verdict, family_power, replicas_for, student_t_quantile};
 use sss::scene::{Camera, GBuffer, Scene};
 
@@ -142,8 +152,8 @@ struct Design {
     /// 6 of 64 for sequential-exact on bumpy (its re-traced intersection index), none
     /// elsewhere (measured 2026-11-24).
     paired_cv: [(&'static str, f64); 5],
-    /// The CPU replicas of each registered preset (in the order of `cv`), shared by its CPU
-    /// test, its Vulkan test and the tint controls.
+    /// The CPU replicas of each registered preset (in the order of `cv`), shared by its Vulkan
+    /// test and the Vulkan tint controls (the CPU tests render their own, `lab::bias::run`).
     cpu: [OnceLock<Images>; 5],
 }
 
@@ -456,52 +466,79 @@ impl Design {
         }
     }
 
-    /// The bias rows of `images` (printed with the run's design) after checking that no value
-    /// was non-finite; `planned` names the preset whose CVs planned N.
-    fn rows(&self, label: &str, images: &Images, planned: &str) -> Vec<BiasRow> {
-        let reference = self.reference();
-        assert_eq!(images.nonfinite, 0, "{label}: non-finite shaded values");
-        let estimate = summarize(&images.rgb, &self.framing().regions);
-        let rows = bias_rows(label, &estimate, reference, &PROTOCOL);
+    /// The bias test of `method` (`lab::bias::run`) on the CPU backend, N planned for the
+    /// registered preset `planned`; printed with the measured CVs beside the planned ones. Checks
+    /// the plan's assumptions: the planned regions and no other, no non-finite value, the
+    /// reference's error within the planned one.
+    fn measure(&self, method: Method, planned: &str) -> Vec<BiasRow> {
+        let start = Instant::now();
+        let plan = BiasPlan {
+            scene: (self.scene)(),
+            spec: method.name(),
+            method,
+            replicas: Replicas::Fixed(self.replicas(planned) as u32),
+            frames: FRAMES,
+            protocol: PROTOCOL,
+            reference_batches: self.reference_batches,
+            reference_batch_spp: self.spp_per_batch,
+            backend: Backend::Cpu,
+        };
+        let outcome = lab::bias::run(&plan, &mut lab::progress::Silent).expect("runs");
+        let label = &plan.spec;
+        let BiasOutcome {
+            rows, nonfinite, ..
+        } = &outcome;
         println!(
-            "{label} on {}: N = {}, {FRAMES} frames, δ = ±{}%, α = {}\n{}",
+            "{label} on {}: N = {}, {FRAMES} frames, δ = ±{}%, α = {}, {:.1} s\n{}",
             self.name,
-            images.rgb.len(),
+            outcome.replicas,
             100.0 * PROTOCOL.delta,
             PROTOCOL.alpha,
-            Table(&rows)
+            start.elapsed().as_secs_f64(),
+            Table(rows)
         );
-        for (r, cvs) in estimate.iter().zip(self.measured_cv(planned)) {
-            let measured = Channel::ALL.map(|c| {
-                let s = r.channel(c);
+        assert_eq!(
+            (nonfinite.replicas, nonfinite.reference),
+            (0, 0),
+            "{label}: non-finite values"
+        );
+        let regions: Vec<Region> = rows.chunks(4).map(|r| r[0].region).collect();
+        assert_eq!(
+            regions, self.regions,
+            "{}: the framing's regions",
+            self.name
+        );
+        for (chunk, cvs) in rows.chunks(4).zip(self.measured_cv(planned)) {
+            let measured = [0, 1, 2, 3].map(|c| {
+                let s = &chunk[c].estimate;
                 s.variance.sqrt() / s.mean
             });
             println!(
                 "  {label} {:<11} per-replica CV (R, G, B, Y) {measured:.3?}, planned {:.3?}",
-                r.region,
+                chunk[0].region,
                 cvs.map(|cv| CV_MARGIN * cv)
             );
+            for row in chunk {
+                let rel = row.reference.std_err / row.reference.mean;
+                assert!(
+                    rel <= self.reference_rel_se,
+                    "{}: reference error {rel} in {} {} exceeds the planned {}",
+                    self.name,
+                    row.region,
+                    row.channel,
+                    self.reference_rel_se
+                );
+            }
         }
-        assert_eq!(rows.len(), 4 * self.regions.len(), "{}", Table(&rows));
-        rows
-    }
-
-    /// The table of `preset` on `backend`, N planned for `planned`.
-    fn measure(&self, backend: &Backend, preset: &Preset, planned: &str) -> Vec<BiasRow> {
-        let start = Instant::now();
-        let images = self.images(backend, preset, planned);
-        let label = format!("{} on {backend}", preset.name);
-        let rows = self.rows(&label, &images, planned);
-        println!("{label}: {:.1} s", start.elapsed().as_secs_f64());
-        rows
+        outcome.rows
     }
 }
 
 /// Every row "equivalent within ±2% at 99%".
-fn assert_equivalent(backend: &Backend, design: &Design, name: &str) {
-    let preset = Preset::named(name).expect("registered preset");
-    let rows = design.measure(backend, &preset, name);
-    let what = format!("{name} on {backend}, {}", design.name);
+fn assert_equivalent(design: &Design, name: &str) {
+    let method = Method::parse(&format!("restir:{name}")).expect("registered preset");
+    let rows = design.measure(method, name);
+    let what = format!("{name} on the CPU, {}", design.name);
     assert_all_equivalent(&rows, &PROTOCOL, &what);
 }
 
@@ -535,7 +572,7 @@ fn assert_biased(rows: &[BiasRow], what: &str) {
 /// neighbours) on the CPU backend, with the N of the preset `breaks` whose shift it breaks.
 fn assert_shift_detected(design: &Design, shift: ShiftKind, breaks: &str) {
     let preset = Preset::single_shift(shift.name(), shift);
-    let rows = design.measure(&Backend::Cpu, &preset, breaks);
+    let rows = design.measure(Method::new(Restir(preset)), breaks);
     assert_biased(&rows, shift.name());
 }
 
@@ -567,12 +604,11 @@ fn assert_blue_only(rows: &[BiasRow]) {
 /// every luminance row (blue weighs 7% of it: +0.2%) stays equivalent within ±2%: a test of
 /// the luminance alone passes this estimator.
 fn assert_tint_detected(design: &Design) {
-    let hybrid = Preset::named("hybrid").expect("registered preset");
-    let images = tinted(
-        &design.images(&Backend::Cpu, &hybrid, "hybrid"),
-        DVec3::new(1.0, 1.0, 1.0 + CONTROL_BIAS),
-    );
-    let rows = design.rows("hybrid, blue × 1.03", &images, "hybrid");
+    let tinted = Tinted {
+        method: Method::parse("restir:hybrid").expect("registered preset"),
+        factor: Vec3::new(1.0, 1.0, 1.0 + CONTROL_BIAS as f32),
+    };
+    let rows = design.measure(Method::new(tinted), "hybrid");
     assert_biased(&rows, "blue × 1.03");
     assert_blue_only(&rows);
 }
@@ -843,12 +879,12 @@ macro_rules! cpu_tests {
     ($name:literal, $bumpy:ident, $plane:ident) => {
         #[test]
         fn $bumpy() {
-            assert_equivalent(&Backend::Cpu, &BUMPY, $name);
+            assert_equivalent(&BUMPY, $name);
         }
 
         #[test]
         fn $plane() {
-            assert_equivalent(&Backend::Cpu, &HALF_SHADOW, $name);
+            assert_equivalent(&HALF_SHADOW, $name);
         }
     };
 }

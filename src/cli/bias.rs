@@ -1,21 +1,29 @@
-//! `reshift bias`: N replicas of one method against independent path-traced reference batches
+//! `reshift bias`: replicas of one method against independent path-traced reference batches
 //! (the path tracer with the method's reference settings, `Method::reference`: the dipole
 //! profile for `image-space`); per region and colour channel (red, green, blue, luminance) the
 //! Welch test of zero bias (Holm across all of them) and the verdict "equivalent within ±δ at
-//! 1 − α", "biased" or "inconclusive" (`lab::bias::run`). Here: the options, parsed into a
+//! 1 − α", "biased" or "inconclusive" (`lab::bias::run`). By default the group-sequential
+//! design within `--budget`; `--replicas N` runs a fixed N. Here: the options, parsed into a
 //! `lab::bias::BiasPlan`; what it prints: the table with the overall verdict in words, or the
-//! JSON of the outcome (schema `reshift-bias/2`, docs/results-schema.md).
+//! JSON of the outcome (schema `reshift-bias/3`, docs/results-schema.md).
+
+use std::time::Duration;
 
 use std::path::PathBuf;
 
 use clap::Args;
 use lab::bias::shard::{BiasShard, run_shard};
-use lab::bias::{self, BiasOutcome, BiasPlan, BiasRow, PLANNED_POWER, Protocol, Table, overall};
+use lab::bias::{
+    self, BiasOutcome, BiasPlan, BiasRow, PLANNED_POWER, Protocol, Replicas, SequentialEntry,
+    Table, overall,
+};
+use lab::limits::MAX_REPLICAS;
 use lab::output::{output_dir, write_text};
 use lab::shard::{Shard, file_name};
 use methods::Method;
 use restir::stats::Verdict;
 use serde_json::Value;
+use sss::InputError;
 
 use super::common::{
     BackendArgs, Bars, CliError, CliResult, command_line, load_scene, parse_resolution,
@@ -30,9 +38,14 @@ pub struct BiasArgs {
     /// The method under test, e.g. restir:hybrid.
     #[arg(long)]
     pub method: String,
-    /// Independent replicas (seeds 0..N).
-    #[arg(long, default_value_t = 256)]
-    pub replicas: u32,
+    /// A fixed number of independent replicas (seeds 0..N), tested once at level α; without it,
+    /// the group-sequential design within --budget.
+    #[arg(long, conflicts_with = "budget")]
+    pub replicas: Option<u32>,
+    /// Time the group-sequential design may take, on the backend's clock (process CPU time on
+    /// the CPU backend), e.g. 90s, 10m, 1.5h.
+    #[arg(long, default_value = "10m")]
+    pub budget: String,
     /// Tolerance δ on the relative bias of a region's mean in each channel (0.02 = ±2%).
     #[arg(long, default_value_t = 0.02)]
     pub delta: f64,
@@ -51,13 +64,13 @@ pub struct BiasArgs {
     /// Samples per pixel of one reference batch.
     #[arg(long, default_value_t = 64)]
     pub reference_batch_spp: u32,
-    /// Print JSON (schema `reshift-bias/2`) instead of the table.
+    /// Print JSON (schema `reshift-bias/3`) instead of the table.
     #[arg(long)]
     pub json: bool,
     /// Render only shard i of n (0-based, i < n): the replicas of seeds ⌊i·N/n⌋..⌊(i+1)·N/n⌋
     /// (shard 0 also the reference), written to <out>/shard-i-of-n.json; `reshift merge` of
     /// all n prints what one run prints, bit for bit (docs/cluster.md).
-    #[arg(long, value_name = "i/n")]
+    #[arg(long, value_name = "i/n", requires = "replicas")]
     pub shard: Option<String>,
     /// With --shard: the folder of the shard file.
     #[arg(long, requires = "shard", default_value = "out/bias-shards")]
@@ -78,8 +91,8 @@ pub fn command(args: &BiasArgs) -> CliResult<()> {
     print(&plan, &outcome, args.json);
     if outcome.interrupted {
         return Err(CliError(format!(
-            "interrupted after {} of {} replicas",
-            outcome.replicas, args.replicas
+            "interrupted after {} replicas",
+            outcome.replicas
         )));
     }
     Ok(())
@@ -104,7 +117,7 @@ fn write_shard(args: &BiasArgs, plan: &BiasPlan, scene_key: &str, shard: Shard) 
         "shard {}/{} of {} replicas: written to {}",
         shard.index,
         shard.count,
-        args.replicas,
+        part.plan.replicas,
         path.display()
     );
     Ok(())
@@ -130,7 +143,10 @@ fn plan(args: &BiasArgs) -> CliResult<(BiasPlan, String)> {
         scene: with_resolution(loaded.scene, Some(resolution)),
         spec: args.method.clone(),
         method,
-        replicas: args.replicas,
+        replicas: match args.replicas {
+            Some(n) => Replicas::Fixed(n),
+            None => Replicas::Budget(parse_budget(&args.budget)?),
+        },
         frames: args.frames,
         protocol: Protocol {
             delta: args.delta,
@@ -144,12 +160,34 @@ fn plan(args: &BiasArgs) -> CliResult<(BiasPlan, String)> {
     Ok((plan, loaded.key))
 }
 
+/// A time such as `90s`, `10m` or `1.5h` (a number ≥ 0 and a unit s, m or h).
+fn parse_budget(text: &str) -> CliResult<Duration> {
+    let unit = |suffix: char| match suffix {
+        's' => Some(1.0),
+        'm' => Some(60.0),
+        'h' => Some(3600.0),
+        _ => None,
+    };
+    let parsed = text.trim().char_indices().last().and_then(|(at, suffix)| {
+        let seconds = unit(suffix)? * text.trim()[..at].parse::<f64>().ok()?;
+        Duration::try_from_secs_f64(seconds).ok()
+    });
+    parsed.ok_or_else(|| {
+        let reason = "expected a time such as 90s, 10m or 1.5h";
+        InputError::new(command_line(), "--budget", format!("{text:?}"), reason).into()
+    })
+}
+
 /// The test as a Markdown table between a header line (what ran) and the verdict and plan lines.
 fn print_table(plan: &BiasPlan, outcome: &BiasOutcome) {
     let protocol = outcome.protocol();
     let reference = &outcome.reference;
+    let design = match outcome.sequential {
+        Some(_) => "group-sequential: α spent over the looks by Lan–DeMets O'Brien–Fleming, Holm across all rows at each look's level".to_string(),
+        None => format!("{}% CIs, Holm across all rows", 100.0 * outcome.confidence),
+    };
     println!(
-        "# bias of {} on {} ({}, frame {}): N = {} replicas vs {} reference batches × {} spp ({} profile); per region and channel, δ = ±{}%, α = {} ({}% CIs, Holm across all rows)\n",
+        "# bias of {} on {} ({}, frame {}): N = {} replicas vs {} reference batches × {} spp ({} profile); per region and channel, δ = ±{}%, α = {} ({design})\n",
         plan.method,
         outcome.scene,
         outcome.resolution,
@@ -160,9 +198,11 @@ fn print_table(plan: &BiasPlan, outcome: &BiasOutcome) {
         reference.profile,
         100.0 * protocol.delta,
         protocol.alpha,
-        100.0 * outcome.confidence
     );
     println!("{}", Table(&outcome.rows));
+    if let Some(sequential) = &outcome.sequential {
+        print_sequential(sequential);
+    }
     println!(
         "verdict: {}; non-finite values: {} in replicas, {} in the reference",
         verdict_line(&outcome.rows, &protocol),
@@ -177,6 +217,52 @@ fn print_table(plan: &BiasPlan, outcome: &BiasOutcome) {
         Ok(n) => println!("planned: N = {n} for {goal} (from this run's per-replica CVs)"),
         Err(why) => println!("planned: no N for {goal}: {why}"),
     }
+}
+
+/// The looks, the rows left undecided with what they would need, and the budget.
+fn print_sequential(s: &SequentialEntry) {
+    for (k, look) in s.looks.iter().enumerate() {
+        let what = if look.taken {
+            format!("{} equivalent, {} biased", look.equivalent, look.biased)
+        } else {
+            "not taken".to_string()
+        };
+        println!(
+            "look {}: N = {}, level {:.2e} ({:.4}% CIs): {what}",
+            k + 1,
+            look.n,
+            look.level,
+            100.0 * (1.0 - look.level)
+        );
+    }
+    for row in s.rows.iter() {
+        let Some(needs) = row.needs else { continue };
+        let state = if row.planned {
+            "not decided"
+        } else {
+            "not decided (not planned for: its reference or replicas exceed the budget)"
+        };
+        let cost = match (needs.replicas, needs.reference_batches, needs.minutes) {
+            (Some(n), Some(b), Some(minutes)) => format!(
+                "needs N = {n} replicas and {b} reference batches, ≈ {minutes:.1} min of {}",
+                s.clock
+            ),
+            _ => format!(
+                "cannot be planned (no spread, or more than {MAX_REPLICAS} replicas or reference batches)"
+            ),
+        };
+        println!("{} {}: {state}: {cost}", row.region, row.channel);
+    }
+    println!(
+        "budget: {:.0} of {:.0} s used ({}); {:.3} s per replica, {:.3} s per reference batch; pilot {} replicas, N_max = {}, reference error ≤ δ/4 in planned rows",
+        s.used_seconds,
+        s.budget_seconds,
+        s.clock,
+        s.seconds_per_replica,
+        s.seconds_per_reference_batch,
+        s.pilot,
+        s.n_max
+    );
 }
 
 /// The overall verdict in words: `equivalent within ±δ at 99% in every region and channel`,

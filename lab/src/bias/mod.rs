@@ -15,29 +15,40 @@
 //!   from its channel's row.
 //!
 //! Here: the channels and the test's rows ([`bias_rows`], [`paired_rows`], [`overall`]); the
-//! test as a job of a [`BiasPlan`] ([`run`]) in `run`, what it found ([`BiasOutcome`], the JSON
-//! of `reshift bias`) in `outcome`; the replicas' and reference batches' final frames in
+//! test as a job of a [`BiasPlan`] ([`run`]) in `run`, with a fixed N or, within a time budget,
+//! the group-sequential design of `sequential` planned and run by `budgeted`; what it found
+//! ([`BiasOutcome`], the JSON of `reshift bias`) in `outcome`; the replicas' and reference batches' final frames in
 //! `render`; their reduction to region means in `summary`; the replicas a run needs in
 //! `planning`; the Markdown table in `table`; a test split over seeds and merged again in
-//! [`shard`].
+//! [`shard`]; a tinted method, the negative control of a colour bias, in `tinted`.
 
+mod budgeted;
 mod outcome;
 mod planning;
 mod render;
 mod run;
+pub mod sequential;
 pub mod shard;
 mod summary;
 mod table;
 #[cfg(test)]
 mod tests;
+mod tinted;
 
-pub use outcome::{BiasOutcome, NonFinite, PLANNED_POWER, Planned, ReferenceEntry, SCHEMA};
+pub use budgeted::{CV_MARGIN, PILOT};
+pub use outcome::{
+    BiasOutcome, LookEntry, Needs, NonFinite, PLANNED_POWER, Planned, ReferenceEntry, RowDesign,
+    SCHEMA, SequentialEntry,
+};
 pub use planning::{Unplannable, replicas_needed};
-pub use render::{Images, reference_images, reference_images_with, replica_images, test_bytes};
-pub use run::{BiasPlan, run};
+pub use render::{
+    Images, reference_batches, reference_images, reference_images_with, replica_images, test_bytes,
+};
+pub use run::{BiasPlan, Replicas, run};
 pub use summary::{RegionSummary, region_mean, summarize};
 use summary::{channel_summary, region_means, summaries};
 pub use table::Table;
+pub use tinted::Tinted;
 
 use std::fmt;
 

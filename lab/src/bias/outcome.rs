@@ -9,7 +9,7 @@ use serde::{Serialize, Serializer};
 use super::{BiasRow, Protocol, Unplannable};
 
 /// The schema name written into [`BiasOutcome::schema`].
-pub const SCHEMA: &str = "reshift-bias/2";
+pub const SCHEMA: &str = "reshift-bias/3";
 
 /// The power for which a bias test plans the replicas a method needs ([`super::replicas_needed`]).
 pub const PLANNED_POWER: f64 = 0.9;
@@ -41,6 +41,73 @@ pub struct BiasOutcome {
     pub planned: Planned,
     /// Per non-empty region and channel, in table order.
     pub rows: Vec<BiasRow>,
+    /// The group-sequential design of a budgeted test; `null` for a fixed N.
+    pub sequential: Option<SequentialEntry>,
+}
+
+/// How a budgeted test ([`super::Replicas::Budget`]) spent its budget and looked at its rows.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SequentialEntry {
+    /// The α spending function: `lan-demets-obrien-fleming` (`super::sequential::spent`).
+    pub spending: &'static str,
+    /// What the budget and the times count: `process CPU time` or `wall time`.
+    pub clock: &'static str,
+    pub budget_seconds: f64,
+    /// Seconds used by the whole test (regions, reference, replicas).
+    pub used_seconds: f64,
+    /// Measured cost of one replica and of one reference batch.
+    pub seconds_per_replica: f64,
+    pub seconds_per_reference_batch: f64,
+    /// Replicas rendered before the design was planned (part of the sample).
+    pub pilot: usize,
+    /// The bound on the reference's share of a planned row's CI half-width,
+    /// `z_{1−α/2}·se_r/r̄ ≤ δ/4`.
+    pub reference_target: f64,
+    /// Replicas at the last planned look (0 when no row is planned for).
+    pub n_max: usize,
+    /// The planned looks, in order.
+    pub looks: Vec<LookEntry>,
+    /// Per row of [`BiasOutcome::rows`], in the same order.
+    pub rows: Vec<RowDesign>,
+}
+
+/// One planned look of the sequential design.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct LookEntry {
+    /// Replicas at the look.
+    pub n: usize,
+    /// The level it spends, `α(t_k) − α(t_{k−1})`.
+    pub level: f64,
+    /// Whether it was taken (not if every row was decided before, or the budget ran out).
+    pub taken: bool,
+    /// Rows it decided.
+    pub equivalent: usize,
+    pub biased: usize,
+}
+
+/// How the sequential design treated one row.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct RowDesign {
+    pub region: &'static str,
+    pub channel: &'static str,
+    /// Whether `n_max` and the reference were planned to decide this row; a row whose reference
+    /// or replicas would not fit the budget is not (it is tested all the same).
+    pub planned: bool,
+    /// The look (1-based) that decided the row.
+    pub look: Option<usize>,
+    /// For a row not decided: what a test of it alone would need.
+    pub needs: Option<Needs>,
+}
+
+/// What a test deciding one row would need, with power [`PLANNED_POWER`] if it had no bias;
+/// `null` fields when it cannot be planned (no spread, or more than `crate::limits::MAX_REPLICAS`
+/// replicas or reference batches).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Needs {
+    pub replicas: Option<usize>,
+    pub reference_batches: Option<u32>,
+    /// On the budget's clock, from the measured seconds per replica and per batch.
+    pub minutes: Option<f64>,
 }
 
 /// The path-traced reference the replicas were tested against.

@@ -1,6 +1,8 @@
 //! The images a bias test compares: the final frame of every replica of a preset and of every
 //! independent path-traced reference batch at the same frame.
 
+use std::ops::Range;
+
 use engine::{Backend, PipelineError, RunConfig};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -108,11 +110,28 @@ pub fn reference_images_with(
             "need ≥ 2 for a standard error",
         );
     }
+    reference_batches(settings, scene, frame, 0..batches, spp_per_batch, seed)
+}
+
+/// Batches `batches` of the reference of [`reference_images_with`] (batch `b` is samples
+/// `b·spp_per_batch ..` under `seed`), so that a reference can grow batch by batch. Input
+/// errors: no samples per batch, more than 2³² samples per pixel.
+pub fn reference_batches(
+    settings: &PtSettings,
+    scene: &Scene,
+    frame: u32,
+    batches: Range<u32>,
+    spp_per_batch: u32,
+    seed: u64,
+) -> Result<Images, InputError> {
+    let bad = |field: &str, value: String, reason: &str| {
+        Err(InputError::new("(bias reference)", field, value, reason))
+    };
     if spp_per_batch == 0 {
         return bad("spp_per_batch", "0".into(), "must be ≥ 1");
     }
-    if batches as u64 * spp_per_batch as u64 > 1 << 32 {
-        let value = format!("{batches} × {spp_per_batch}");
+    if batches.end as u64 * spp_per_batch as u64 > 1 << 32 {
+        let value = format!("{} × {spp_per_batch}", batches.end);
         return bad(
             "batches",
             value,
@@ -120,7 +139,7 @@ pub fn reference_images_with(
         );
     }
     let gbuffer = GBuffer::render(scene, frame);
-    let images: Vec<pt::SampleMeans> = (0..batches)
+    let images: Vec<pt::SampleMeans> = batches
         .map(|b| {
             pt::render(
                 scene,

@@ -14,8 +14,8 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use super::outcome::{BiasOutcome, NonFinite};
-use super::run::{Tested, outcome, reference, render_replicas, tested_regions};
-use super::{BiasPlan, Protocol, region_means, summaries};
+use super::run::{Counts, Setup, outcome, reference, render_replicas};
+use super::{BiasPlan, Protocol, Replicas, bias_rows, region_means, summaries};
 use crate::error::Error;
 use crate::progress::Progress;
 use crate::reference_cache::REFERENCE_SEED;
@@ -125,18 +125,24 @@ pub fn run_shard(
     progress: &mut dyn Progress,
 ) -> Result<BiasShard, Error> {
     plan.validate(Path::new("(bias plan)"))?;
-    let regions = tested_regions(plan);
+    let Replicas::Fixed(replicas) = plan.replicas else {
+        return Err(Error::Invalid(
+            "a shard needs a fixed number of replicas (--replicas N), not a budget".into(),
+        ));
+    };
+    let setup = Setup::of(plan);
+    let regions = &setup.regions;
     let reference = match shard.index {
         0 => {
-            let images = reference(plan)?;
+            let images = reference(plan, &setup)?;
             Some(ReferenceMeans {
-                batches: image_means(&images.rgb, &regions, 0),
+                batches: image_means(&images.rgb, regions, 0),
                 nonfinite: images.nonfinite,
             })
         }
         _ => None,
     };
-    let seeds = seeds(shard, plan.replicas);
+    let seeds = seeds(shard, replicas);
     progress.begin(&plan.method.name(), seeds.end - seeds.start, 0);
     let images = render_replicas(plan, seeds.clone(), progress);
     progress.end();
@@ -160,7 +166,7 @@ pub fn run_shard(
             method: plan.spec.clone(),
             resolution: format!("{width}x{height}"),
             frames: plan.frames,
-            replicas: plan.replicas,
+            replicas,
             delta: Exact(plan.protocol.delta),
             alpha: Exact(plan.protocol.alpha),
             reference_batches: plan.reference_batches,
@@ -168,13 +174,13 @@ pub fn run_shard(
             reference_seed: REFERENCE_SEED,
             backend: plan.backend.to_string(),
             shards: shard.count,
-            regions: region_means(&[], &regions)
+            regions: region_means(&[], regions)
                 .into_iter()
                 .map(|(r, pixels, _)| (r.name().to_string(), pixels))
                 .collect(),
         },
         scene_path: scene_path.to_string(),
-        replicas: image_means(&images.rgb, &regions, seeds.start),
+        replicas: image_means(&images.rgb, regions, seeds.start),
         nonfinite: images.nonfinite,
         reference,
     })
@@ -252,16 +258,22 @@ pub fn merge(parts: Vec<(PathBuf, BiasShard)>) -> Result<(BiasPlan, BiasOutcome)
         )
     };
     let plan = rebuilt_plan(first_path, first)?;
-    let tested = Tested {
-        replicas: summarized(&replicas),
-        count: replicas.len(),
-        reference: summarized(&reference.batches.iter().collect::<Vec<_>>()),
+    let rows = bias_rows(
+        &plan.method.name(),
+        &summarized(&replicas),
+        &summarized(&reference.batches.iter().collect::<Vec<_>>()),
+        &plan.protocol,
+    );
+    let counts = Counts {
+        replicas: replicas.len(),
+        reference_batches: plan.reference_batches,
         nonfinite: NonFinite {
             replicas: parts.iter().map(|(_, s)| s.nonfinite).sum(),
             reference: reference.nonfinite,
         },
+        interrupted: false,
     };
-    let outcome = outcome(&plan, tested);
+    let outcome = outcome(&plan, &Setup::of(&plan), counts, rows, None);
     Ok((plan, outcome))
 }
 
@@ -295,7 +307,7 @@ fn rebuilt_plan(path: &Path, shard: &BiasShard) -> Result<BiasPlan, Error> {
         scene: with_resolution(loaded.scene, Some(resolution)),
         spec: p.method.clone(),
         method: Method::parse(&p.method)?,
-        replicas: p.replicas,
+        replicas: Replicas::Fixed(p.replicas),
         frames: p.frames,
         protocol: Protocol {
             delta: p.delta.0,
@@ -320,7 +332,7 @@ mod tests {
             scene: with_resolution(Scene::builtin("bumpy").unwrap(), Some((16, 12))),
             spec: method.to_string(),
             method: Method::parse(method).unwrap(),
-            replicas: 4,
+            replicas: Replicas::Fixed(4),
             frames: 2,
             protocol: Protocol {
                 delta: 0.05,

@@ -5,7 +5,7 @@ use std::fmt::{self, Write as _};
 use super::BiasRow;
 
 /// The rows as a Markdown table (relative bias, CI and its half-width in percent; δ, the CI's
-/// confidence and N on every row).
+/// confidence to six decimals of a percent and N on every row).
 pub struct Table<'a>(pub &'a [BiasRow]);
 
 impl fmt::Display for Table<'_> {
@@ -37,7 +37,7 @@ impl fmt::Display for Table<'_> {
                 100.0 * e.ci_high,
                 100.0 * row.ci_half_width(),
                 100.0 * e.delta,
-                100.0 * e.confidence,
+                (1e8 * e.confidence).round() / 1e6,
                 e.p_zero_bias,
                 if row.holm_rejected { "reject" } else { "-" },
                 row.verdict.describe(e.delta, e.confidence),

@@ -599,6 +599,10 @@ fn bias_shards_merge_into_one_run_and_refuse_other_plans() {
         &["bias", "--method", "pt", "--shard", "3/3"],
         "field `--shard` = \"3/3\": need 0 ≤ i < n",
     );
+    fails_with(
+        &["bias", "--method", "pt", "--shard", "0/3"],
+        "a shard needs a fixed number of replicas (--replicas N)",
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

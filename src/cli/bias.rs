@@ -70,7 +70,8 @@ pub struct BiasArgs {
     /// Render only shard i of n (0-based, i < n): the replicas of seeds ⌊i·N/n⌋..⌊(i+1)·N/n⌋
     /// (shard 0 also the reference), written to <out>/shard-i-of-n.json; `reshift merge` of
     /// all n prints what one run prints, bit for bit (docs/cluster.md).
-    #[arg(long, value_name = "i/n", requires = "replicas")]
+    /// Needs --replicas N (the fixed design).
+    #[arg(long, value_name = "i/n")]
     pub shard: Option<String>,
     /// With --shard: the folder of the shard file.
     #[arg(long, requires = "shard", default_value = "out/bias-shards")]
@@ -82,11 +83,18 @@ pub struct BiasArgs {
 /// Runs `bias` and prints the table (or the JSON), or with `--shard` writes the shard file; a
 /// test stopped by Ctrl-C prints the replicas rendered so far and fails.
 pub fn command(args: &BiasArgs) -> CliResult<()> {
-    let (plan, scene_key) = plan(args)?;
     if let Some(text) = &args.shard {
         let shard = Shard::parse(text, "--shard")?;
+        if args.replicas.is_none() {
+            return Err(CliError(format!(
+                "--shard {text}: a shard needs a fixed number of replicas (--replicas N), not the \
+                 budgeted design"
+            )));
+        }
+        let (plan, scene_key) = plan(args)?;
         return write_shard(args, &plan, &scene_key, shard);
     }
+    let (plan, _) = plan(args)?;
     let outcome = bias::run(&plan, &mut Bars::default())?;
     print(&plan, &outcome, args.json);
     if outcome.interrupted {

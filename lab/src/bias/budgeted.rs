@@ -29,10 +29,11 @@ use restir::stats::{
     EquivalencePlan, Summary, Verdict, equivalence, normal_quantile, replicas_for,
 };
 
+use super::job::{Counts, Setup, outcome, render_replica};
 use super::outcome::{
     BiasOutcome, LookEntry, Needs, NonFinite, PLANNED_POWER, RowDesign, SequentialEntry,
 };
-use super::run::{BiasPlan, Counts, Setup, outcome, render_replica};
+use super::plan::BiasPlan;
 use super::sequential::{Schedule, looks};
 use super::summary::{channel_summary, region_means};
 use super::{BiasRow, Channel, RegionSummary, reference_batches, summarize};

@@ -15,7 +15,7 @@
 //!   from its channel's row.
 //!
 //! Here: the channels and the test's rows ([`bias_rows`], [`paired_rows`], [`overall`]); the
-//! test as a job of a [`BiasPlan`] ([`run`]) in `run`, with a fixed N or, within a time budget,
+//! test as a job of a [`BiasPlan`] (in `plan`) run by [`run`] in `run` from the pieces of `job`, with a fixed N or, within a time budget,
 //! the group-sequential design of `sequential` planned and run by `budgeted`; what it found
 //! ([`BiasOutcome`], the JSON of `reshift bias`) in `outcome`; the replicas' and reference batches' final frames in
 //! `render`; their reduction to region means in `summary`; the replicas a run needs in
@@ -23,7 +23,9 @@
 //! [`shard`]; a tinted method, the negative control of a colour bias, in `tinted`.
 
 mod budgeted;
+mod job;
 mod outcome;
+mod plan;
 mod planning;
 mod render;
 mod run;
@@ -40,11 +42,12 @@ pub use outcome::{
     BiasOutcome, LookEntry, Needs, NonFinite, PLANNED_POWER, Planned, ReferenceEntry, RowDesign,
     SCHEMA, SequentialEntry,
 };
+pub use plan::{BiasPlan, Replicas};
 pub use planning::{Unplannable, replicas_needed};
 pub use render::{
     Images, reference_batches, reference_images, reference_images_with, replica_images, test_bytes,
 };
-pub use run::{BiasPlan, Replicas, run};
+pub use run::run;
 pub use summary::{RegionSummary, region_mean, summarize};
 use summary::{channel_summary, region_means, summaries};
 pub use table::Table;

@@ -13,8 +13,8 @@ use methods::Method;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
+use super::job::{Counts, Setup, outcome, reference, render_replicas};
 use super::outcome::{BiasOutcome, NonFinite};
-use super::run::{Counts, Setup, outcome, reference, render_replicas};
 use super::{BiasPlan, Protocol, Replicas, bias_rows, region_means, summaries};
 use crate::error::Error;
 use crate::progress::Progress;

@@ -1,0 +1,112 @@
+//! What a bias test runs ([`BiasPlan`]): the scene, the method, the replicas (a fixed number or
+//! a time budget, [`Replicas`]), the tolerance and level, the reference; checked in one line per
+//! option at fault.
+
+use std::path::Path;
+use std::time::Duration;
+
+use engine::Backend;
+use methods::Method;
+use sss::InputError;
+use sss::limits::{self, MAX_SPP};
+use sss::scene::Scene;
+
+use super::Protocol;
+use super::test_bytes;
+use crate::limits::MAX_REPLICAS;
+
+/// How many replicas a bias test runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Replicas {
+    /// Exactly this many (seeds `0..n`), one test at level α (`--replicas`).
+    Fixed(u32),
+    /// As many as the group-sequential design needs and this much time (on the backend's
+    /// clock, `engine::clock`) allows (`--budget`).
+    Budget(Duration),
+}
+
+/// What to test, where, and how strictly. [`BiasPlan::validate`] names the fields by the
+/// `reshift bias` options that set them one to one (`--replicas`, `--delta`, …).
+pub struct BiasPlan {
+    /// The scene with the camera at the test's resolution.
+    pub scene: Scene,
+    /// The method under test as requested (the outcome's `method`), and the method.
+    pub spec: String,
+    pub method: Method,
+    /// Independent replicas (seeds `0..n`), fixed or within a budget.
+    pub replicas: Replicas,
+    /// Frames of the camera trajectory; the last one is tested.
+    pub frames: u32,
+    /// Tolerance δ and level α.
+    pub protocol: Protocol,
+    /// Independent path-traced reference batches, and the samples per pixel of each.
+    pub reference_batches: u32,
+    pub reference_batch_spp: u32,
+    pub backend: Backend,
+}
+
+impl BiasPlan {
+    /// The plan's values within range, as one line that names the option at fault (in `origin`):
+    /// δ finite and > 0, 0 < α < 1; at least two replicas and two reference batches (for their
+    /// standard errors), a budget > 0, every count within `sss::limits` and [`MAX_REPLICAS`],
+    /// and the test within the memory budget ([`test_bytes`]; a budgeted test keeps region means
+    /// only, so its replicas count as two).
+    pub fn validate(&self, origin: &Path) -> Result<(), InputError> {
+        let Protocol { delta, alpha } = self.protocol;
+        if !(delta.is_finite() && delta > 0.0) {
+            let reason = "the tolerance must be a finite number > 0";
+            return Err(InputError::new(
+                origin,
+                "--delta",
+                delta.to_string(),
+                reason,
+            ));
+        }
+        if !(alpha > 0.0 && alpha < 1.0) {
+            let reason = "the level must be in (0, 1)";
+            return Err(InputError::new(
+                origin,
+                "--alpha",
+                alpha.to_string(),
+                reason,
+            ));
+        }
+        let count = |field: &str, n: u32, min: u32, max: u32| {
+            limits::count(origin, field, n as u64, min as u64, max as u64)
+        };
+        let kept = match self.replicas {
+            Replicas::Fixed(n) => {
+                count("--replicas", n, 2, MAX_REPLICAS)?;
+                n
+            }
+            Replicas::Budget(budget) => {
+                if budget.is_zero() {
+                    let reason = "the time budget must be > 0";
+                    return Err(InputError::new(origin, "--budget", "0s", reason));
+                }
+                2
+            }
+        };
+        count(
+            "--reference-batches",
+            self.reference_batches,
+            2,
+            MAX_REPLICAS,
+        )?;
+        count(
+            "--reference-batch-spp",
+            self.reference_batch_spp,
+            1,
+            MAX_SPP,
+        )?;
+        limits::frames(origin, "--frames", self.frames)?;
+        let (width, height) = (self.scene.camera.width(), self.scene.camera.height());
+        let value = format!(
+            "{kept} replicas, {} reference batches, {} frames at {width}×{height}",
+            self.reference_batches, self.frames
+        );
+        let pixels = width as u64 * height as u64;
+        let needed = test_bytes(pixels, kept, self.reference_batches, self.frames);
+        limits::memory(origin, "--replicas", &value, needed, "the bias test")
+    }
+}

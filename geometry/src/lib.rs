@@ -32,4 +32,6 @@ pub use error::InputError;
 pub use frame::Frame;
 pub use load::load_mesh;
 pub use mesh::TriangleMesh;
+/// The build parameters [`Geometry::with_build_params`] takes (obvhs's).
+pub use obvhs::BvhBuildParams;
 pub use ray::{Hit, Ray};

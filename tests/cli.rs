@@ -421,6 +421,10 @@ fn huge_sizes_in_files_are_one_line_errors() {
         "field `--reference-batches` = 100000: must be in 2..=65536",
     );
     bias(&["--frames", "0"], "field `--frames` = 0");
+    for tint in ["1,1", "1,1,-1", "1,1,x", "1,1,1,1"] {
+        let needle = format!("field `--tint` = \"{tint}\": expected three finite factors");
+        bias(&["--tint", tint], &needle);
+    }
     bias(
         &["--budget", "0m"],
         "field `--budget` = 0s: the time budget must be > 0",
@@ -541,6 +545,41 @@ fn sharded_reference_merges_bit_identically() {
         "small.rsref: field `batches` = 2: differs from",
     );
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `bias --tint 1,1,1.5` (the tint control from the command line): the outcome names the
+/// factor and calls a blue row biased; no red or green row is.
+#[test]
+fn bias_tint_is_a_named_control_that_is_called_biased() {
+    let text = ok(&reshift(&[
+        "bias",
+        "--method",
+        "pt",
+        "--tint",
+        "1,1,1.5",
+        "--replicas",
+        "16",
+        "--resolution",
+        "16x12",
+        "--frames",
+        "1",
+        "--reference-batches",
+        "8",
+        "--reference-batch-spp",
+        "4",
+        "--scene",
+        "half-shadow",
+        "--json",
+    ]));
+    let outcome: Value = serde_json::from_str(&text).expect("JSON");
+    assert_eq!(outcome["method"], "pt:1 × (1, 1, 1.5)");
+    let rows = outcome["rows"].as_array().expect("rows");
+    let biased = |channel: &str| {
+        rows.iter()
+            .any(|r| r["channel"] == channel && r["verdict"] == "biased")
+    };
+    assert!(biased("blue"), "{text}");
+    assert!(!biased("red") && !biased("green"), "{text}");
 }
 
 /// A bias test in 3 shards (`--shard i/n`) merges, from a folder or from files in any order,

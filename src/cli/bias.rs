@@ -12,10 +12,11 @@ use std::time::Duration;
 use std::path::PathBuf;
 
 use clap::Args;
+use glam::Vec3;
 use lab::bias::shard::{BiasShard, run_shard};
 use lab::bias::{
     self, BiasOutcome, BiasPlan, BiasRow, PLANNED_POWER, Protocol, Replicas, SequentialEntry,
-    Table, overall,
+    Table, Tinted, overall,
 };
 use lab::limits::MAX_REPLICAS;
 use lab::output::{output_dir, write_text};
@@ -64,6 +65,10 @@ pub struct BiasArgs {
     /// Samples per pixel of one reference batch.
     #[arg(long, default_value_t = 64)]
     pub reference_batch_spp: u32,
+    /// A negative control: the method's final frame multiplied per channel by R,G,B (e.g.
+    /// 1,1,1.03: blue 3% too bright). Biased by construction; the outcome names the factor.
+    #[arg(long, value_name = "R,G,B", conflicts_with = "shard")]
+    pub tint: Option<String>,
     /// Print JSON (schema `reshift-bias/3`) instead of the table.
     #[arg(long)]
     pub json: bool,
@@ -144,12 +149,16 @@ pub fn merge(files: Vec<(PathBuf, Value)>, json: bool) -> CliResult<()> {
 
 /// The plan of `args`, checked with errors that name the options, and the scene's cache key.
 fn plan(args: &BiasArgs) -> CliResult<(BiasPlan, String)> {
-    let method = Method::parse(&args.method)?;
+    let mut method = Method::parse(&args.method)?;
+    if let Some(text) = &args.tint {
+        let factor = parse_tint(text)?;
+        method = Method::new(Tinted { method, factor });
+    }
     let resolution = parse_resolution(&args.resolution)?;
     let loaded = load_scene(&args.scene)?;
     let plan = BiasPlan {
         scene: with_resolution(loaded.scene, Some(resolution)),
-        spec: args.method.clone(),
+        spec: method.name(),
         method,
         replicas: match args.replicas {
             Some(n) => Replicas::Fixed(n),
@@ -163,9 +172,31 @@ fn plan(args: &BiasArgs) -> CliResult<(BiasPlan, String)> {
         reference_batches: args.reference_batches,
         reference_batch_spp: args.reference_batch_spp,
         backend: args.backend.open()?,
+        reference: None,
     };
     plan.validate(command_line())?;
     Ok((plan, loaded.key))
+}
+
+/// Three finite factors ≥ 0, `R,G,B`.
+fn parse_tint(text: &str) -> CliResult<Vec3> {
+    let factors: Vec<f32> = text
+        .split(',')
+        .map(|f| {
+            f.trim()
+                .parse::<f32>()
+                .ok()
+                .filter(|f| f.is_finite() && *f >= 0.0)
+        })
+        .collect::<Option<_>>()
+        .unwrap_or_default();
+    match factors[..] {
+        [r, g, b] => Ok(Vec3::new(r, g, b)),
+        _ => {
+            let reason = "expected three finite factors ≥ 0, R,G,B, such as 1,1,1.03";
+            Err(InputError::new(command_line(), "--tint", format!("{text:?}"), reason).into())
+        }
+    }
 }
 
 /// A time such as `90s`, `10m` or `1.5h` (a number ≥ 0 and a unit s, m or h).

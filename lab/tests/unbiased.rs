@@ -28,16 +28,16 @@
 //!   Vulkan chain's plan (see Backends), which the CPU tests share. Planned power to detect a
 //!   +3% bias in any one row: ≥ 0.9995. `power_plan_detects_3pct_in_any_row` prints the plan;
 //!   each table prints the measured CVs beside the planned ones.
-//! * Cost: since the CPU tests and the controls against the reference run `lab::bias::run`, each
-//!   renders its own replicas and reference (≈ 12 CPU-s per reference; before, one reference per
-//!   design and one set of CPU replicas per preset served the CPU test, the Vulkan chain and the
-//!   tint control): the whole file took 1432 s wall on 2 cores shared with other tests and builds
-//!   (load 4–6; CPU time not measured). Before that change it took 562 CPU-s (user)
-//!   and 12 min 44 s wall on 2 cores shared with two builds and a fuzz campaign (load 5–8),
-//!   with the CPU's N raised 1.29× for the Vulkan chain; before that, 328–500 CPU-s for the CPU
-//!   tests and 54 CPU-s for the four paired Vulkan tests. Per replica 0.02 (reconnection) – 0.05
-//!   (sequential-exact) CPU-s on bumpy, 0.011–0.015 on half-shadow; each reference ≈ 12 CPU-s;
-//!   each Vulkan test's 32 lavapipe replicas 11–37 s wall under that load.
+//! * Cost: each design's reference batches are rendered once and handed to every test of the
+//!   design ([`ReferenceBatches`], `BiasPlan::reference`), and each preset's CPU test runs once:
+//!   the Vulkan test's chain tests its rows again at its own level ([`rows_at`]) and renders only
+//!   the CPU side of its 32 pairs. Before, every CPU test and control rendered its own reference
+//!   (≈ 12–20 CPU-s each) and every Vulkan test rendered the CPU's N replicas a second time. The
+//!   whole file: 866 s wall, 1000 CPU-s (user) on 2 cores shared with a build (load 3–5); the
+//!   same file before the change took 941 s wall alone in a fresh-clone run of the suite and
+//!   1432 s under load 4–6. Per replica 0.02 (reconnection) – 0.05 (sequential-exact) CPU-s on
+//!   bumpy, 0.011–0.015 on half-shadow; each Vulkan test's 32 lavapipe replicas 17–51 s wall
+//!   under that load.
 //! * Negative controls, same protocol and N as the preset they break: near δ, delayed
 //!   reconnection with J · 1.03 (`broken::DelayedJacobianOff`: +4.8% … +6.1% on bumpy, the error
 //!   compounds over reuse passes) and the hybrid preset with its blue channel × 1.03
@@ -70,7 +70,7 @@
 //!     (Bonferroni); every row must be "equivalent within ±2% at 99%". The CPU's N is planned
 //!     for both its own test and this one (tolerance (1 + δ)/(1 + 0.2%) − 1 at 99.1%, leaving
 //!     [`PAIRED_ALLOWANCE`] to the paired CI): the larger N, 1.29× the CPU test's alone, runs
-//!     once and both tests share the replicas ([`Design::images`]).
+//!     once and both tests read its outcome ([`Design::outcome`]).
 //!
 //!   Negative controls on the GPU's hybrid on `bumpy`: blue × 1.0075 (1.5δ of the parity test)
 //!   is Biased in every blue row of the paired test while its luminance stays equivalent; blue
@@ -83,20 +83,25 @@
 //!   paired against the selected shading of the same replicas at ±2% on both designs
 //!   ([`RB_PAIRS`]), with its own negative control.
 //!
+//! * Recorded ±1% verdicts (`record_verdicts_at_1pct`, ignored: a measurement of about 25
+//!   CPU-minutes): every preset and the two near-δ controls on both designs at δ = 1%, N from the
+//!   same power plan, against a reference of 4× the batches; `docs/experiments.md` holds them.
+//!
 //! Run with `--nocapture` to see the plan and the tables (bias, CI, half-width, p-value, Holm,
 //! verdict per region and channel).
 
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 use std::time::Instant;
 
 use engine::vulkan::testing::backend_or_skip;
 use engine::{Backend, Preset, Shade, ShiftKind};
 use glam::{DVec3, Vec3};
 use lab::bias::{
-    BiasOutcome, BiasPlan, BiasRow, Channel, Images, Protocol, RegionSummary, Replicas, Table,
-    Tinted, bias_rows, paired_rows, reference_images, region_mean, replica_images, summarize,
+    BiasOutcome, BiasPlan, BiasRow, Channel, Images, Protocol, ReferenceBatches, Replicas, Table,
+    Tinted, paired_rows, region_mean, replica_images, rows_at,
 };
 use lab::chained::chained_rows;
+use lab::reference_cache::REFERENCE_SEED;
 use lab::regions::{Region, Regions};
 use methods::Method;
 use methods::restir::Restir;
@@ -117,10 +122,6 @@ const CV_MARGIN: f64 = 1.1;
 const FRAMES: u32 = 3;
 /// Image side in pixels.
 const SIDE: u32 = 32;
-/// Far above every replica seed, so reference and replicas draw from disjoint streams.
-const REFERENCE_SEED: u64 = 1 << 40;
-/// Keys the light samples of the region classification.
-const REGIONS_SEED: u64 = 0x5E61;
 /// The bias of the near-δ controls.
 const CONTROL_BIAS: f64 = 0.03;
 
@@ -143,7 +144,8 @@ struct Design {
     reference_batches: u32,
     spp_per_batch: u32,
     framing: OnceLock<Framing>,
-    reference: OnceLock<Reference>,
+    /// The reference batches, rendered once and shared by every test of the design.
+    reference: OnceLock<Arc<ReferenceBatches>>,
     /// Per registered preset of [`Design::paired_cv`], the largest per-replica CV of the paired
     /// difference GPU − CPU over the 12 rows (`sd(dᵢ − b·cᵢ)/c̄`, see
     /// [`lab::bias::paired_rows`]), measured by [`measure_paired_cv`] with [`PAIRED_MEASURE_N`]
@@ -152,9 +154,9 @@ struct Design {
     /// 6 of 64 for sequential-exact on bumpy (its re-traced intersection index), none
     /// elsewhere (measured 2026-11-24).
     paired_cv: [(&'static str, f64); 5],
-    /// The CPU replicas of each registered preset (in the order of `cv`), shared by its Vulkan
-    /// test and the Vulkan tint controls (the CPU tests render their own, `lab::bias::run`).
-    cpu: [OnceLock<Images>; 5],
+    /// The CPU test of each registered preset (in the order of `cv`), run once: its CPU test
+    /// and the CPU part of its Vulkan test's chain read it.
+    outcomes: [OnceLock<BiasOutcome>; 5],
 }
 
 /// `bumpy` from its own eye path, looking at the top of the object through a 8° field of view
@@ -228,7 +230,7 @@ static BUMPY: Design = Design {
         ("sequential", 1.2e-6),
         ("sequential-exact", 1.0e-3),
     ],
-    cpu: [const { OnceLock::new() }; 5],
+    outcomes: [const { OnceLock::new() }; 5],
 };
 
 /// `half-shadow` seen from 0.42 units above the shadow edge x = 0 through a 5° field of view
@@ -302,20 +304,14 @@ static HALF_SHADOW: Design = Design {
         ("sequential", 1.4e-7),
         ("sequential-exact", 1.4e-7),
     ],
-    cpu: [const { OnceLock::new() }; 5],
+    outcomes: [const { OnceLock::new() }; 5],
 };
 
-/// The scene of a design and its regions, computed once per run.
+/// The scene of a design and its regions (those of `lab::bias::run`: the tested frame
+/// classified with the lab's reference seed), computed once per run.
 struct Framing {
     scene: Scene,
     regions: Regions,
-}
-
-/// The reference of a design, computed once per run (the paired tests do not need it).
-struct Reference {
-    summaries: Vec<RegionSummary>,
-    /// Non-finite reference samples.
-    nonfinite: u64,
 }
 
 impl Design {
@@ -374,7 +370,7 @@ impl Design {
         let framing = self.framing.get_or_init(|| {
             let scene = (self.scene)();
             let gbuffer = GBuffer::render(&scene, FRAMES - 1);
-            let regions = Regions::classify(&scene, &gbuffer, REGIONS_SEED);
+            let regions = Regions::classify(&scene, &gbuffer, REFERENCE_SEED);
             Framing { scene, regions }
         });
         let present: Vec<Region> = Region::ALL
@@ -389,90 +385,42 @@ impl Design {
         framing
     }
 
-    /// The reference's region summaries, computed once (printed then). Checks the plan's
-    /// assumptions on the reference at every call: no non-finite sample, its error within the
-    /// planned one.
-    fn reference(&self) -> &[RegionSummary] {
-        let framing = self.framing();
-        let reference = self.reference.get_or_init(|| {
+    /// The reference batches of `plan` (the design's scene at the tested frame), rendered once
+    /// for every test of the design (timed then).
+    fn reference(&self, plan: &BiasPlan) -> Arc<ReferenceBatches> {
+        let batches = self.reference.get_or_init(|| {
             let start = Instant::now();
-            let frame = FRAMES - 1;
-            let reference = reference_images(
-                &framing.scene,
-                frame,
-                self.reference_batches,
-                self.spp_per_batch,
-                REFERENCE_SEED,
-            )
-            .expect("reference settings");
+            let batches = ReferenceBatches::render(plan).expect("reference settings");
             println!(
-                "{}: reference, path tracer at frame {frame}, {} batches × {} spp, {:.1} s",
+                "{}: reference, path tracer at frame {}, {} batches × {} spp, {:.1} s",
                 self.name,
+                FRAMES - 1,
                 self.reference_batches,
                 self.spp_per_batch,
                 start.elapsed().as_secs_f64()
             );
-            let summaries = summarize(&reference.rgb, &framing.regions);
-            for r in &summaries {
-                for c in Channel::ALL {
-                    let s = r.channel(c);
-                    println!(
-                        "  {:<11} {:<9} {:>4} px  mean {:.5} ± {:.5} ({:.3}%)",
-                        r.region,
-                        c,
-                        r.pixels,
-                        s.mean,
-                        s.std_err,
-                        100.0 * s.std_err / s.mean
-                    );
-                }
-            }
-            Reference {
-                summaries,
-                nonfinite: reference.nonfinite,
-            }
+            Arc::new(batches)
         });
-        assert_eq!(
-            reference.nonfinite, 0,
-            "{}: non-finite reference samples",
-            self.name
-        );
-        for r in &reference.summaries {
-            for c in Channel::ALL {
-                let rel = r.channel(c).std_err / r.channel(c).mean;
-                assert!(
-                    rel <= self.reference_rel_se,
-                    "{}: reference error {rel} in {} {c} exceeds the planned {}",
-                    self.name,
-                    r.region,
-                    self.reference_rel_se
-                );
-            }
-        }
-        &reference.summaries
+        batches.clone()
     }
 
-    /// N replicas of `preset` on `backend`, N planned for the registered preset `planned`
-    /// (the CPU replicas of a registered preset are computed once).
-    fn images(&self, backend: &Backend, preset: &Preset, planned: &str) -> Images {
-        let scene = &self.framing().scene;
-        let n = self.replicas(planned);
-        let run = || replica_images(backend, scene, preset, n, FRAMES).expect("preset runs");
-        let registered = Preset::named(planned).is_some_and(|p| p == *preset);
-        let cached = self.cv.iter().position(|(name, _)| *name == planned);
-        match (backend, cached) {
-            (Backend::Cpu, Some(i)) if registered => self.cpu[i].get_or_init(run).clone(),
-            _ => run(),
-        }
+    /// The CPU test of the registered preset `name` ([`Design::measure`]), run once.
+    fn outcome(&self, name: &str) -> &BiasOutcome {
+        let i = self.cv.iter().position(|(n, _)| *n == name);
+        let i = i.unwrap_or_else(|| panic!("{name} is not a registered preset"));
+        self.outcomes[i].get_or_init(|| {
+            let method = Method::parse(&format!("restir:{name}")).expect("registered preset");
+            self.measure(method, name)
+        })
     }
 
-    /// The bias test of `method` (`lab::bias::run`) on the CPU backend, N planned for the
-    /// registered preset `planned`; printed with the measured CVs beside the planned ones. Checks
-    /// the plan's assumptions: the planned regions and no other, no non-finite value, the
-    /// reference's error within the planned one.
-    fn measure(&self, method: Method, planned: &str) -> Vec<BiasRow> {
+    /// The bias test of `method` (`lab::bias::run`) on the CPU backend against the design's
+    /// shared reference, N planned for the registered preset `planned`; printed with the
+    /// measured CVs beside the planned ones. Checks the plan's assumptions: the planned regions
+    /// and no other, no non-finite value, the reference's error within the planned one.
+    fn measure(&self, method: Method, planned: &str) -> BiasOutcome {
         let start = Instant::now();
-        let plan = BiasPlan {
+        let mut plan = BiasPlan {
             scene: (self.scene)(),
             spec: method.name(),
             method,
@@ -482,7 +430,9 @@ impl Design {
             reference_batches: self.reference_batches,
             reference_batch_spp: self.spp_per_batch,
             backend: Backend::Cpu,
+            reference: None,
         };
+        plan.reference = Some(self.reference(&plan));
         let outcome = lab::bias::run(&plan, &mut lab::progress::Silent).expect("runs");
         let label = &plan.spec;
         let BiasOutcome {
@@ -530,16 +480,15 @@ impl Design {
                 );
             }
         }
-        outcome.rows
+        outcome
     }
 }
 
 /// Every row "equivalent within ±2% at 99%".
 fn assert_equivalent(design: &Design, name: &str) {
-    let method = Method::parse(&format!("restir:{name}")).expect("registered preset");
-    let rows = design.measure(method, name);
+    let rows = &design.outcome(name).rows;
     let what = format!("{name} on the CPU, {}", design.name);
-    assert_all_equivalent(&rows, &PROTOCOL, &what);
+    assert_all_equivalent(rows, &PROTOCOL, &what);
 }
 
 /// Every row of `what` "equivalent within ±δ at 1 − α".
@@ -572,7 +521,7 @@ fn assert_biased(rows: &[BiasRow], what: &str) {
 /// neighbours) on the CPU backend, with the N of the preset `breaks` whose shift it breaks.
 fn assert_shift_detected(design: &Design, shift: ShiftKind, breaks: &str) {
     let preset = Preset::single_shift(shift.name(), shift);
-    let rows = design.measure(Method::new(Restir(preset)), breaks);
+    let rows = design.measure(Method::new(Restir(preset)), breaks).rows;
     assert_biased(&rows, shift.name());
 }
 
@@ -608,7 +557,7 @@ fn assert_tint_detected(design: &Design) {
         method: Method::parse("restir:hybrid").expect("registered preset"),
         factor: Vec3::new(1.0, 1.0, 1.0 + CONTROL_BIAS as f32),
     };
-    let rows = design.measure(Method::new(tinted), "hybrid");
+    let rows = design.measure(Method::new(tinted), "hybrid").rows;
     assert_biased(&rows, "blue × 1.03");
     assert_blue_only(&rows);
 }
@@ -690,8 +639,21 @@ impl Design {
         gpu
     }
 
-    /// The paired rows of `gpu` against the first replicas of `cpu` under `protocol` (printed,
-    /// with each row's per-replica CV) after checking that no value was non-finite.
+    /// The CPU's replicas of the seeds of `gpu` (the other side of the pairs), checked finite.
+    fn cpu_pairs(&self, preset: &Preset, gpu: &Images) -> Images {
+        let scene = &self.framing().scene;
+        let n = gpu.rgb.len() as u64;
+        let cpu = replica_images(&Backend::Cpu, scene, preset, n, FRAMES).expect("preset runs");
+        assert_eq!(
+            cpu.nonfinite, 0,
+            "{}: non-finite values on the CPU",
+            preset.name
+        );
+        cpu
+    }
+
+    /// The paired rows of `gpu` against `cpu` (the same seeds) under `protocol` (printed, with
+    /// each row's per-replica CV) after checking that no value was non-finite.
     fn paired_rows(
         &self,
         label: &str,
@@ -699,9 +661,8 @@ impl Design {
         cpu: &Images,
         protocol: &Protocol,
     ) -> Vec<BiasRow> {
-        let cpu = &cpu.rgb[..gpu.rgb.len()];
         assert_eq!(gpu.nonfinite, 0, "{label}: non-finite values on the GPU");
-        let rows = paired_rows(label, &gpu.rgb, cpu, &self.framing().regions, protocol);
+        let rows = paired_rows(label, &gpu.rgb, &cpu.rgb, &self.framing().regions, protocol);
         println!(
             "{label}, GPU − CPU on {}: N = {} pairs, {FRAMES} frames, δ = ±{}%, α = {}\n{}",
             self.name,
@@ -719,17 +680,17 @@ impl Design {
         rows
     }
 
-    /// The chained rows of the GPU ([`lab::chained`]): the CPU's `cpu` replicas against the
-    /// reference at [`CHAIN_CPU`], then `gpu` − CPU paired at [`CHAIN_PAIRED`]; printed.
-    fn chained_rows(&self, label: &str, gpu: &Images, cpu: &Images) -> Vec<BiasRow> {
-        assert_eq!(cpu.nonfinite, 0, "{label}: non-finite values on the CPU");
-        let estimate = summarize(&cpu.rgb, &self.framing().regions);
-        let first = bias_rows(label, &estimate, self.reference(), &CHAIN_CPU);
+    /// The chained rows of the GPU ([`lab::chained`]): the CPU test of the registered preset
+    /// `planned` against the reference, tested again at [`CHAIN_CPU`] ([`rows_at`]), then `gpu`
+    /// − `cpu` paired at [`CHAIN_PAIRED`]; printed.
+    fn chained_rows(&self, label: &str, planned: &str, gpu: &Images, cpu: &Images) -> Vec<BiasRow> {
+        let outcome = self.outcome(planned);
+        let first = rows_at(label, &outcome.rows, &CHAIN_CPU);
         let then = self.paired_rows(label, gpu, cpu, &CHAIN_PAIRED);
         let rows = chained_rows(label, &first, &then);
         println!(
             "{label}, chained (CPU N = {} against the reference at {}%, GPU − CPU N = {} at {}%) on {}:\n{}",
-            cpu.rgb.len(),
+            outcome.replicas,
             100.0 * (1.0 - CHAIN_CPU.alpha),
             gpu.rgb.len(),
             100.0 * (1.0 - CHAIN_PAIRED.alpha),
@@ -770,11 +731,11 @@ fn assert_gpu_equivalent(backend: &Backend, design: &Design, name: &str) {
         computed = design.gpu_images(backend, &preset, n);
         &computed
     };
-    let cpu = design.images(&Backend::Cpu, &preset, name);
+    let cpu = design.cpu_pairs(&preset, gpu);
     let what = format!("{name} on {backend}, {}", design.name);
     let paired = design.paired_rows(&what, gpu, &cpu, &PAIRED);
     assert_all_equivalent(&paired, &PAIRED, &format!("{what} against the CPU"));
-    let chained = design.chained_rows(&what, gpu, &cpu);
+    let chained = design.chained_rows(&what, name, gpu, &cpu);
     println!("{what}: {:.1} s", start.elapsed().as_secs_f64());
     assert_all_equivalent(&chained, &PROTOCOL, &what);
 }
@@ -782,9 +743,10 @@ fn assert_gpu_equivalent(backend: &Backend, design: &Design, name: &str) {
 /// The GPU's hybrid with its blue channel × (1 + 1.5δ) differs from the CPU's in every blue
 /// row, while every luminance row (blue weighs 7% of it) stays equivalent within ±0.5%.
 fn assert_paired_tint_detected(backend: &Backend) {
-    let cpu = BUMPY.images(&Backend::Cpu, &Preset::named("hybrid").unwrap(), "hybrid");
+    let gpu = hybrid_gpu(backend);
+    let cpu = BUMPY.cpu_pairs(&Preset::named("hybrid").unwrap(), gpu);
     let factor = 1.0 + PAIRED_CONTROL_BIAS;
-    let tinted = tinted(hybrid_gpu(backend), DVec3::new(1.0, 1.0, factor));
+    let tinted = tinted(gpu, DVec3::new(1.0, 1.0, factor));
     let label = format!("hybrid, GPU blue × {factor}");
     let rows = BUMPY.paired_rows(&label, &tinted, &cpu, &PAIRED);
     assert_biased(&rows, "GPU blue × (1 + 1.5δ)");
@@ -794,12 +756,10 @@ fn assert_paired_tint_detected(backend: &Backend) {
 /// The GPU's hybrid with its blue channel × 1.03 is not equivalent within ±2% in any blue row
 /// of the chain (its interval reaches past +2%), while every luminance row stays equivalent.
 fn assert_chained_tint_detected(backend: &Backend) {
-    let cpu = BUMPY.images(&Backend::Cpu, &Preset::named("hybrid").unwrap(), "hybrid");
-    let tinted = tinted(
-        hybrid_gpu(backend),
-        DVec3::new(1.0, 1.0, 1.0 + CONTROL_BIAS),
-    );
-    let rows = BUMPY.chained_rows("hybrid, GPU blue × 1.03", &tinted, &cpu);
+    let gpu = hybrid_gpu(backend);
+    let cpu = BUMPY.cpu_pairs(&Preset::named("hybrid").unwrap(), gpu);
+    let tinted = tinted(gpu, DVec3::new(1.0, 1.0, 1.0 + CONTROL_BIAS));
+    let rows = BUMPY.chained_rows("hybrid, GPU blue × 1.03", "hybrid", &tinted, &cpu);
     for row in &rows {
         let equivalent = row.verdict == Verdict::Equivalent;
         match row.channel {
@@ -1104,5 +1064,90 @@ fn hybrid_rao_blackwellised_matches_selected_per_channel() {
 fn sequential_exact_rao_blackwellised_matches_selected_per_channel() {
     for design in [&BUMPY, &HALF_SHADOW] {
         assert_rao_blackwellised_matches_selected(design, "sequential-exact");
+    }
+}
+
+/// The tolerance of the recorded verdicts, ±1% at 99%.
+const TIGHT: Protocol = Protocol {
+    delta: 0.01,
+    alpha: 0.01,
+};
+
+/// Reference batches of the ±1% verdicts per design batch of the ±2% tests: the reference's
+/// relative error halves (≤ 0.06%).
+const TIGHT_REFERENCE: u32 = 4;
+
+/// The verdicts at ±1% of every preset and the two near-δ controls (J × 1.03, blue × 1.03) on
+/// both designs, each through `lab::bias::run` with N from the power plan at ±1% (the same CVs,
+/// margin and family power as the ±2% tests) against a reference of 4× the batches, shared
+/// within a design. A measurement recorded in `docs/experiments.md`: `cargo test --release -p
+/// lab --test unbiased record_verdicts_at_1pct -- --ignored --nocapture`.
+#[test]
+#[ignore = "a measurement, run by hand (about 25 CPU-minutes)"]
+fn record_verdicts_at_1pct() {
+    for design in [&BUMPY, &HALF_SHADOW] {
+        let batches = TIGHT_REFERENCE * design.reference_batches;
+        let tight = EquivalencePlan {
+            delta: TIGHT.delta,
+            reference_rel_se: design.reference_rel_se / f64::from(TIGHT_REFERENCE).sqrt(),
+            reference_n: batches as usize,
+            ..design.plan()
+        };
+        let n = |preset: &str| {
+            let cvs = design.measured_cv(preset).iter().flatten();
+            let planned: Vec<_> = cvs.map(|cv| (tight, CV_MARGIN * cv)).collect();
+            replicas_for(&planned, FAMILY_POWER, 1 << 20).expect("plannable") as u32
+        };
+        let plan = |method: Method, planned: &str| BiasPlan {
+            scene: (design.scene)(),
+            spec: method.name(),
+            method,
+            replicas: Replicas::Fixed(n(planned)),
+            frames: FRAMES,
+            protocol: TIGHT,
+            reference_batches: batches,
+            reference_batch_spp: design.spp_per_batch,
+            backend: Backend::Cpu,
+            reference: None,
+        };
+        let mut methods: Vec<(Method, &str)> = design
+            .cv
+            .iter()
+            .map(|(name, _)| {
+                let method = Method::parse(&format!("restir:{name}")).expect("registered");
+                (method, *name)
+            })
+            .collect();
+        let jacobian = Preset::single_shift("J × 1.03", ShiftKind::DelayedJacobianOff);
+        methods.push((Method::new(Restir(jacobian)), "delayed"));
+        let tint = Tinted {
+            method: Method::parse("restir:hybrid").expect("registered preset"),
+            factor: Vec3::new(1.0, 1.0, 1.0 + CONTROL_BIAS as f32),
+        };
+        methods.push((Method::new(tint), "hybrid"));
+        let mut reference = None;
+        for (method, planned) in methods {
+            let start = Instant::now();
+            let mut plan = plan(method, planned);
+            let given = reference.get_or_insert_with(|| {
+                Arc::new(ReferenceBatches::render(&plan).expect("reference settings"))
+            });
+            plan.reference = Some(given.clone());
+            let outcome = lab::bias::run(&plan, &mut lab::progress::Silent).expect("runs");
+            let count = |v: Verdict| outcome.rows.iter().filter(|r| r.verdict == v).count();
+            println!(
+                "{} on {}: N = {}, {batches} × {} spp reference, δ = ±1%, α = {}, {:.1} s: {} equivalent, {} biased, {} inconclusive\n{}",
+                plan.spec,
+                design.name,
+                outcome.replicas,
+                design.spp_per_batch,
+                TIGHT.alpha,
+                start.elapsed().as_secs_f64(),
+                count(Verdict::Equivalent),
+                count(Verdict::Biased),
+                count(Verdict::Inconclusive),
+                Table(&outcome.rows)
+            );
+        }
     }
 }

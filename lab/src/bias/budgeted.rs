@@ -29,7 +29,7 @@ use restir::stats::{
     EquivalencePlan, Summary, Verdict, equivalence, normal_quantile, replicas_for,
 };
 
-use super::job::{Counts, Setup, outcome, render_replica};
+use super::job::{Counts, Setup, chunk, outcome, render_chunk};
 use super::outcome::{
     BiasOutcome, LookEntry, Needs, NonFinite, PLANNED_POWER, RowDesign, SequentialEntry,
 };
@@ -68,7 +68,7 @@ impl Replicas {
         self.seconds / self.len().max(1) as f64
     }
 
-    /// Renders replicas up to seed `n − 1` unless a stop is requested.
+    /// Renders replicas up to seed `n − 1` (`job::chunk` at a time) unless a stop is requested.
     fn extend(
         &mut self,
         plan: &BiasPlan,
@@ -82,18 +82,21 @@ impl Replicas {
                 self.interrupted = true;
                 return Ok(());
             }
+            let seeds = self.len() as u64..(n as u64).min(self.len() as u64 + chunk(plan));
             let before = watch.read().seconds;
-            let (rgb, nonfinite) = render_replica(plan, self.len() as u64)?;
+            let rendered = render_chunk(plan, seeds)?;
             self.seconds += watch.read().seconds - before;
-            self.nonfinite += nonfinite;
-            for (all, one) in self
-                .means
-                .iter_mut()
-                .zip(region_means(&[rgb], &setup.regions))
-            {
-                all.2.extend(one.2);
+            for (rgb, nonfinite) in rendered {
+                self.nonfinite += nonfinite;
+                for (all, one) in self
+                    .means
+                    .iter_mut()
+                    .zip(region_means(&[rgb], &setup.regions))
+                {
+                    all.2.extend(one.2);
+                }
+                progress.step();
             }
-            progress.step();
         }
         Ok(())
     }

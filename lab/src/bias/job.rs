@@ -4,7 +4,9 @@
 
 use std::ops::Range;
 
+use engine::Backend;
 use glam::DVec3;
+use rayon::prelude::*;
 use sss::integrator::pt::PtSettings;
 use sss::scene::GBuffer;
 
@@ -38,7 +40,12 @@ impl Setup {
 }
 
 /// The reference batches of `plan` at the tested frame, with the method's reference settings.
+/// A reference given in the plan is used when it is the one the plan would render.
 pub(super) fn reference(plan: &BiasPlan, setup: &Setup) -> Result<Images, Error> {
+    if let Some(given) = &plan.reference {
+        given.check(plan)?;
+        return Ok(given.images.clone());
+    }
     Ok(reference_images_with(
         &setup.settings,
         &plan.scene,
@@ -96,7 +103,7 @@ pub(super) fn outcome(
 }
 
 /// The final frame of replica `seed` as linear RGB, and its non-finite values.
-pub(super) fn render_replica(plan: &BiasPlan, seed: u64) -> Result<(Vec<DVec3>, u64), Error> {
+fn render_replica(plan: &BiasPlan, seed: u64) -> Result<(Vec<DVec3>, u64), Error> {
     let rendered = plan
         .method
         .render_on(&plan.backend, &plan.scene, plan.frames, seed)?;
@@ -104,7 +111,18 @@ pub(super) fn render_replica(plan: &BiasPlan, seed: u64) -> Result<(Vec<DVec3>, 
     Ok((rgb, rendered.nonfinite))
 }
 
-/// The final frames of the replicas of `seeds` until a stop request, one step each.
+/// Replicas rendered at once: on the CPU a chunk of them runs in parallel (each is a function of
+/// its seed, so the images do not depend on the chunking; a small image parallelises poorly
+/// within one replica), two per worker thread; a Vulkan device renders one at a time.
+pub(super) fn chunk(plan: &BiasPlan) -> u64 {
+    match plan.backend {
+        Backend::Cpu => 2 * rayon::current_num_threads() as u64,
+        Backend::Vulkan(_) => 1,
+    }
+}
+
+/// The final frames of the replicas of `seeds` in seed order, [`chunk`] at a time, until a stop
+/// request (checked between chunks); one progress step each.
 pub(super) fn render_replicas(
     plan: &BiasPlan,
     seeds: Range<u64>,
@@ -114,14 +132,29 @@ pub(super) fn render_replicas(
         rgb: Vec::new(),
         nonfinite: 0,
     };
-    for seed in seeds {
-        if progress.stop_requested() {
-            break;
+    let mut next = seeds.start;
+    while next < seeds.end && !progress.stop_requested() {
+        let end = seeds.end.min(next + chunk(plan));
+        for (rgb, nonfinite) in render_chunk(plan, next..end)? {
+            images.nonfinite += nonfinite;
+            images.rgb.push(rgb);
+            progress.step();
         }
-        let (rgb, nonfinite) = render_replica(plan, seed)?;
-        images.nonfinite += nonfinite;
-        images.rgb.push(rgb);
-        progress.step();
+        next = end;
     }
     Ok(images)
+}
+
+/// The final frames of the replicas of `seeds`, in seed order (in parallel on the CPU).
+pub(super) fn render_chunk(
+    plan: &BiasPlan,
+    seeds: Range<u64>,
+) -> Result<Vec<(Vec<DVec3>, u64)>, Error> {
+    match plan.backend {
+        Backend::Cpu => seeds
+            .into_par_iter()
+            .map(|seed| render_replica(plan, seed))
+            .collect(),
+        Backend::Vulkan(_) => seeds.map(|seed| render_replica(plan, seed)).collect(),
+    }
 }

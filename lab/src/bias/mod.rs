@@ -19,10 +19,12 @@
 //! the group-sequential design of `sequential` planned and run by `budgeted`; what it found
 //! ([`BiasOutcome`], the JSON of `reshift bias`) in `outcome`; the replicas' and reference batches' final frames in
 //! `render`; their reduction to region means in `summary`; the replicas a run needs in
-//! `planning`; the Markdown table in `table`; a test split over seeds and merged again in
+//! `planning`; reference batches rendered once for several tests in `given`; the Markdown table
+//! in `table`; a test split over seeds and merged again in
 //! [`shard`]; a tinted method, the negative control of a colour bias, in `tinted`.
 
 mod budgeted;
+mod given;
 mod job;
 mod outcome;
 mod plan;
@@ -38,6 +40,7 @@ mod tests;
 mod tinted;
 
 pub use budgeted::{CV_MARGIN, PILOT};
+pub use given::ReferenceBatches;
 pub use outcome::{
     BiasOutcome, LookEntry, Needs, NonFinite, PLANNED_POWER, Planned, ReferenceEntry, RowDesign,
     SCHEMA, SequentialEntry,
@@ -175,6 +178,25 @@ pub fn bias_rows(
                 let test = equivalence(&estimate, &reference, protocol.delta, 1.0 - protocol.alpha);
                 (e.region, e.pixels, c, estimate, reference, test)
             })
+        })
+        .collect();
+    holm_rows(method, tests, protocol)
+}
+
+/// `rows` (of `method`) tested again under `protocol`: each row's estimate against its
+/// reference at the new tolerance and level, Holm across them; the rows [`bias_rows`] gives at
+/// that protocol from the same summaries.
+pub fn rows_at(method: &str, rows: &[BiasRow], protocol: &Protocol) -> Vec<BiasRow> {
+    let tests = rows
+        .iter()
+        .map(|r| {
+            let test = equivalence(
+                &r.estimate,
+                &r.reference,
+                protocol.delta,
+                1.0 - protocol.alpha,
+            );
+            (r.region, r.pixels, r.channel, r.estimate, r.reference, test)
         })
         .collect();
     holm_rows(method, tests, protocol)

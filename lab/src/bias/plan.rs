@@ -3,6 +3,7 @@
 //! option at fault.
 
 use std::path::Path;
+use std::sync::Arc;
 use std::time::Duration;
 
 use engine::Backend;
@@ -12,6 +13,7 @@ use sss::limits::{self, MAX_SPP};
 use sss::scene::Scene;
 
 use super::Protocol;
+use super::given::ReferenceBatches;
 use super::test_bytes;
 use crate::limits::MAX_REPLICAS;
 
@@ -43,6 +45,10 @@ pub struct BiasPlan {
     pub reference_batches: u32,
     pub reference_batch_spp: u32,
     pub backend: Backend,
+    /// The reference batches rendered beforehand and shared by several tests of one scene
+    /// ([`ReferenceBatches::render`]), or `None` to render them in the test. Only the fixed
+    /// design takes them (the budgeted one grows its reference as it plans).
+    pub reference: Option<Arc<ReferenceBatches>>,
 }
 
 impl BiasPlan {
@@ -78,6 +84,10 @@ impl BiasPlan {
             Replicas::Fixed(n) => {
                 count("--replicas", n, 2, MAX_REPLICAS)?;
                 n
+            }
+            Replicas::Budget(_) if self.reference.is_some() => {
+                let reason = "a reference rendered beforehand serves the fixed design only";
+                return Err(InputError::new(origin, "--budget", "given", reason));
             }
             Replicas::Budget(budget) => {
                 if budget.is_zero() {

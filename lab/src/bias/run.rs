@@ -15,7 +15,8 @@ use crate::progress::Progress;
 
 /// Runs the bias test of `plan`, reporting to `progress` (one phase, the replicas, named after
 /// the method). The regions and the reference are those of the last frame; replica `i` renders
-/// with seed `i`, one after another. A stop request ends the replicas after the current one:
+/// with seed `i`, several at once on the CPU (`job::chunk`). A stop request ends the replicas after
+/// the current chunk:
 /// the outcome of those rendered ([`BiasOutcome::interrupted`]), or [`Error::Interrupted`]
 /// before two.
 pub fn run(plan: &BiasPlan, progress: &mut dyn Progress) -> Result<BiasOutcome, Error> {

@@ -316,6 +316,7 @@ fn rebuilt_plan(path: &Path, shard: &BiasShard) -> Result<BiasPlan, Error> {
         reference_batches: p.reference_batches,
         reference_batch_spp: p.reference_batch_spp,
         backend: Backend::Cpu,
+        reference: None,
     })
 }
 
@@ -341,6 +342,7 @@ mod tests {
             reference_batches: 4,
             reference_batch_spp: 2,
             backend: Backend::Cpu,
+            reference: None,
         }
     }
 

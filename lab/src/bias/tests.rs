@@ -377,6 +377,7 @@ fn small_plan() -> BiasPlan {
         reference_batches: 2,
         reference_batch_spp: 2,
         backend: engine::Backend::Cpu,
+        reference: None,
     }
 }
 
@@ -413,6 +414,87 @@ fn a_bad_tolerance_or_level_is_refused() {
     assert!(small_plan().validate(origin).is_ok());
 }
 
+/// A reference rendered beforehand gives the rows of a test that renders its own, bit for bit;
+/// one of another frame, batch count or scene is refused in one line naming the setting, and
+/// the budgeted design refuses any.
+#[test]
+fn a_given_reference_is_the_one_the_test_would_render() {
+    let own = run(&small_plan(), &mut crate::progress::Silent).expect("runs");
+    let batches = std::sync::Arc::new(ReferenceBatches::render(&small_plan()).expect("renders"));
+    let given = BiasPlan {
+        reference: Some(batches.clone()),
+        ..small_plan()
+    };
+    let shared = run(&given, &mut crate::progress::Silent).expect("runs");
+    assert_eq!(
+        serde_json::to_string(&shared).unwrap(),
+        serde_json::to_string(&own).unwrap()
+    );
+    let scene = Scene::builtin("slab").expect("built-in");
+    let others = [
+        (
+            "frame",
+            BiasPlan {
+                frames: 2,
+                reference: Some(batches.clone()),
+                ..small_plan()
+            },
+        ),
+        (
+            "batches",
+            BiasPlan {
+                reference_batches: 3,
+                reference: Some(batches.clone()),
+                ..small_plan()
+            },
+        ),
+        (
+            "scene",
+            BiasPlan {
+                scene: crate::scenes::with_resolution(scene, Some((8, 6))),
+                reference: Some(batches.clone()),
+                ..small_plan()
+            },
+        ),
+    ];
+    for (field, plan) in others {
+        let line = match run(&plan, &mut crate::progress::Silent) {
+            Err(crate::Error::Input(e)) => e.to_string(),
+            other => panic!("{field}: {:?}", other.map(|o| o.verdict)),
+        };
+        assert!(line.contains(&format!("field `{field}`")), "{line}");
+        assert_eq!(line.lines().count(), 1, "{line}");
+    }
+    let budgeted = BiasPlan {
+        replicas: Replicas::Budget(std::time::Duration::from_secs(1)),
+        reference: Some(batches),
+        ..small_plan()
+    };
+    let line = budgeted
+        .validate(std::path::Path::new("(command line)"))
+        .unwrap_err()
+        .to_string();
+    assert!(line.contains("field `--budget` = given:"), "{line}");
+}
+
+/// Rows tested again at another level are the rows a test at that level computes.
+#[test]
+fn rows_at_another_level_are_that_levels_rows() {
+    let outcome = run(&small_plan(), &mut crate::progress::Silent).expect("runs");
+    let strict = Protocol {
+        alpha: 0.001,
+        ..PROTOCOL
+    };
+    let again = rows_at(&outcome.rows[0].method, &outcome.rows, &strict);
+    let plan = BiasPlan {
+        protocol: strict,
+        ..small_plan()
+    };
+    let direct = run(&plan, &mut crate::progress::Silent).expect("runs");
+    assert_eq!(format!("{:?}", again), format!("{:?}", direct.rows));
+    assert_ne!(format!("{:?}", again), format!("{:?}", outcome.rows));
+}
+
 /// Asks to stop once `after` replicas are done.
 struct StopAfter {
     after: u64,
@@ -430,8 +512,8 @@ impl crate::progress::Progress for StopAfter {
 }
 
 /// `run` renders every replica, one row per non-empty region and channel; a stop request keeps
-/// the replicas rendered (an interrupted outcome) unless fewer than two are; the same plan gives
-/// the same outcome.
+/// the replicas rendered by the end of the current chunk (an interrupted outcome) unless fewer
+/// than two are; the same plan gives the same outcome.
 #[test]
 fn run_tests_the_plan_and_stops_on_request() {
     let plan = small_plan();
@@ -451,9 +533,15 @@ fn run_tests_the_plan_and_stops_on_request() {
     );
     let again = run(&plan, &mut crate::progress::Silent).expect("runs");
     assert_eq!(again.to_json(), whole.to_json());
-    let stopped = run(&plan, &mut StopAfter { after: 3, done: 0 }).expect("3 replicas");
-    assert_eq!((stopped.replicas, stopped.interrupted), (3, true));
-    let early = run(&plan, &mut StopAfter { after: 1, done: 0 });
+    // A stop is seen between chunks of 2 replicas per worker thread.
+    let chunk = 2 * rayon::current_num_threads();
+    let longer = BiasPlan {
+        replicas: Replicas::Fixed(3 * chunk as u32),
+        ..small_plan()
+    };
+    let stopped = run(&longer, &mut StopAfter { after: 3, done: 0 }).expect("a chunk");
+    assert_eq!((stopped.replicas, stopped.interrupted), (chunk, true));
+    let early = run(&plan, &mut StopAfter { after: 0, done: 0 });
     assert!(matches!(early, Err(crate::Error::Interrupted(_))));
 }
 
@@ -567,6 +655,7 @@ fn default_design_detects_the_controls() {
             reference_batches: 32,
             reference_batch_spp: 64,
             backend: engine::Backend::Cpu,
+            reference: None,
         };
         let outcome = run(&plan, &mut crate::progress::Silent).expect("runs");
         println!("{}:\n{}", plan.spec, Table(&outcome.rows));

@@ -43,20 +43,26 @@ pub const ENTRY: Entry = Entry {
     build: build,
 };
 
-/// `restir:<arg>`: [`Restir`] of [`preset`], or [`Channels`] of it with `/channels=rgb` (the
-/// preset's target must then be the luminance, which each channel's run replaces).
+/// `restir:<arg>`: [`Restir`] of [`preset`], or with `/channels=rgb` [`Channels`] of the preset
+/// the other modifiers make (its target must be the luminance, which each channel's run
+/// replaces), named `arg`.
 fn build(arg: Option<&str>) -> Result<Method, String> {
-    let channels = arg.is_some_and(|a| a.split('/').skip(1).any(|m| m == "channels=rgb"));
-    let preset = preset(arg)?;
-    if !channels {
-        return Ok(Method::new(Restir(preset)));
+    let arg = arg.ok_or("needs a preset, e.g. restir:hybrid")?;
+    let mut parts = arg.split('/');
+    let name = parts.next().unwrap_or_default();
+    let (per_channel, others): (Vec<&str>, Vec<&str>) = parts.partition(|m| *m == "channels=rgb");
+    if per_channel.is_empty() {
+        return Ok(Method::new(Restir(preset(Some(arg))?)));
     }
+    let spec: Vec<&str> = std::iter::once(name).chain(others).collect();
+    let mut preset = preset(Some(&spec.join("/")))?;
     if preset.target != Target::Luminance {
         return Err(format!(
             "channels=rgb sets p̂ to each channel in turn; it cannot be combined with target={}",
             preset.target.name()
         ));
     }
+    preset.name = arg.to_string();
     Ok(Method::new(Channels(preset)))
 }
 
@@ -70,8 +76,8 @@ pub struct Restir(pub Preset);
 /// `/cap=<κ>` (the temporal confidence cap, finite and > 0), `/spatial-cap=<κ>` (every spatial
 /// pass's cap), `/neighbours=<n>` (every spatial pass's count), `/radius=<clamped|unclamped>`
 /// (every spatial pass's [`RadiusRule`]), `/target=<p̂>` (the [`Target`] named `p̂`) and
-/// `/shade=<selected|all>` ([`Shade`]); `/channels=rgb` is the method's ([`Channels`]) and leaves
-/// the preset as it is. A modified preset is named `arg`.
+/// `/shade=<selected|all>` ([`Shade`]). A modified preset is named `arg`. `/channels=rgb` is
+/// refused: it makes a method of three runs ([`Channels`]), not a preset.
 pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
     let arg = arg.ok_or("needs a preset, e.g. restir:hybrid")?;
     let mut parts = arg.split('/');
@@ -111,7 +117,11 @@ pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
                 shade: Shade::AllInputs,
                 ..preset
             },
-            Some(("channels", "rgb")) => preset,
+            Some(("channels", "rgb")) => {
+                return Err("channels=rgb runs the preset once per channel: a method \
+                            (restir:<preset>/channels=rgb), not one preset"
+                    .into());
+            }
             Some(("channels", value)) => {
                 return Err(format!("channels {value:?} is not rgb"));
             }
@@ -335,17 +345,15 @@ mod tests {
         ] {
             let method = Method::parse(&format!("restir:{spec}")).unwrap();
             assert_eq!(method.name(), format!("restir:{spec}"));
-            let channels = Channels(preset(Some(spec)).unwrap());
+            let channels = Channels(Preset {
+                name: spec.into(),
+                ..preset(Some("hybrid/shade=all")).unwrap()
+            });
             assert_eq!(format!("{method:?}"), format!("{channels:?}"));
-            assert_eq!(
-                (channels.0.target, channels.0.shade, &channels.0.passes),
-                (
-                    Target::Luminance,
-                    Shade::AllInputs,
-                    &Preset::named("hybrid").unwrap().passes
-                )
-            );
+            assert_eq!(channels.0.target, Target::Luminance);
         }
+        let not_a_preset = preset(Some("hybrid/channels=rgb")).expect_err("channels=rgb");
+        assert!(not_a_preset.contains("channels=rgb"), "{not_a_preset}");
         let mixed = Method::parse("restir:hybrid/channels=rgb/target=red").expect_err("mixed");
         assert!(mixed.to_string().contains("target=red"), "{mixed}");
         assert!(!mixed.to_string().contains('\n'), "{mixed}");

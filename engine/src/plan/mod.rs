@@ -364,6 +364,30 @@ mod tests {
         );
     }
 
+    /// Every step's push constants carry the preset's target (`TARGET_*`), the luminance's by
+    /// default.
+    #[test]
+    fn every_step_carries_the_target() {
+        let hybrid = Preset::named("hybrid").unwrap();
+        for target in [Target::Luminance, Target::Red, Target::Blue] {
+            let preset = Preset {
+                target,
+                ..hybrid.clone()
+            };
+            let codes: Vec<u32> = Plan::lower(&preset)
+                .steps
+                .iter()
+                .map(|s| s.params(false).target)
+                .collect();
+            assert_eq!(codes, vec![target.code(); preset.passes.len() + 2]);
+        }
+        assert_eq!(
+            Target::Luminance.code(),
+            0,
+            "a zeroed PassParams targets the luminance"
+        );
+    }
+
     /// Rao-Blackwellised shading: the G-buffer step clears the per-pixel values, the reuse
     /// passes write them and shade reads them, every step says so in its push constants, and
     /// the waits are those of selected shading (every step after the G-buffer already waits).

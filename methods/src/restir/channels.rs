@@ -24,35 +24,6 @@ const CHANNELS: [Target; 3] = [Target::Red, Target::Green, Target::Blue];
 #[derive(Clone, Debug, PartialEq)]
 pub struct Channels(pub Preset);
 
-impl Channels {
-    /// The three runs of replica `seed`, merged channel by channel, frame by frame.
-    fn trajectory(
-        &self,
-        backend: &Backend,
-        scene: &Scene,
-        frames: u32,
-        seed: u64,
-    ) -> Result<Trajectory, PipelineError> {
-        let mut runs = Vec::with_capacity(CHANNELS.len());
-        for target in CHANNELS {
-            let preset = Preset {
-                target,
-                ..self.0.clone()
-            };
-            runs.push(trajectory(&preset, backend, scene, frames, seed)?);
-        }
-        let frames_out = (0..frames as usize)
-            .map(|f| merge([&runs[0].frames[f], &runs[1].frames[f], &runs[2].frames[f]]))
-            .collect();
-        Ok(Trajectory {
-            frames: frames_out,
-            frames_rendered: frames,
-            nonfinite: runs.iter().map(|r| r.nonfinite).sum(),
-            counts: None,
-        })
-    }
-}
-
 /// The image whose channel `c` is channel `c` of `images[c]` (all of one size).
 fn merge(images: [&Image; 3]) -> Image {
     let [red, green, blue] = images;
@@ -87,10 +58,11 @@ impl Estimator for Channels {
         frames: u32,
         seed: u64,
     ) -> Result<LastFrame, PipelineError> {
-        last_frame(self.trajectory(backend, scene, frames, seed)?)
+        last_frame(self.render_trajectory(backend, scene, frames, seed)?)
     }
 
-    /// The three runs of the trajectory, merged frame by frame.
+    /// The three runs of replica `seed`, merged channel by channel, frame by frame; the
+    /// non-finite count is theirs summed.
     fn render_trajectory(
         &self,
         backend: &Backend,
@@ -98,7 +70,23 @@ impl Estimator for Channels {
         frames: u32,
         seed: u64,
     ) -> Result<Trajectory, PipelineError> {
-        self.trajectory(backend, scene, frames, seed)
+        let mut runs = Vec::with_capacity(CHANNELS.len());
+        for target in CHANNELS {
+            let preset = Preset {
+                target,
+                ..self.0.clone()
+            };
+            runs.push(trajectory(&preset, backend, scene, frames, seed)?);
+        }
+        let frames_out = (0..frames as usize)
+            .map(|f| merge([&runs[0].frames[f], &runs[1].frames[f], &runs[2].frames[f]]))
+            .collect();
+        Ok(Trajectory {
+            frames: frames_out,
+            frames_rendered: frames,
+            nonfinite: runs.iter().map(|r| r.nonfinite).sum(),
+            counts: None,
+        })
     }
 }
 

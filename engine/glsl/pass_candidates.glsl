@@ -141,6 +141,7 @@ void main() {
         diag[pixel] = uvec4(0u);
         return;
     }
+    domain.target = params.target;
     PixelReservoir canonical;
     ProbeCounts counts;
     uint error = candidates_generate(domain, params.bssrdf_samples, params.shared_light != 0u,

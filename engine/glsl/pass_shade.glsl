@@ -49,6 +49,7 @@ void main() {
     SssDomain domain;
     vec3 value;
     if (domain_new(x1, pixel, frame_params.frame, params.pass, seed, domain)) {
+        domain.target = params.target;
         // Selected shading binds no per-pixel values: the buffer is read only with params.shade.
         vec4 rao_blackwellised_value = vec4(0.0);
         if (params.shade != 0u) {

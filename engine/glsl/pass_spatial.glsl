@@ -52,6 +52,7 @@ void main() {
     if (!domain_new(g, pixel, frame, params.pass, seed, resample_domains[0])) {
         return;
     }
+    resample_domains[0].target = params.target;
     resample_inputs[0] = stored;
     float max_d = bssrdf_max_element(material_d(resample_domains[0].material));
     float radius = camera_spatial_radius_px(frame_params.camera,
@@ -76,6 +77,7 @@ void main() {
         if (!domain_new(g_q, q, frame, params.pass, seed, domain)) {
             continue;
         }
+        domain.target = params.target;
         if (g_q.object != g.object) {
             continue;
         }

@@ -63,6 +63,7 @@ void main() {
     if (!domain_new(g, pixel, frame_params.frame, params.pass, seed, resample_domains[0])) {
         return;
     }
+    resample_domains[0].target = params.target;
     uint q;
     if (frame_params.has_previous == 0u || frame_params.frame == 0u || !reproject(g, q)) {
         return;
@@ -71,6 +72,7 @@ void main() {
                     resample_domains[1])) {
         return;
     }
+    resample_domains[1].target = params.target;
     resample_inputs[0] = stored;
     resample_inputs[1] = previous_reservoirs[q];
     resample_inputs[1].confidence = reservoir_cap_confidence(

@@ -163,6 +163,9 @@ twin::contract! {
         /// 1 for `Shade::AllInputs`: the reuse passes write the Rao-Blackwellised value of the
         /// pixels they resample and shade paints it; 0 (`Shade::Selected`): neither touches it.
         pub shade: u32,
+        /// The preset's `Target` code (`TARGET_*` of the shifts' contract): `p̂` of every
+        /// domain of the pass.
+        pub target: u32,
     }
 
     /// Push constants of `method_random_walk`.

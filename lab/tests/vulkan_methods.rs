@@ -1,7 +1,8 @@
 //! The whole frame pipeline on Vulkan against the CPU backend: every preset and method runs on
 //! every built-in scene; a 16-frame `sequential` run agrees with the CPU run of the same seed
 //! far better than two CPU seeds agree with each other, and so do the pass-parameter modifiers
-//! and Rao-Blackwellised shading (`/shade=all`); GPU runs are deterministic.
+//! (the channel targets among them), per-channel reservoirs (`/channels=rgb`) and
+//! Rao-Blackwellised shading (`/shade=all`); GPU runs are deterministic.
 //!
 //! Without Vulkan (no loader, no device, or a build without glslc) each test says why it is
 //! skipped and passes, unless `RESHIFT_REQUIRE_VULKAN=1`, which makes it fail.
@@ -29,9 +30,14 @@ fn config(seed: u64, frames: u32) -> RunConfig {
 /// Mean over frames and pixels of `Σ_c (a − b)² / (b² + ε)` over RGB, ε = 1e-2 (a relative MSE
 /// that does not explode on black pixels), accumulated in f64.
 fn rel_mse(a: &Run, b: &Run) -> f64 {
+    rel_mse_frames(&a.frames, &b.frames)
+}
+
+/// [`rel_mse`] of two trajectories' frames.
+fn rel_mse_frames(a: &[Image], b: &[Image]) -> f64 {
     const EPSILON: f64 = 1e-2;
     let (mut sum, mut n) = (0.0, 0usize);
-    for (fa, fb) in a.frames.iter().zip(&b.frames) {
+    for (fa, fb) in a.iter().zip(b) {
         for (pa, pb) in fa.pixels.iter().zip(&fb.pixels) {
             for c in 0..3 {
                 let (x, y) = (pa[c] as f64, pb[c] as f64);
@@ -222,9 +228,9 @@ fn gpu_runs_are_deterministic() {
     assert_ne!(bits(&one).0, bits(&other).0, "control: another seed");
 }
 
-/// The unclamped spatial radius and targets other than the luminance have no Vulkan kernel: the
-/// backend refuses each with one line naming the preset, and the same preset with the clamped
-/// radius and the luminance target runs (control).
+/// The unclamped spatial radius and the mean and L2 targets have no Vulkan kernel: the backend
+/// refuses each with one line naming the preset, and the same preset with the clamped radius, the
+/// luminance or a channel target runs (control).
 #[test]
 fn cpu_only_modifiers_are_refused_in_one_line() {
     let Some(backend) = backend_or_skip("cpu_only_modifiers_are_refused_in_one_line") else {
@@ -246,7 +252,11 @@ fn cpu_only_modifiers_are_refused_in_one_line() {
             "{line}"
         );
     }
-    for control in ["hybrid/radius=clamped", "hybrid/target=luminance"] {
+    for control in [
+        "hybrid/radius=clamped",
+        "hybrid/target=luminance",
+        "hybrid/target=green",
+    ] {
         let preset = restir::preset(Some(control)).unwrap();
         backend.run(&scene, &preset, &config(0, 2)).unwrap();
     }
@@ -431,13 +441,14 @@ fn probes_with_more_hits_than_kept_are_errors() {
 }
 
 /// The modifiers that are pass parameters of the Vulkan kernels — `/neighbours=n`,
-/// `/spatial-cap=κ` and `/cap=κ` — give the CPU run of the same seed on the device: 8 frames of
+/// `/spatial-cap=κ`, `/cap=κ` and `/target=<red|green|blue>` (with `/shade=all` for one) — give
+/// the CPU run of the same seed on the device: 8 frames of
 /// `bumpy` at 32×24, `R = relMSE(GPU a, CPU a) / relMSE(CPU b, CPU a) < 1e-3` (R as in
 /// [`sequential_run_matches_the_cpu_within_monte_carlo_noise`]; 1e-3 allows about six diverged
-/// pixel-frames of 6144; measured on lavapipe: R ≤ 2e-14). Control: the GPU run of the
+/// pixel-frames of 6144; measured on lavapipe: R ≤ 5.3e-14). Control: the GPU run of the
 /// unmodified preset against the modified CPU run must give R ≥ 1e-3 (measured 8.1e-3 for two
-/// against four neighbours, 0.055 for eight with the spatial cap), so a kernel that ignored the
-/// parameter would be caught.
+/// against four neighbours, 0.055 for eight with the spatial cap, 0.081–0.13 for the channel
+/// targets), so a kernel that ignored the parameter would be caught.
 #[test]
 fn pass_parameter_modifiers_match_the_cpu() {
     let Some(backend) = backend_or_skip("pass_parameter_modifiers_match_the_cpu") else {
@@ -449,6 +460,9 @@ fn pass_parameter_modifiers_match_the_cpu() {
         "hybrid/neighbours=8/spatial-cap=1",
         "reconnection/neighbours=2",
         "sequential/cap=20/spatial-cap=0.5",
+        "hybrid/target=red",
+        "sequential/target=green",
+        "reconnection/target=blue/shade=all",
     ] {
         let modified = restir::preset(Some(spec)).unwrap();
         let plain = Preset::named(spec.split('/').next().unwrap()).unwrap();
@@ -461,6 +475,48 @@ fn pass_parameter_modifiers_match_the_cpu() {
         let control = rel_mse(&gpu_plain, &cpu_a) / noise;
         println!("{spec}: R(GPU a) = {ratio:.3e}; control R(GPU, unmodified) = {control:.4}");
         assert!(noise > 0.0 && gpu_a.nan_count == 0, "{spec}");
+        assert!(ratio < BOUND, "{spec}: R = {ratio} ≥ {BOUND}");
+        assert!(control >= BOUND, "{spec}: control R = {control} < {BOUND}");
+    }
+}
+
+/// `restir:hybrid/channels=rgb` (and with `/shade=all`) through `Method::render_trajectory_on`
+/// on the device is the CPU's trajectory of the same seed: 4 frames of `bumpy` at 32×24,
+/// `R = relMSE(GPU a, CPU a) / relMSE(CPU b, CPU a)` below the bound of
+/// [`pass_parameter_modifiers_match_the_cpu`] (each channel's run is a channel-target run that
+/// test checks), with no non-finite value (measured on lavapipe: R = 1.8e-14). Control: the
+/// GPU's luminance-target trajectory of seed a against the CPU's per-channel one must give
+/// R ≥ the bound (measured 0.018, and 0.012 with `/shade=all`).
+#[test]
+fn per_channel_reservoirs_match_the_cpu() {
+    let Some(backend) = backend_or_skip("per_channel_reservoirs_match_the_cpu") else {
+        return;
+    };
+    const BOUND: f64 = 1e-3;
+    let scene = scene("bumpy", 32, 24);
+    let frames = |spec: &str, backend: &Backend, seed: u64| {
+        let method = Method::parse(spec).unwrap();
+        let (run, _) = method
+            .render_trajectory_on(backend, &scene, 4, seed)
+            .unwrap();
+        assert_eq!(
+            (run.frames.len(), run.nonfinite),
+            (4, 0),
+            "{spec} on {backend}"
+        );
+        run.frames
+    };
+    for shade in ["", "/shade=all"] {
+        let spec = format!("restir:hybrid/channels=rgb{shade}");
+        let gpu_a = frames(&spec, &backend, 1);
+        let cpu_a = frames(&spec, &Backend::Cpu, 1);
+        let cpu_b = frames(&spec, &Backend::Cpu, 2);
+        let luminance = frames(&format!("restir:hybrid{shade}"), &backend, 1);
+        let noise = rel_mse_frames(&cpu_b, &cpu_a);
+        let ratio = rel_mse_frames(&gpu_a, &cpu_a) / noise;
+        let control = rel_mse_frames(&luminance, &cpu_a) / noise;
+        println!("{spec}: R(GPU a) = {ratio:.3e}; control R(GPU, luminance) = {control:.4}");
+        assert!(noise > 0.0, "{spec}");
         assert!(ratio < BOUND, "{spec}: R = {ratio} ≥ {BOUND}");
         assert!(control >= BOUND, "{spec}: control R = {control} < {BOUND}");
     }

@@ -1,4 +1,4 @@
-//! `restir:<preset>[/temporal=<shift>][/spatial=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/radius=<clamped|unclamped>][/target=<luminance|mean|l2>][/shade=<selected|all>]`:
+//! `restir:<preset>[/temporal=<shift>][/spatial=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/radius=<clamped|unclamped>][/target=<p̂>][/shade=<selected|all>][/channels=rgb]`:
 //! the ReSTIR SSS frame pipeline with a registered preset [001 §5.1] (DESIGN §6). Every frame of
 //! the trajectory is rendered (temporal reuse) and the last one is kept; `/temporal=<shift>`
 //! swaps the shift of the temporal pass [001 Fig. 10], `/spatial=<shift>` the one shift of the
@@ -6,7 +6,9 @@
 //! `/spatial-cap=<κ>` caps every spatial neighbour's confidence at κ × the receiver's,
 //! `/neighbours=<n>` sets every spatial pass's neighbour count, `/target=<p̂>` the target function
 //! of every domain (`Target`), `/shade=all` shades with all inputs of the last reuse pass
-//! (`Shade::AllInputs`).
+//! (`Shade::AllInputs`), `/channels=rgb` runs the preset once per channel with that channel as
+//! `p̂` and the same seed, and keeps each run's channel ([`Channels`], `restir/channels.rs`:
+//! per-channel reservoirs at about three times the cost).
 //!
 //! The only file of the lab that names presets and shift kinds: when presets move crates, the
 //! import below is the one to change.
@@ -19,9 +21,13 @@ use sss::scene::Scene;
 
 use super::estimator::{Entry, Estimator, LastFrame, Method, Trajectory};
 
+mod channels;
+
+pub use channels::Channels;
+
 pub const ENTRY: Entry = Entry {
     family: "restir",
-    usage: "restir:<preset>[/temporal=<shift>][/spatial=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/radius=<clamped|unclamped>][/target=<luminance|mean|l2>][/shade=<selected|all>]",
+    usage: "restir:<preset>[/temporal=<shift>][/spatial=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/radius=<clamped|unclamped>][/target=<luminance|mean|l2|red|green|blue>][/shade=<selected|all>][/channels=rgb]",
     about: "ReSTIR SSS with spatiotemporal reuse and the preset's shift mapping [001 §5.1]; \
             `/temporal=<shift>` swaps the temporal pass's shift (001 Fig. 10), \
             `/spatial=<shift>` the spatial passes' one shift (see `reshift shifts`); \
@@ -29,10 +35,36 @@ pub const ENTRY: Entry = Entry {
             `/spatial-cap=<κ>` caps spatial neighbours' confidence (default none); \
             `/neighbours=<n>` sets the spatial passes' neighbour count; \
             `/radius=unclamped` drops the spatial disk's [5, 30] px clamp (floor 1 px; CPU only); \
-            `/target=<mean|l2>` sets p̂ to the channel mean or the L2 norm of f (default luminance; CPU only); \
-            `/shade=all` paints the last reuse pass's Rao-Blackwellised value over all its inputs",
-    build: |arg| Ok(Method::new(Restir(preset(arg)?))),
+            `/target=<mean|l2>` sets p̂ to the channel mean or the L2 norm of f (default luminance; CPU only), \
+            `/target=<red|green|blue>` to one channel of f (an estimator of that channel alone); \
+            `/shade=all` paints the last reuse pass's Rao-Blackwellised value over all its inputs; \
+            `/channels=rgb` runs the preset once per channel with that channel as p̂ and the same seed \
+            and keeps each run's channel (per-channel reservoirs; about 3× the cost)",
+    build: build,
 };
+
+/// `restir:<arg>`: [`Restir`] of [`preset`], or with `/channels=rgb` [`Channels`] of the preset
+/// the other modifiers make (its target must be the luminance, which each channel's run
+/// replaces), named `arg`.
+fn build(arg: Option<&str>) -> Result<Method, String> {
+    let arg = arg.ok_or("needs a preset, e.g. restir:hybrid")?;
+    let mut parts = arg.split('/');
+    let name = parts.next().unwrap_or_default();
+    let (per_channel, others): (Vec<&str>, Vec<&str>) = parts.partition(|m| *m == "channels=rgb");
+    if per_channel.is_empty() {
+        return Ok(Method::new(Restir(preset(Some(arg))?)));
+    }
+    let spec: Vec<&str> = std::iter::once(name).chain(others).collect();
+    let mut preset = preset(Some(&spec.join("/")))?;
+    if preset.target != Target::Luminance {
+        return Err(format!(
+            "channels=rgb sets p̂ to each channel in turn; it cannot be combined with target={}",
+            preset.target.name()
+        ));
+    }
+    preset.name = arg.to_string();
+    Ok(Method::new(Channels(preset)))
+}
 
 /// The frame pipeline with `0`'s passes.
 #[derive(Clone, Debug, PartialEq)]
@@ -43,8 +75,9 @@ pub struct Restir(pub Preset);
 /// `/spatial=<shift>` (the same for the spatial passes' one shift, [`Preset::with_spatial_shift`]),
 /// `/cap=<κ>` (the temporal confidence cap, finite and > 0), `/spatial-cap=<κ>` (every spatial
 /// pass's cap), `/neighbours=<n>` (every spatial pass's count), `/radius=<clamped|unclamped>`
-/// (every spatial pass's [`RadiusRule`]), `/target=<luminance|mean|l2>` (the [`Target`] `p̂`)
-/// and `/shade=<selected|all>` ([`Shade`]). A modified preset is named `arg`.
+/// (every spatial pass's [`RadiusRule`]), `/target=<p̂>` (the [`Target`] named `p̂`) and
+/// `/shade=<selected|all>` ([`Shade`]). A modified preset is named `arg`. `/channels=rgb` is
+/// refused: it makes a method of three runs ([`Channels`]), not a preset.
 pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
     let arg = arg.ok_or("needs a preset, e.g. restir:hybrid")?;
     let mut parts = arg.split('/');
@@ -73,7 +106,7 @@ pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
             ),
             Some(("target", value)) => Preset {
                 target: Target::named(value)
-                    .ok_or_else(|| format!("target {value:?} is not luminance, mean or l2"))?,
+                    .ok_or_else(|| format!("target {value:?} is not one of {TARGETS}"))?,
                 ..preset
             },
             Some(("shade", "selected")) => Preset {
@@ -84,6 +117,14 @@ pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
                 shade: Shade::AllInputs,
                 ..preset
             },
+            Some(("channels", "rgb")) => {
+                return Err("channels=rgb runs the preset once per channel: a method \
+                            (restir:<preset>/channels=rgb), not one preset"
+                    .into());
+            }
+            Some(("channels", value)) => {
+                return Err(format!("channels {value:?} is not rgb"));
+            }
             _ => {
                 return Err(format!("unknown modifier {modifier:?}; known: {MODIFIERS}"));
             }
@@ -98,7 +139,10 @@ pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
 }
 
 /// The modifiers [`preset`] knows, for its error message.
-const MODIFIERS: &str = "temporal=<shift>, spatial=<shift>, cap=<κ>, spatial-cap=<κ>, neighbours=<n>, radius=<clamped|unclamped>, target=<luminance|mean|l2>, shade=<selected|all>";
+const MODIFIERS: &str = "temporal=<shift>, spatial=<shift>, cap=<κ>, spatial-cap=<κ>, neighbours=<n>, radius=<clamped|unclamped>, target=<luminance|mean|l2|red|green|blue>, shade=<selected|all>, channels=rgb";
+
+/// The targets `/target=` knows, for its error message.
+const TARGETS: &str = "luminance, mean, l2, red, green, blue";
 
 /// A confidence cap: a finite number > 0.
 fn positive(value: &str) -> Result<f32, String> {
@@ -156,21 +200,7 @@ impl Estimator for Restir {
         frames: u32,
         seed: u64,
     ) -> Result<LastFrame, PipelineError> {
-        let config = RunConfig {
-            seed,
-            frames,
-            collect_diagnostics: false,
-        };
-        let mut result = backend.run(scene, &self.0, &config)?;
-        let image = result
-            .frames
-            .pop()
-            .ok_or_else(|| PipelineError::Config("the run returned no frame".into()))?;
-        Ok(LastFrame {
-            image,
-            frames_rendered: frames,
-            nonfinite: result.nan_count,
-        })
+        last_frame(trajectory(&self.0, backend, scene, frames, seed)?)
     }
 
     /// One run of the trajectory: `engine::Run::frames` holds every frame.
@@ -181,25 +211,49 @@ impl Estimator for Restir {
         frames: u32,
         seed: u64,
     ) -> Result<Trajectory, PipelineError> {
-        let config = RunConfig {
-            seed,
-            frames,
-            collect_diagnostics: false,
-        };
-        let result = backend.run(scene, &self.0, &config)?;
-        if result.frames.len() != frames as usize {
-            return Err(PipelineError::Config(format!(
-                "the run returned {} frames, not {frames}",
-                result.frames.len()
-            )));
-        }
-        Ok(Trajectory {
-            frames: result.frames,
-            frames_rendered: frames,
-            nonfinite: result.nan_count,
-            counts: None,
-        })
+        trajectory(&self.0, backend, scene, frames, seed)
     }
+}
+
+/// The last frame of `run`, with what it cost.
+fn last_frame(mut run: Trajectory) -> Result<LastFrame, PipelineError> {
+    let image = run
+        .frames
+        .pop()
+        .ok_or_else(|| PipelineError::Config("the run returned no frame".into()))?;
+    Ok(LastFrame {
+        image,
+        frames_rendered: run.frames_rendered,
+        nonfinite: run.nonfinite,
+    })
+}
+
+/// One run of `preset` for replica `seed`: every frame of the trajectory.
+fn trajectory(
+    preset: &Preset,
+    backend: &Backend,
+    scene: &Scene,
+    frames: u32,
+    seed: u64,
+) -> Result<Trajectory, PipelineError> {
+    let config = RunConfig {
+        seed,
+        frames,
+        collect_diagnostics: false,
+    };
+    let result = backend.run(scene, preset, &config)?;
+    if result.frames.len() != frames as usize {
+        return Err(PipelineError::Config(format!(
+            "the run returned {} frames, not {frames}",
+            result.frames.len()
+        )));
+    }
+    Ok(Trajectory {
+        frames: result.frames,
+        frames_rendered: frames,
+        nonfinite: result.nan_count,
+        counts: None,
+    })
 }
 
 #[cfg(test)]
@@ -285,6 +339,24 @@ mod tests {
             );
         }
         assert_eq!(preset(Some("hybrid")).unwrap().target, Target::Luminance);
+        for spec in [
+            "hybrid/channels=rgb/shade=all",
+            "hybrid/shade=all/channels=rgb",
+        ] {
+            let method = Method::parse(&format!("restir:{spec}")).unwrap();
+            assert_eq!(method.name(), format!("restir:{spec}"));
+            let channels = Channels(Preset {
+                name: spec.into(),
+                ..preset(Some("hybrid/shade=all")).unwrap()
+            });
+            assert_eq!(format!("{method:?}"), format!("{channels:?}"));
+            assert_eq!(channels.0.target, Target::Luminance);
+        }
+        let not_a_preset = preset(Some("hybrid/channels=rgb")).expect_err("channels=rgb");
+        assert!(not_a_preset.contains("channels=rgb"), "{not_a_preset}");
+        let mixed = Method::parse("restir:hybrid/channels=rgb/target=red").expect_err("mixed");
+        assert!(mixed.to_string().contains("target=red"), "{mixed}");
+        assert!(!mixed.to_string().contains('\n'), "{mixed}");
         let refused = Method::parse("restir:hybrid/radius=wide").expect_err("radius=wide");
         assert!(!refused.to_string().contains('\n'), "{refused}");
         assert!(refused.to_string().contains("wide"), "{refused}");
@@ -297,6 +369,9 @@ mod tests {
             "restir:hybrid/radius=",
             "restir:hybrid/radius=Unclamped",
             "restir:hybrid/target=max",
+            "restir:hybrid/channels=rg",
+            "restir:hybrid/channels=",
+            "restir:hybrid/channels=rgb/target=mean",
             "restir:hybrid/target=",
             "restir:hybrid/cap=0",
             "restir:hybrid/cap=-1",

@@ -16,12 +16,14 @@
 // SHADOW_EPSILON and the shifts' stream purposes PURPOSE_INVERSION, PURPOSE_PICK and
 // PARTNER_PIXEL_MASK come from the contract (shifts/src/contract.rs, via sample.glsl).
 
-// The domain of one pixel: its translucent material, x1, the technique selection and the stream
-// key fields.
+// The domain of one pixel: its translucent material, x1, the technique selection, the target
+// function (a TARGET_* code; the pass kernels set the preset's, as SssDomain::with_target) and
+// the stream key fields.
 struct SssDomain {
     GpuMaterial material;
     ExitPoint x1;
     TechniqueSelection selection;
+    uint target;
     uint pixel;
     uint frame;
     uint pass;
@@ -66,6 +68,7 @@ bool domain_new(GPixel gpixel, uint pixel, uint frame, uint pass, uint64_t seed,
     domain.pass = pass;
     domain.seed = seed;
     domain.selection = bssrdf_selection_default();
+    domain.target = TARGET_LUMINANCE;
     if (gpixel.valid == 0u || gpixel.object >= uint(scene_objects.length())) {
         return false;
     }
@@ -163,9 +166,25 @@ bool domain_visible(SssDomain domain, SssSample y) {
     return bvh_traverse(ray, BVH_OCCLUDED, BVH_NO_HIT).prim == BVH_NO_HIT;
 }
 
-// Domain::target: p-hat = luminance(f), unshadowed, clamped below at 0 (f32::max).
+// Target::of (shifts/src/target.rs) for the targets with a kernel: the luminance and the channels
+// (channel selection is exact, so it matches the CPU bit for bit). TARGET_MEAN and TARGET_L2 are
+// CPU-only; the renderer refuses them.
+float domain_target_of(uint target, vec3 f) {
+    switch (target) {
+    case TARGET_RED:
+        return f.x;
+    case TARGET_GREEN:
+        return f.y;
+    case TARGET_BLUE:
+        return f.z;
+    default:
+        return bssrdf_target(f);
+    }
+}
+
+// Domain::target: p-hat of the domain's target of f, unshadowed, clamped below at 0 (f32::max).
 float domain_target(SssDomain domain, SssSample y) {
-    return rust_max(bssrdf_target(domain_contribution(domain, y)), 0.0);
+    return rust_max(domain_target_of(domain.target, domain_contribution(domain, y)), 0.0);
 }
 
 // SssDomain::shift_stream: the stream of a shift's random numbers used at `domain` when it is

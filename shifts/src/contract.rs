@@ -28,6 +28,27 @@ twin::contract! {
     /// unbiasedness tests resolve per region and channel.
     pub const BROKEN_JACOBIAN_ERROR: f32 = 1.03;
 
+    /// How the target function `p̂` of the SSS domain weighs the channels of the unshadowed
+    /// contribution `f` (DESIGN §9; methods in `target.rs`). Every choice is ≥ 0 and positive
+    /// where it is meant to integrate: the scalar targets wherever `f` is, a channel target
+    /// wherever its channel is, so GRIS with it is unbiased for that channel [001 Eq. 5].
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+    pub enum Target in TARGET {
+        /// `p̂ = luminance(f)` (Rec. 709 weights), paper 001's choice.
+        #[default]
+        Luminance,
+        /// `p̂ = (f_r + f_g + f_b)/3`.
+        Mean,
+        /// `p̂ = ‖f‖₂`, scaled by the largest channel so that tiny `f` does not underflow to 0.
+        L2,
+        /// `p̂ = f_r`: GRIS with it estimates the red channel alone.
+        Red,
+        /// `p̂ = f_g`.
+        Green,
+        /// `p̂ = f_b`.
+        Blue,
+    }
+
     /// How the intersection index of an inverted sample is found (DESIGN §5).
     #[derive(Clone, Copy, Debug, PartialEq, Eq)]
     pub enum IndexPolicy in INDEX_POLICY {

@@ -3,7 +3,8 @@
 //! directional light). Pairs: spatial neighbours within the spatial radius in frame 1, and
 //! temporal pairs (the same pixel in frames 0 and 1, the camera moves). Test points come from
 //! BSSRDF IS at the source pixel, shadow-tested like canonical samples for checks 1–2 (`common::VISIBLE`),
-//! all paths with `p̂ > 0` for check 4 (`common::UNSHADOWED`).
+//! all paths with `p̂ > 0` for check 4 (`common::UNSHADOWED`). The domains' `p̂` is the
+//! luminance, and a channel of `f` for the hybrid shift and its parts (`channel_targets_conform`).
 //!
 //! Equality of a round trip is path-space equality of x2 and x3 (`SssDomain`'s local
 //! coordinates); for the inverting reconnection the random numbers are a re-drawn auxiliary
@@ -22,7 +23,7 @@ use restir::shift::{CandidateSampler, Shift};
 use shifts::broken::{DelayedWithoutJacobian, DelayedWithoutVisibility, HybridIgnoringCriterion};
 use shifts::{
     DelayedReconnection, DistantReconnection, Hybrid, IndexPolicy, InvertingReconnection,
-    Reconnection, SssDomain, SssSample,
+    Reconnection, SssDomain, SssSample, Target,
 };
 
 /// Round trip: max deviation of x2, x3 in scene units. Replay re-intersects a triangle in f32
@@ -139,22 +140,30 @@ where
     T: for<'s> Shift<SssDomain<'s>>,
 {
     for &scene in scenes {
-        let fx = fixture(scene);
-        for (label, report) in geometry_checks_with(shift, fx, &VISIBLE, points)
-            .into_iter()
-            .chain(mis_checks(shift, fx))
-        {
-            let shifted = report
-                .figure("shifted")
-                .or(report.figure("tested"))
-                .unwrap_or(0.0);
-            println!("{name}, {label}: {report}");
-            assert!(report.passed, "{name}, {label}: {report}");
-            assert!(
-                shifted >= 20.0,
-                "{name}, {label}: only {shifted} points tested: {report}"
-            );
-        }
+        conforms_on(name, shift, fixture(scene), points);
+    }
+}
+
+/// Checks 1, 2 and 4 on the domains of `fx`, `points` test points per pair and direction in
+/// checks 1 and 2; every check passes on at least 20 points.
+fn conforms_on<T>(name: &str, shift: &T, fx: &Fixture, points: usize)
+where
+    T: for<'s> Shift<SssDomain<'s>>,
+{
+    for (label, report) in geometry_checks_with(shift, fx, &VISIBLE, points)
+        .into_iter()
+        .chain(mis_checks(shift, fx))
+    {
+        let shifted = report
+            .figure("shifted")
+            .or(report.figure("tested"))
+            .unwrap_or(0.0);
+        println!("{name}, {label}: {report}");
+        assert!(report.passed, "{name}, {label}: {report}");
+        assert!(
+            shifted >= 20.0,
+            "{name}, {label}: only {shifted} points tested: {report}"
+        );
     }
 }
 
@@ -184,6 +193,29 @@ fn hybrid_conforms() {
     for scene in SCENES {
         let hybrid = Hybrid::for_material(fixture(scene).domain_material());
         conforms("hybrid", &hybrid, &[scene]);
+    }
+}
+
+/// The hybrid shift and its parts on domains whose target is one channel of `f`
+/// (`restir:<preset>/channels=rgb`): the shifts' maps do not depend on `p̂`, but their support
+/// (reconnection fails where the receiver's `p̂ = 0`) and every MIS weight do, so checks 1, 2
+/// and 4 run again with the red and the blue target.
+#[test]
+fn channel_targets_conform() {
+    for scene in SCENES {
+        for target in [Target::Red, Target::Blue] {
+            let fx = Fixture::with_target(scene, target);
+            let name = |shift: &str| format!("{shift}, p̂ = {}", target.name());
+            conforms_on(&name("reconnection"), &Reconnection, &fx, POINTS);
+            conforms_on(
+                &name("delayed reconnection"),
+                &DelayedReconnection,
+                &fx,
+                POINTS,
+            );
+            let hybrid = Hybrid::for_material(fx.domain_material());
+            conforms_on(&name("hybrid"), &hybrid, &fx, POINTS);
+        }
     }
 }
 

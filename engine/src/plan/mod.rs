@@ -12,6 +12,7 @@
 
 mod kernels;
 
+use shifts::Target;
 use shifts::preset::{PassSpec, Preset, Shade};
 
 use crate::contract::PassParams;
@@ -58,6 +59,8 @@ pub struct Step {
     pub clears: Vec<Resource>,
     /// The preset's shade ([`PassParams::shade`]).
     pub shade: Shade,
+    /// The preset's target function `p̂` ([`PassParams::target`]).
+    pub target: Target,
 }
 
 impl Step {
@@ -76,6 +79,7 @@ impl Step {
         let collect = collect_diagnostics && self.spec.is_some();
         PassParams {
             shade: (self.shade == Shade::AllInputs) as u32,
+            target: self.target.code(),
             ..PassParams::new(self.pass, self.spec.as_ref(), collect)
         }
     }
@@ -101,16 +105,15 @@ impl Plan {
     /// reservoirs the previous one wrote and writes the other work buffer; the first writes
     /// `Work(0)`), then shade of the last pass's reservoirs.
     pub fn lower(preset: &Preset) -> Plan {
-        let shade = preset.shade;
         let mut gbuffer = step(
             PassKernel::GBuffer,
             0,
             None,
             "gbuffer".into(),
-            shade,
+            preset,
             |_| None,
         );
-        if shade == Shade::AllInputs {
+        if preset.shade == Shade::AllInputs {
             gbuffer.clears.push(Resource::RaoBlackwellised);
         }
         let mut steps = vec![gbuffer];
@@ -127,7 +130,7 @@ impl Plan {
                 index as u32,
                 Some(*spec),
                 spec.label(),
-                shade,
+                preset,
                 |role| match role {
                     Role::ReservoirsIn => Some(Resource::Reservoirs(input)),
                     Role::ReservoirsOut => Some(Resource::Reservoirs(output)),
@@ -143,7 +146,7 @@ impl Plan {
             passes,
             None,
             "shade".into(),
-            shade,
+            preset,
             |role| (role == Role::ReservoirsIn).then_some(Resource::Reservoirs(input)),
         ));
         Plan {
@@ -194,13 +197,14 @@ impl Plan {
     }
 }
 
-/// A step of `kernel`: the roles every frame has are bound here, the others by `bind`.
+/// A step of `kernel` with `preset`'s shade and target: the roles every frame has are bound
+/// here, the others by `bind`.
 fn step(
     kernel: PassKernel,
     pass: u32,
     spec: Option<PassSpec>,
     label: String,
-    shade: Shade,
+    preset: &Preset,
     bind: impl Fn(Role) -> Option<Resource>,
 ) -> Step {
     let buffers = kernel
@@ -227,7 +231,8 @@ fn step(
         label,
         buffers,
         clears: Vec::new(),
-        shade,
+        shade: preset.shade,
+        target: preset.target,
     }
 }
 
@@ -330,6 +335,7 @@ mod tests {
                     buffers,
                     clears: Vec::new(),
                     shade: Shade::Selected,
+                    target: Target::Luminance,
                 })
                 .collect(),
             final_reservoirs: Slot::Work(0),
@@ -355,6 +361,30 @@ mod tests {
         assert_eq!(
             plan(vec![vec![(a, w)], vec![(a, r)], vec![(b, r)], vec![(a, r)]]).waits(),
             [false, true, false, false]
+        );
+    }
+
+    /// Every step's push constants carry the preset's target (`TARGET_*`), the luminance's by
+    /// default.
+    #[test]
+    fn every_step_carries_the_target() {
+        let hybrid = Preset::named("hybrid").unwrap();
+        for target in [Target::Luminance, Target::Red, Target::Blue] {
+            let preset = Preset {
+                target,
+                ..hybrid.clone()
+            };
+            let codes: Vec<u32> = Plan::lower(&preset)
+                .steps
+                .iter()
+                .map(|s| s.params(false).target)
+                .collect();
+            assert_eq!(codes, vec![target.code(); preset.passes.len() + 2]);
+        }
+        assert_eq!(
+            Target::Luminance.code(),
+            0,
+            "a zeroed PassParams targets the luminance"
         );
     }
 

@@ -60,7 +60,7 @@ mod tests {
     /// as 0 (the layout itself is checked by the contract at compile time).
     #[test]
     fn pass_params_carry_the_pass() {
-        assert_eq!(size_of::<PassParams>(), 36);
+        assert_eq!(size_of::<PassParams>(), 40);
         let spatial = PassSpec::Spatial {
             shift: ShiftKind::Hybrid,
             mis: MisKind::DefensivePairwise,
@@ -76,6 +76,7 @@ mod tests {
         );
         assert_eq!((p.confidence_cap, p.collect_diagnostics), (0.0, 1));
         assert_eq!(p.shade, 0, "the plan's step sets the shade");
+        assert_eq!(p.target, 0, "the plan's step sets the target");
         let candidates = PassSpec::Candidates {
             bssrdf_samples: 3,
             shared_light: true,

@@ -25,7 +25,6 @@ use crate::hash::Fnv1a;
 use crate::image::Image;
 use crate::plan::Plan;
 use crate::{PipelineError, Run, RunConfig};
-use shifts::Target;
 use shifts::preset::{PassSpec, Preset, RadiusRule};
 
 /// A Vulkan device with its kernels and the last uploaded scene, reused across runs.
@@ -142,18 +141,19 @@ impl Renderer {
     /// Renders `config.frames` frames of `scene` with `preset` (validated by the caller) on
     /// the device: the GPU twin of [`crate::run`]. `Run::timings` are GPU seconds from the
     /// timestamps; they are empty on a queue that writes no timestamps. Both shades run
-    /// (`Shade::AllInputs` through the plan's Rao-Blackwellised buffer); the spatial kernel
-    /// clamps its radius ([`RadiusRule::Clamped`]) and every kernel targets the luminance
-    /// ([`Target::Luminance`]): any other choice is a one-line configuration error.
+    /// (`Shade::AllInputs` through the plan's Rao-Blackwellised buffer); the target reaches
+    /// the kernels through `PassParams::target` and must have a kernel
+    /// ([`shifts::Target::has_kernel`]), and the spatial kernel clamps its radius
+    /// ([`RadiusRule::Clamped`]): any other choice is a one-line configuration error.
     pub fn run(
         &mut self,
         scene: &Scene,
         preset: &Preset,
         config: &RunConfig,
     ) -> Result<Run, PipelineError> {
-        if preset.target != Target::Luminance {
+        if !preset.target.has_kernel() {
             return Err(PipelineError::Config(format!(
-                "preset `{}`: target {} has no Vulkan kernel (p̂ = luminance there); use the CPU backend",
+                "preset `{}`: target {} has no Vulkan kernel (luminance, red, green and blue have); use the CPU backend",
                 preset.name,
                 preset.target.name()
             )));

@@ -80,8 +80,7 @@ pub fn run(settings: &Settings, progress: &mut dyn Progress) -> Result<Report, E
         )));
     }
     let root = output_dir(&settings.out_dir("ablation"))?;
-    // The unclamped radius and the targets other than the luminance have no Vulkan kernel: CPU
-    // rows only.
+    // The unclamped radius and the mean and L2 targets have no Vulkan kernel: CPU rows only.
     let cpu = matches!(settings.backend, engine::Backend::Cpu);
     let rows: Vec<Variation> = bases
         .iter()

@@ -7,7 +7,7 @@ use std::sync::OnceLock;
 
 use restir::rng::{Stream, StreamKey};
 use restir::shift::{CandidateSampler, Domain};
-use shifts::{SssDomain, SssSample};
+use shifts::{SssDomain, SssSample, Target};
 use sss::bssrdf::{BssrdfSample, EntryPoint, Probe, pick_hit};
 use sss::material::{Material, Translucent};
 use sss::scene::{GBuffer, Scene};
@@ -15,10 +15,12 @@ use sss::scene::{GBuffer, Scene};
 /// Run seed of every test stream.
 pub const SEED: u64 = 0x5_1F75;
 
-/// A built-in scene with the G-buffers of frames 0 and 1.
+/// A built-in scene with the G-buffers of frames 0 and 1, and the target function `p̂` of its
+/// domains.
 pub struct Fixture {
     pub scene: Scene,
     pub frames: [GBuffer; 2],
+    pub target: Target,
 }
 
 /// The fixture of built-in scene `name` ("bumpy", "half-shadow" or "far-knot"), built once per
@@ -41,13 +43,22 @@ pub const SCENES: [&str; 2] = ["bumpy", "half-shadow"];
 
 impl Fixture {
     pub fn new(name: &str) -> Fixture {
-        let scene = Scene::builtin(name).unwrap_or_else(|| panic!("no built-in scene {name}"));
-        let frames = [GBuffer::render(&scene, 0), GBuffer::render(&scene, 1)];
-        Fixture { scene, frames }
+        Fixture::with_target(name, Target::Luminance)
     }
 
-    /// The domain of pixel `(px, py)` of `frame` (0 or 1), receiving in `pass`; `None` off the
-    /// translucent object.
+    /// The fixture of built-in scene `name` whose domains have the target `target`.
+    pub fn with_target(name: &str, target: Target) -> Fixture {
+        let scene = Scene::builtin(name).unwrap_or_else(|| panic!("no built-in scene {name}"));
+        let frames = [GBuffer::render(&scene, 0), GBuffer::render(&scene, 1)];
+        Fixture {
+            scene,
+            frames,
+            target,
+        }
+    }
+
+    /// The domain of pixel `(px, py)` of `frame` (0 or 1), receiving in `pass`, with the
+    /// fixture's target; `None` off the translucent object.
     pub fn domain(&self, frame: u32, px: i64, py: i64, pass: u32) -> Option<SssDomain<'_>> {
         self.domain_with_seed(frame, px, py, pass, SEED)
     }
@@ -75,6 +86,7 @@ impl Fixture {
             pass,
             seed,
         )
+        .map(|d| d.with_target(self.target))
     }
 
     /// The scene's (first) translucent material.

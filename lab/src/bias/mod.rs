@@ -19,12 +19,10 @@
 //! the group-sequential design of `sequential` planned and run by `budgeted`; what it found
 //! ([`BiasOutcome`], the JSON of `reshift bias`) in `outcome`; the replicas' and reference batches' final frames in
 //! `render`; their reduction to region means in `summary`; the replicas a run needs in
-//! `planning`; reference batches rendered once for several tests in `given`; the Markdown table
-//! in `table`; a test split over seeds and merged again in
+//! `planning`; the Markdown table in `table`; a test split over seeds and merged again in
 //! [`shard`]; a tinted method, the negative control of a colour bias, in `tinted`.
 
 mod budgeted;
-mod given;
 mod job;
 mod outcome;
 mod plan;
@@ -40,12 +38,12 @@ mod tests;
 mod tinted;
 
 pub use budgeted::{CV_MARGIN, PILOT};
-pub use given::ReferenceBatches;
+
 pub use outcome::{
     BiasOutcome, LookEntry, Needs, NonFinite, PLANNED_POWER, Planned, ReferenceEntry, RowDesign,
     SCHEMA, SequentialEntry,
 };
-pub use plan::{BiasPlan, Replicas};
+pub use plan::{BiasPlan, ReferenceBatches, Replicas};
 pub use planning::{Unplannable, replicas_needed};
 pub use render::{
     Images, reference_batches, reference_images, reference_images_with, replica_images, test_bytes,

@@ -298,7 +298,8 @@ mod tests {
         assert_eq!(offset_of!(GpuPixel, prim), 28);
         assert_eq!(offset_of!(GpuPixel, depth), 44);
         assert_eq!(offset_of!(GpuPixel, valid), 60);
-        assert_eq!(GBUFFER.push_bytes, 36);
+        // Every pass kernel, the G-buffer's included, takes the pass parameters (10 words).
+        assert_eq!(GBUFFER.push_bytes, 40);
     }
 
     /// G-buffer entries round-trip through the device layout, misses included.

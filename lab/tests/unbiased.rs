@@ -445,24 +445,31 @@ impl Design {
         })
     }
 
+    /// The plan of a CPU test of `method` on the design: `n` replicas under `protocol` against
+    /// `batches` reference batches (rendered by the test unless the caller sets `reference`).
+    fn bias_plan(&self, method: Method, n: u32, protocol: Protocol, batches: u32) -> BiasPlan {
+        BiasPlan {
+            scene: (self.scene)(),
+            spec: method.name(),
+            method,
+            replicas: Replicas::Fixed(n),
+            frames: FRAMES,
+            protocol,
+            reference_batches: batches,
+            reference_batch_spp: self.spp_per_batch,
+            backend: Backend::Cpu,
+            reference: None,
+        }
+    }
+
     /// The bias test of `method` (`lab::bias::run`) on the CPU backend against the design's
     /// shared reference, N planned for the registered preset `planned`; printed with the
     /// measured CVs beside the planned ones. Checks the plan's assumptions: the planned regions
     /// and no other, no non-finite value, the reference's error within the planned one.
     fn measure(&self, method: Method, planned: &str) -> BiasOutcome {
         let start = Instant::now();
-        let mut plan = BiasPlan {
-            scene: (self.scene)(),
-            spec: method.name(),
-            method,
-            replicas: Replicas::Fixed(self.replicas(planned) as u32),
-            frames: FRAMES,
-            protocol: PROTOCOL,
-            reference_batches: self.reference_batches,
-            reference_batch_spp: self.spp_per_batch,
-            backend: Backend::Cpu,
-            reference: None,
-        };
+        let n = self.replicas(planned) as u32;
+        let mut plan = self.bias_plan(method, n, PROTOCOL, self.reference_batches);
         plan.reference = Some(self.reference(&plan));
         let outcome = lab::bias::run(&plan, &mut lab::progress::Silent).expect("runs");
         let label = &plan.spec;
@@ -489,11 +496,11 @@ impl Design {
             "{}: the framing's regions",
             self.name
         );
-        for (chunk, cvs) in rows.chunks(4).zip(self.measured_cv(planned)) {
-            let measured = [0, 1, 2, 3].map(|c| {
-                let s = &chunk[c].estimate;
-                s.variance.sqrt() / s.mean
-            });
+        for ((chunk, cvs), measured) in rows
+            .chunks(4)
+            .zip(self.measured_cv(planned))
+            .zip(replica_cvs(rows))
+        {
             println!(
                 "  {label} {:<11} per-replica CV (R, G, B, Y) {measured:.3?}, planned {:.3?}",
                 chunk[0].region,
@@ -513,6 +520,15 @@ impl Design {
         }
         outcome
     }
+}
+
+/// The per-replica CV of every row (`sd/mean` of the replicas' region means), per region in
+/// [`Channel::ALL`] order.
+fn replica_cvs(rows: &[BiasRow]) -> Vec<[f64; 4]> {
+    let cv = |row: &BiasRow| row.estimate.variance.sqrt() / row.estimate.mean;
+    rows.chunks(4)
+        .map(|chunk| [0, 1, 2, 3].map(|c| cv(&chunk[c])))
+        .collect()
 }
 
 /// Every row "equivalent within ±2% at 99%".
@@ -1126,30 +1142,11 @@ fn measure_cv() {
                 continue;
             }
             let method = Method::parse(&format!("restir:{name}")).expect("registered preset");
-            let mut plan = BiasPlan {
-                scene: (design.scene)(),
-                spec: method.name(),
-                method,
-                replicas: Replicas::Fixed(CV_MEASURE_N),
-                frames: FRAMES,
-                protocol: PROTOCOL,
-                reference_batches: design.reference_batches,
-                reference_batch_spp: design.spp_per_batch,
-                backend: Backend::Cpu,
-                reference: None,
-            };
+            let mut plan =
+                design.bias_plan(method, CV_MEASURE_N, PROTOCOL, design.reference_batches);
             plan.reference = Some(design.reference(&plan));
             let outcome = lab::bias::run(&plan, &mut lab::progress::Silent).expect("runs");
-            let cvs: Vec<[f64; 4]> = outcome
-                .rows
-                .chunks(4)
-                .map(|chunk| {
-                    [0, 1, 2, 3].map(|c| {
-                        let s = &chunk[c].estimate;
-                        s.variance.sqrt() / s.mean
-                    })
-                })
-                .collect();
+            let cvs = replica_cvs(&outcome.rows);
             println!("{} {name}, N = {CV_MEASURE_N}: {cvs:.3?}", design.name);
         }
     }
@@ -1186,18 +1183,8 @@ fn record_verdicts_at_1pct() {
             let planned: Vec<_> = cvs.map(|cv| (tight, CV_MARGIN * cv)).collect();
             replicas_for(&planned, FAMILY_POWER, 1 << 20).expect("plannable") as u32
         };
-        let plan = |method: Method, planned: &str| BiasPlan {
-            scene: (design.scene)(),
-            spec: method.name(),
-            method,
-            replicas: Replicas::Fixed(n(planned)),
-            frames: FRAMES,
-            protocol: TIGHT,
-            reference_batches: batches,
-            reference_batch_spp: design.spp_per_batch,
-            backend: Backend::Cpu,
-            reference: None,
-        };
+        let plan =
+            |method: Method, planned: &str| design.bias_plan(method, n(planned), TIGHT, batches);
         let mut methods: Vec<(Method, &str)> = design
             .cv
             .iter()

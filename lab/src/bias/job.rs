@@ -13,8 +13,8 @@ use sss::scene::GBuffer;
 use super::outcome::{
     BiasOutcome, NonFinite, PLANNED_POWER, Planned, ReferenceEntry, SCHEMA, SequentialEntry,
 };
-use super::plan::BiasPlan;
-use super::{BiasRow, Images, overall, reference_images_with, replicas_needed};
+use super::plan::{BiasPlan, ReferenceBatches};
+use super::{BiasRow, Images, overall, replicas_needed};
 use crate::error::Error;
 use crate::progress::Progress;
 use crate::reference_cache::REFERENCE_SEED;
@@ -39,21 +39,16 @@ impl Setup {
     }
 }
 
-/// The reference batches of `plan` at the tested frame, with the method's reference settings.
-/// A reference given in the plan is used when it is the one the plan would render.
-pub(super) fn reference(plan: &BiasPlan, setup: &Setup) -> Result<Images, Error> {
-    if let Some(given) = &plan.reference {
-        given.check(plan)?;
-        return Ok(given.images.clone());
+/// The reference batches of `plan` at the tested frame, with the method's reference settings:
+/// those given in the plan when they are the ones it would render ([`ReferenceBatches::render`]).
+pub(super) fn reference(plan: &BiasPlan) -> Result<Images, Error> {
+    match &plan.reference {
+        Some(given) => {
+            given.check(plan)?;
+            Ok(given.images.clone())
+        }
+        None => Ok(ReferenceBatches::render(plan)?.images),
     }
-    Ok(reference_images_with(
-        &setup.settings,
-        &plan.scene,
-        setup.frame,
-        plan.reference_batches,
-        plan.reference_batch_spp,
-        REFERENCE_SEED,
-    )?)
 }
 
 /// What a test rendered.

@@ -30,7 +30,7 @@ pub fn run(plan: &BiasPlan, progress: &mut dyn Progress) -> Result<BiasOutcome, 
 /// [`Replicas::Fixed`]: `n` replicas, one test of every row at level α.
 fn fixed(plan: &BiasPlan, n: u32, progress: &mut dyn Progress) -> Result<BiasOutcome, Error> {
     let setup = Setup::of(plan);
-    let reference = reference(plan, &setup)?;
+    let reference = reference(plan)?;
     let name = plan.method.name();
     progress.begin(&name, n as u64, 0);
     let replicas = render_replicas(plan, 0..n as u64, progress);

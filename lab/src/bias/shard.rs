@@ -134,7 +134,7 @@ pub fn run_shard(
     let regions = &setup.regions;
     let reference = match shard.index {
         0 => {
-            let images = reference(plan, &setup)?;
+            let images = reference(plan)?;
             Some(ReferenceMeans {
                 batches: image_means(&images.rgb, regions, 0),
                 nonfinite: images.nonfinite,

@@ -81,7 +81,8 @@
 //!
 //! * Per-channel reservoirs (`restir:hybrid/channels=rgb`: the preset run with `p̂ = f_r, f_g,
 //!   f_b`, channel c from run c) on the CPU on both designs, its CVs measured by [`measure_cv`]
-//!   (0.03–0.08, below the hybrid's: the colour of one sample is gone), N = 276 and 413; its
+//!   (0.03–0.08, below the hybrid's: the colour of one sample is gone), N = 276 and 413, with
+//!   its own near-δ control at its N (blue × 1.03 on `bumpy`: Biased in every blue row); its
 //!   Vulkan kernels' parity with the CPU is `vulkan_methods.rs`'s
 //!   `per_channel_reservoirs_match_the_cpu`, so it has no chained Vulkan test here.
 //! * Rao-Blackwellised shading (`Shade::AllInputs`, CPU backend): per region and channel,
@@ -596,15 +597,15 @@ fn assert_blue_only(rows: &[BiasRow]) {
     }
 }
 
-/// The hybrid preset with its blue channel 3% too bright is Biased in every blue row, while
-/// every luminance row (blue weighs 7% of it: +0.2%) stays equivalent within ±2%: a test of
-/// the luminance alone passes this estimator.
-fn assert_tint_detected(design: &Design) {
+/// The registered preset `name` with its blue channel 3% too bright, at `name`'s N, is Biased in
+/// every blue row, while every luminance row (blue weighs 7% of it: +0.2%) stays equivalent
+/// within ±2%: a test of the luminance alone passes this estimator.
+fn assert_tint_detected(design: &Design, name: &str) {
     let tinted = Tinted {
-        method: Method::parse("restir:hybrid").expect("registered preset"),
+        method: Method::parse(&format!("restir:{name}")).expect("registered preset"),
         factor: Vec3::new(1.0, 1.0, 1.0 + CONTROL_BIAS as f32),
     };
-    let rows = design.measure(Method::new(tinted), "hybrid").rows;
+    let rows = design.measure(Method::new(tinted), name).rows;
     assert_biased(&rows, "blue × 1.03");
     assert_blue_only(&rows);
 }
@@ -1035,12 +1036,18 @@ fn control_delayed_jacobian_3pct_high_is_biased_on_bumpy() {
 
 #[test]
 fn control_blue_3pct_high_is_biased_on_bumpy() {
-    assert_tint_detected(&BUMPY);
+    assert_tint_detected(&BUMPY, "hybrid");
 }
 
 #[test]
 fn control_blue_3pct_high_is_biased_on_half_shadow() {
-    assert_tint_detected(&HALF_SHADOW);
+    assert_tint_detected(&HALF_SHADOW, "hybrid");
+}
+
+/// The near-δ control of the per-channel reservoirs' tests, at their (smaller) N: blue × 1.03.
+#[test]
+fn control_per_channel_blue_3pct_high_is_biased_on_bumpy() {
+    assert_tint_detected(&BUMPY, "hybrid/channels=rgb");
 }
 
 #[test]

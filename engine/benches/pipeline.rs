@@ -17,8 +17,13 @@
 //! the per-round log ratios, where every round's ratio is positive).
 //!
 //! Environment: `RESHIFT_BENCH_FRAMES` (1..=16, default 4; frame 0 has no temporal history and
-//! the table averages all frames), `RESHIFT_BENCH_SIZE` (default 512), `RESHIFT_BENCH_PRESETS`
-//! (comma-separated preset names, default all).
+//! the table averages all frames), `RESHIFT_BENCH_SIZE` (`N` for N×N, or `WxH`; default 512),
+//! `RESHIFT_BENCH_PRESETS` (comma-separated preset names, default all), `RESHIFT_BENCH_SHADE=all`
+//! (every preset with Rao-Blackwellised shading, `<preset>/shade=all`) and
+//! `RESHIFT_BENCH_NEIGHBOURS=<n>` (every spatial pass with `n` neighbours,
+//! `<preset>/neighbours=<n>`; the marginal cost then doubles `n`).
+
+mod common;
 
 use engine::{PassSpec, PixelReservoir, Preset, Run, RunConfig, run, run_pt};
 use restir::stats::student_t_quantile;
@@ -114,25 +119,26 @@ fn interval(ratios: &[f64]) -> (f64, Option<(f64, f64)>) {
 }
 
 fn main() -> Result<(), String> {
-    let frames = env_u32("RESHIFT_BENCH_FRAMES", 4)?.min(16);
-    let size = env_u32("RESHIFT_BENCH_SIZE", 512)?;
+    let frames = common::frames()?;
+    let (width, height) = match std::env::var("RESHIFT_BENCH_SIZE") {
+        Err(_) => (512, 512),
+        Ok(text) if text.contains('x') => common::size(&text, "RESHIFT_BENCH_SIZE")?,
+        Ok(_) => {
+            let n = env_u32("RESHIFT_BENCH_SIZE", 512)?;
+            (n, n)
+        }
+    };
     let rounds = env_u32("RESHIFT_BENCH_ROUNDS", 3)?;
     let mut scene = Scene::builtin("bumpy").ok_or("built-in scene `bumpy` is missing")?;
-    scene.camera = scene.camera.with_resolution(size, size);
-    let presets: Vec<Preset> = match std::env::var("RESHIFT_BENCH_PRESETS") {
-        Err(_) => Preset::all(),
-        Ok(names) => names
-            .split(',')
-            .map(|n| Preset::named(n.trim()).ok_or(format!("no preset named {n:?}")))
-            .collect::<Result<_, _>>()?,
-    };
+    scene.camera = scene.camera.with_resolution(width, height);
+    let presets = common::presets()?;
     let config = RunConfig {
         seed: 0,
         frames,
         collect_diagnostics: false,
     };
     println!(
-        "bumpy {size}×{size}, {frames} frames, {} threads, {rounds} rounds; ms per frame of the \
+        "bumpy {width}×{height}, {frames} frames, {} threads, {rounds} rounds; ms per frame of the \
          last round (CPU: the process's CPU time, all threads; wall beside it)",
         rayon::current_num_threads()
     );

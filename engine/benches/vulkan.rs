@@ -6,62 +6,26 @@
 //! history; the table averages over all frames run); `RESHIFT_BENCH_FRAMES` (1..=16) changes
 //! them, `RESHIFT_BENCH_SIZES` (e.g. `512x512,1920x1080`) the resolutions, and
 //! `RESHIFT_BENCH_SHADE=all` runs every preset with Rao-Blackwellised shading (`<preset>/shade=all`),
+//! `RESHIFT_BENCH_NEIGHBOURS=<n>` with `n` spatial neighbours (`<preset>/neighbours=<n>`), and
 //! `RESHIFT_BENCH_PRESETS` (e.g. `hybrid,sequential`) only the presets it names.
 
 use engine::vulkan::VulkanError;
-use engine::{Backend, PipelineError, Preset, RunConfig, Shade};
+use engine::{Backend, PipelineError, RunConfig};
 use sss::scene::Scene;
 
-fn frames() -> Result<u32, String> {
-    match std::env::var("RESHIFT_BENCH_FRAMES") {
-        Err(_) => Ok(4),
-        Ok(v) => match v.parse::<u32>() {
-            Ok(n) if (1..=16).contains(&n) => Ok(n),
-            _ => Err(format!(
-                "RESHIFT_BENCH_FRAMES = {v:?}: need an integer in 1..=16"
-            )),
-        },
-    }
-}
+mod common;
 
-fn shade() -> Result<Shade, String> {
-    match std::env::var("RESHIFT_BENCH_SHADE").as_deref() {
-        Err(_) | Ok("selected") => Ok(Shade::Selected),
-        Ok("all") => Ok(Shade::AllInputs),
-        Ok(v) => Err(format!("RESHIFT_BENCH_SHADE = {v:?}: need selected or all")),
-    }
-}
-
-/// The presets to run: all, or those `RESHIFT_BENCH_PRESETS` names.
-fn presets() -> Result<Vec<Preset>, String> {
-    match std::env::var("RESHIFT_BENCH_PRESETS") {
-        Err(_) => Ok(Preset::all()),
-        Ok(names) => names
-            .split(',')
-            .map(|n| {
-                Preset::named(n.trim())
-                    .ok_or_else(|| format!("RESHIFT_BENCH_PRESETS: no preset {n:?}"))
-            })
-            .collect(),
-    }
-}
+use common::{frames, presets};
 
 fn sizes() -> Result<Vec<(u32, u32)>, String> {
     let text = std::env::var("RESHIFT_BENCH_SIZES").unwrap_or_else(|_| "512x512,1920x1080".into());
     text.split(',')
-        .map(|s| {
-            let parsed = s.split_once('x').and_then(|(w, h)| {
-                Some((w.trim().parse::<u32>().ok()?, h.trim().parse::<u32>().ok()?))
-            });
-            parsed
-                .filter(|&(w, h)| w > 0 && h > 0)
-                .ok_or_else(|| format!("RESHIFT_BENCH_SIZES: {s:?} is not WxH"))
-        })
+        .map(|s| common::size(s, "RESHIFT_BENCH_SIZES"))
         .collect()
 }
 
 fn main() -> Result<(), String> {
-    let (frames, sizes, shade, presets) = (frames()?, sizes()?, shade()?, presets()?);
+    let (frames, sizes, presets) = (frames()?, sizes()?, presets()?);
     let backend = match Backend::vulkan(None, false) {
         Ok(b) => b,
         Err(e) => {
@@ -86,16 +50,8 @@ fn main() -> Result<(), String> {
             frames,
             collect_diagnostics: false,
         };
-        for preset in presets.iter().cloned() {
-            let preset = match shade {
-                Shade::Selected => preset,
-                Shade::AllInputs => Preset {
-                    name: format!("{}/shade=all", preset.name),
-                    shade,
-                    ..preset
-                },
-            };
-            let run = match backend.run(&scene, &preset, &config) {
+        for preset in &presets {
+            let run = match backend.run(&scene, preset, &config) {
                 Ok(run) => run,
                 // lavapipe's maxStorageBufferRange is 128 MiB: 80-byte-per-pixel buffers at
                 // 1920×1080 do not fit, GPUs allow 4 GiB.

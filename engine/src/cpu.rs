@@ -369,20 +369,24 @@ fn shade(
         let Some(g) = &gbuffer.pixels[pixel as usize] else {
             return Ok(());
         };
-        let value = match input.domain(pixel) {
-            Some((domain, _)) => rao_blackwellised[pixel as usize]
-                .unwrap_or_else(|| reuse::shade(&domain, &reservoirs[pixel as usize])),
-            None => {
-                let mut rng =
-                    StreamKey::new(pixel, gbuffer.frame, pass, purpose::OPAQUE).stream(seed);
-                pt::estimate(
-                    scene,
-                    &Shading::new(scene, g),
-                    &settings,
-                    &mut rng,
-                    &mut Vec::new(),
-                )
-            }
+        // A Rao-Blackwellised value exists only where a reuse pass built the pixel's domain,
+        // so the domain is built here only for the selected sample's `f(Y)·W`.
+        let value = match rao_blackwellised[pixel as usize] {
+            Some(value) => value,
+            None => match input.domain(pixel) {
+                Some((domain, _)) => reuse::shade(&domain, &reservoirs[pixel as usize]),
+                None => {
+                    let mut rng =
+                        StreamKey::new(pixel, gbuffer.frame, pass, purpose::OPAQUE).stream(seed);
+                    pt::estimate(
+                        scene,
+                        &Shading::new(scene, g),
+                        &settings,
+                        &mut rng,
+                        &mut Vec::new(),
+                    )
+                }
+            },
         };
         if value.is_finite() {
             *out = value;

@@ -9,7 +9,8 @@
 //! half their summed CPU time, the rate two free cores would reach.
 //!
 //! `TRAVERSAL_BENCH_RAYS` (default 2^20) and `TRAVERSAL_BENCH_ROUNDS` (default 5) change the
-//! sizes. Without Embree the reshift columns are still measured.
+//! sizes; `TRAVERSAL_BENCH_QUERIES` (comma-separated parts of the query names, e.g. `closest`)
+//! measures only the queries whose names contain one of them. Without Embree the reshift columns are still measured.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
@@ -294,7 +295,8 @@ fn bench(
     let incoherent = rays::incoherent(geometry, object, count);
     let shadow = rays::shadow(geometry, object, count, SHADOW_EPSILON);
     let probes = probes(geometry, object, jade, count);
-    let workloads = [
+    let only = std::env::var("TRAVERSAL_BENCH_QUERIES").unwrap_or_default();
+    let workloads: Vec<Workload> = [
         Workload {
             name: "closest hit, incoherent",
             query: Query::Closest,
@@ -320,7 +322,10 @@ fn bench(
             query: Query::AllHitsOnObject,
             rays: &probes,
         },
-    ];
+    ]
+    .into_iter()
+    .filter(|w| only.split(',').any(|part| w.name.contains(part)))
+    .collect();
     println!(
         "\n## {name}: {} triangles, {} objects; {count} rays per set, probed object {object}\n",
         geometry.triangle_count(),

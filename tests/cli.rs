@@ -1523,3 +1523,83 @@ fn compare_replays_a_trajectory_file() {
         "`pose` = 0",
     );
 }
+
+/// `render` of a method built from the engine's passes reports each pass's time per rendered
+/// frame, in execution order (`--json` and the table); the per-channel method labels each run's
+/// passes by its channel; a method not built from passes (`pt`) reports none. The passes'
+/// process CPU time lies within the whole render's (they run inside it).
+#[test]
+fn render_reports_the_time_of_every_pass() {
+    let dir = scratch("render-passes");
+    let out = dir.to_str().unwrap();
+    let render = |method: &str| -> Value {
+        let args = [
+            "render",
+            "--scene",
+            "bumpy",
+            "--method",
+            method,
+            "--resolution",
+            "16x12",
+            "--frames",
+            "2",
+            "--out",
+            out,
+            "--json",
+        ];
+        serde_json::from_str(&ok(&reshift(&args))).expect(method)
+    };
+    let labels = |json: &Value| -> Vec<String> {
+        json["passes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| p["label"].as_str().unwrap().to_string())
+            .collect()
+    };
+    let combination = render("restir:reconnection/shade=all/neighbours=2");
+    assert_eq!(
+        labels(&combination),
+        [
+            "gbuffer",
+            "candidates",
+            "temporal:reconnection",
+            "spatial2:reconnection",
+            "shade"
+        ]
+    );
+    let total = combination["seconds_per_frame"].as_f64().unwrap();
+    let passes: f64 = combination["passes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["cpu_seconds_per_frame"].as_f64().unwrap())
+        .sum();
+    assert!(passes > 0.0 && passes <= total, "{passes} of {total}");
+    let channels = labels(&render("restir:reconnection/channels=rgb"));
+    assert_eq!(channels.len(), 3 * 5, "{channels:?}");
+    assert!(
+        channels[0] == "red: gbuffer"
+            && channels[5] == "green: gbuffer"
+            && channels[14] == "blue: shade",
+        "{channels:?}"
+    );
+    assert!(labels(&render("pt")).is_empty());
+    let table = ok(&reshift(&[
+        "render",
+        "--scene",
+        "bumpy",
+        "--method",
+        "restir:reconnection",
+        "--resolution",
+        "16x12",
+        "--frames",
+        "2",
+        "--out",
+        out,
+    ]));
+    assert!(
+        table.contains("| pass | CPU ms/frame |") && table.contains("| spatial4:reconnection | "),
+        "{table}"
+    );
+}

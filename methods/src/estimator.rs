@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use engine::clock::{Stopwatch, Timing};
 use engine::image::Image;
-use engine::{Backend, PipelineError};
+use engine::{Backend, PassTiming, PipelineError};
 use sss::integrator::pt::PtSettings;
 use sss::limits::{self, MAX_SPP};
 use sss::scene::Scene;
@@ -95,6 +95,7 @@ pub fn memoryless_trajectory<E: Estimator + ?Sized>(
         frames_rendered: 0,
         nonfinite: 0,
         counts: None,
+        passes: Vec::new(),
     };
     for f in 1..=frames {
         let (frame, counts) = estimator.render_counted(backend, scene, f, seed)?;
@@ -142,6 +143,10 @@ pub struct LastFrame {
     pub frames_rendered: u32,
     /// Shaded values that were NaN or infinite (written as 0 or left out of the mean).
     pub nonfinite: u64,
+    /// Time of each pass of the frame pipeline over the rendered frames, in execution order
+    /// (`gbuffer`, `candidates`, `temporal:…`, `spatial<n>:…`, `shade`), for a method that runs
+    /// the engine's passes (`restir:…`); empty for the others.
+    pub passes: Vec<PassTiming>,
 }
 
 /// The output of [`Estimator::render_trajectory`].
@@ -155,6 +160,10 @@ pub struct Trajectory {
     pub nonfinite: u64,
     /// Per-pixel sample counts of the last frame (`None`: [`Estimator::spp`] everywhere).
     pub counts: Option<SampleCounts>,
+    /// Time of each pass of the frame pipeline over the rendered frames, in execution order
+    /// (`gbuffer`, `candidates`, `temporal:…`, `spatial<n>:…`, `shade`), for a method that runs
+    /// the engine's passes (`restir:…`); empty for the others.
+    pub passes: Vec<PassTiming>,
 }
 
 /// The final frame of one replica of a method, and what it cost.
@@ -177,6 +186,10 @@ pub struct Rendered {
     pub spp: f64,
     /// Per-pixel sample counts of the frame (`None`: `spp` everywhere).
     pub counts: Option<SampleCounts>,
+    /// Time of each pass of the frame pipeline over the rendered frames, in execution order
+    /// (`gbuffer`, `candidates`, `temporal:…`, `spatial<n>:…`, `shade`), for a method that runs
+    /// the engine's passes (`restir:…`); empty for the others.
+    pub passes: Vec<PassTiming>,
 }
 
 /// A rendering method: a shared [`Estimator`]. Two methods are equal when their canonical
@@ -246,6 +259,7 @@ impl Method {
             image: frame.image,
             frames_rendered: frame.frames_rendered,
             nonfinite: frame.nonfinite,
+            passes: frame.passes,
             spp: counts
                 .as_ref()
                 .map_or(self.spp() as f64, SampleCounts::mean),

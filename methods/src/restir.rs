@@ -225,6 +225,7 @@ fn last_frame(mut run: Trajectory) -> Result<LastFrame, PipelineError> {
         image,
         frames_rendered: run.frames_rendered,
         nonfinite: run.nonfinite,
+        passes: run.passes,
     })
 }
 
@@ -253,6 +254,7 @@ fn trajectory(
         frames_rendered: frames,
         nonfinite: result.nan_count,
         counts: None,
+        passes: result.timings,
     })
 }
 

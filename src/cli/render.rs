@@ -1,11 +1,14 @@
 //! `reshift render`: one method, one scene → the final frame as linear EXR and tonemapped PNG,
 //! and its timing; for a method that chooses its sample counts per pixel (`adaptive`), its mean
 //! samples per pixel and the count map as a false-colour PNG with a labelled colour bar (0 … the
-//! most a pixel may take).
+//! most a pixel may take); for a method built from the engine's passes (`restir:…`), the time of
+//! each pass per rendered frame (process CPU time and wall time on the CPU backend, GPU
+//! timestamps on Vulkan), which says where a configuration's cost goes.
 
 use std::path::PathBuf;
 
 use clap::Args;
+use engine::PassTiming;
 use engine::clock::Clock;
 use lab::draw::false_colour_map;
 use lab::output::{file_stem, output_dir};
@@ -74,6 +77,7 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
         }
         None => None,
     };
+    let per_frame = f64::from(rendered.frames_rendered.max(1));
     if args.json {
         let value = json!({
             "schema": "reshift-render/1",
@@ -93,6 +97,11 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
             "exr": exr.display().to_string(),
             "png": png.display().to_string(),
             "samples_png": samples.as_ref().map(|p| p.display().to_string()),
+            "passes": rendered.passes.iter().map(|pass| json!({
+                "label": pass.label,
+                "seconds_per_frame": json_number(pass.seconds / per_frame),
+                "cpu_seconds_per_frame": pass.cpu_seconds.map(|s| json_number(s / per_frame)),
+            })).collect::<Vec<_>>(),
         });
         println!(
             "{}",
@@ -118,6 +127,22 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
             png.display(),
             samples.map_or(String::new(), |p| format!("\n{}", p.display()))
         );
+        if !rendered.passes.is_empty() {
+            print!("{}", pass_table(&rendered.passes, per_frame));
+        }
     }
     Ok(())
+}
+
+/// Per pass, ms per rendered frame on both clocks: the process's CPU time (CPU backend) and the
+/// wall time (GPU timestamps on Vulkan), as a markdown table.
+fn pass_table(passes: &[PassTiming], frames: f64) -> String {
+    let ms = |s: f64| format!("{:.2}", 1e3 * s / frames);
+    let mut table =
+        String::from("| pass | CPU ms/frame | wall or GPU ms/frame |\n|---|---:|---:|\n");
+    for pass in passes {
+        let cpu = pass.cpu_seconds.map_or("—".to_string(), ms);
+        table += &format!("| {} | {cpu} | {} |\n", pass.label, ms(pass.seconds));
+    }
+    table
 }

@@ -44,6 +44,7 @@ impl Estimator for Tinted {
             image,
             frames_rendered: rendered.frames_rendered,
             nonfinite: rendered.nonfinite,
+            passes: rendered.passes,
         })
     }
 

@@ -158,6 +158,7 @@ impl Estimator for Adaptive {
             image,
             frames_rendered: frames,
             nonfinite,
+            passes: Vec::new(),
         };
         Ok((frame, Some(counts)))
     }

@@ -79,6 +79,7 @@ impl PerSample for ImageSpace {
             image,
             frames_rendered: 1,
             nonfinite,
+            passes: Vec::new(),
         })
     }
 

@@ -79,6 +79,7 @@ pub fn path_trace(
         image,
         frames_rendered: 1,
         nonfinite,
+        passes: Vec::new(),
     })
 }
 

@@ -80,6 +80,7 @@ impl PerSample for RandomWalk {
             image,
             frames_rendered: 1,
             nonfinite,
+            passes: Vec::new(),
         })
     }
 }

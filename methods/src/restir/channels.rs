@@ -11,7 +11,7 @@
 //! their sum. With `/shade=all` each run shades its own channel by its Rao-Blackwellised value.
 
 use engine::image::Image;
-use engine::{Backend, PipelineError, Preset, Target};
+use engine::{Backend, PassTiming, PipelineError, Preset, Target};
 use sss::scene::Scene;
 
 use super::{last_frame, trajectory};
@@ -35,6 +35,22 @@ fn merge(images: [&Image; 3]) -> Image {
         height: red.height,
         pixels,
     }
+}
+
+/// The three runs' passes, each labelled by its run's channel (`red: spatial4:hybrid`).
+fn channel_passes(runs: &mut [Trajectory]) -> Vec<PassTiming> {
+    let mut passes = Vec::new();
+    for (run, target) in runs.iter_mut().zip(CHANNELS) {
+        passes.extend(
+            std::mem::take(&mut run.passes)
+                .into_iter()
+                .map(|pass| PassTiming {
+                    label: format!("{}: {}", target.name(), pass.label),
+                    ..pass
+                }),
+        );
+    }
+    passes
 }
 
 impl Estimator for Channels {
@@ -86,6 +102,7 @@ impl Estimator for Channels {
             frames_rendered: frames,
             nonfinite: runs.iter().map(|r| r.nonfinite).sum(),
             counts: None,
+            passes: channel_passes(&mut runs),
         })
     }
 }

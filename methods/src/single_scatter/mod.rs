@@ -136,6 +136,7 @@ impl Estimator for SingleScatter {
             frames: images.iter().map(to_image).collect(),
             frames_rendered: frames,
             counts: None,
+            passes: Vec::new(),
         })
     }
 
@@ -156,6 +157,7 @@ impl Estimator for SingleScatter {
                 image: to_image(image),
                 frames_rendered: frames,
                 nonfinite: image.nonfinite,
+                passes: Vec::new(),
             });
         }
         let frame = frames - 1;
@@ -166,6 +168,7 @@ impl Estimator for SingleScatter {
                 image,
                 frames_rendered: 1,
                 nonfinite,
+                passes: Vec::new(),
             });
         }
         let gbuffer = GBuffer::render(scene, frame);
@@ -182,6 +185,7 @@ impl Estimator for SingleScatter {
             image: to_image(&image),
             frames_rendered: 1,
             nonfinite: image.nonfinite,
+            passes: Vec::new(),
         })
     }
 }

@@ -1532,8 +1532,8 @@ fn compare_replays_a_trajectory_file() {
 fn render_reports_the_time_of_every_pass() {
     let dir = scratch("render-passes");
     let out = dir.to_str().unwrap();
-    let render = |method: &str| -> Value {
-        let args = [
+    let run = |method: &str, more: &[&str]| {
+        let mut args = vec![
             "render",
             "--scene",
             "bumpy",
@@ -1545,10 +1545,12 @@ fn render_reports_the_time_of_every_pass() {
             "2",
             "--out",
             out,
-            "--json",
         ];
-        serde_json::from_str(&ok(&reshift(&args))).expect(method)
+        args.extend(more);
+        ok(&reshift(&args))
     };
+    let render =
+        |method: &str| -> Value { serde_json::from_str(&run(method, &["--json"])).expect(method) };
     let labels = |json: &Value| -> Vec<String> {
         json["passes"]
             .as_array()
@@ -1585,19 +1587,7 @@ fn render_reports_the_time_of_every_pass() {
         "{channels:?}"
     );
     assert!(labels(&render("pt")).is_empty());
-    let table = ok(&reshift(&[
-        "render",
-        "--scene",
-        "bumpy",
-        "--method",
-        "restir:reconnection",
-        "--resolution",
-        "16x12",
-        "--frames",
-        "2",
-        "--out",
-        out,
-    ]));
+    let table = run("restir:reconnection", &[]);
     assert!(
         table.contains("| pass | CPU ms/frame |") && table.contains("| spatial4:reconnection | "),
         "{table}"

@@ -120,13 +120,11 @@ fn interval(ratios: &[f64]) -> (f64, Option<(f64, f64)>) {
 
 fn main() -> Result<(), String> {
     let frames = common::frames()?;
-    let (width, height) = match std::env::var("RESHIFT_BENCH_SIZE") {
-        Err(_) => (512, 512),
-        Ok(text) if text.contains('x') => common::size(&text, "RESHIFT_BENCH_SIZE")?,
-        Ok(_) => {
-            let n = env_u32("RESHIFT_BENCH_SIZE", 512)?;
-            (n, n)
-        }
+    let text = std::env::var("RESHIFT_BENCH_SIZE").unwrap_or_else(|_| "512".into());
+    let (width, height) = match text.parse::<u32>() {
+        Ok(n) if n > 0 => (n, n),
+        _ => common::size(&text, "RESHIFT_BENCH_SIZE")
+            .map_err(|_| format!("RESHIFT_BENCH_SIZE = {text:?}: need N or WxH, positive"))?,
     };
     let rounds = env_u32("RESHIFT_BENCH_ROUNDS", 3)?;
     let mut scene = Scene::builtin("bumpy").ok_or("built-in scene `bumpy` is missing")?;

@@ -10,7 +10,8 @@
 //!
 //! `TRAVERSAL_BENCH_RAYS` (default 2^20) and `TRAVERSAL_BENCH_ROUNDS` (default 5) change the
 //! sizes; `TRAVERSAL_BENCH_QUERIES` (comma-separated parts of the query names, e.g. `closest`)
-//! measures only the queries whose names contain one of them. Without Embree the reshift columns are still measured.
+//! measures only the queries whose names contain one of them. Without Embree the reshift columns
+//! are still measured.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};

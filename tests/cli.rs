@@ -645,9 +645,10 @@ fn bias_shards_merge_into_one_run_and_refuse_other_plans() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// A comparison in 2 shards (`compare --shard i/n`) merges from its folder into a report
-/// folder with the tables and results.json; `--shard` with `--equal-time` is a one-line
-/// refusal. (That the merged figures are one run's bit for bit is tested in lab::compare::shard.)
+/// A comparison in 2 shards (`compare --shard i/n`) from `--first-seed 7` merges from its
+/// folder into a report folder with the tables and results.json, which records the first seed;
+/// `--shard` with `--equal-time` and a `--first-seed` whose replicas pass the largest seed are
+/// one-line refusals. (That the merged figures are one run's bit for bit is tested in lab::compare::shard.)
 #[test]
 fn compare_shards_merge_into_a_report() {
     let dir = scratch("compare-shards");
@@ -660,6 +661,8 @@ fn compare_shards_merge_into_a_report() {
         "pt:1",
         "--replicas",
         "3",
+        "--first-seed",
+        "7",
         "--frames",
         "2",
         "--resolution",
@@ -688,10 +691,20 @@ fn compare_shards_merge_into_a_report() {
     for file in ["results.json", "table.md", "report.html"] {
         assert!(dir.join("report").join(file).is_file(), "{file}");
     }
+    let results = std::fs::read_to_string(dir.join("report").join("results.json")).unwrap();
+    let results: Value = serde_json::from_str(&results).unwrap();
+    assert_eq!(results["first_seed"], 7);
     let extra = ["--shard", "0/2", "--equal-time", "0.01", "--cache", &cache];
     fails_with(
         &[&base[..], &extra[..]].concat(),
         "--equal-time with --shard: the budget is calibrated by one process's clock",
+    );
+    let mut last_seeds = [&base[..], &["--cache", &cache]].concat();
+    let at = last_seeds.iter().position(|a| *a == "7").unwrap();
+    last_seeds[at] = "18446744073709551614";
+    fails_with(
+        &last_seeds,
+        "--first-seed 18446744073709551614: with --replicas 3 it passes the largest seed",
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }

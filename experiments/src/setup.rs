@@ -137,6 +137,7 @@ pub fn equal_time_comparison(
         methods: parse_methods(methods)?,
         baseline: DEFAULT_BASELINE.into(),
         replicas: settings.replicas,
+        first_seed: 0,
         frames: FRAMES,
         equal_time: Some(times[1]),
         reference: ReferenceSource::Cache {

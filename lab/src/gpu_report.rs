@@ -468,6 +468,7 @@ fn compare_section(
         methods,
         baseline: DEFAULT_BASELINE.into(),
         replicas: c.replicas,
+        first_seed: 0,
         frames: c.frames,
         equal_time: Some(seconds),
         reference: ReferenceSource::Cache {

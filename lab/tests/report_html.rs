@@ -258,6 +258,7 @@ fn the_report_renders_in_a_browser() {
         methods: parse_methods(&["pt", "restir:hybrid"]).unwrap(),
         baseline: "pt".into(),
         replicas: 3,
+        first_seed: 0,
         frames: 3,
         equal_time: None,
         reference: ReferenceSource::Cache {

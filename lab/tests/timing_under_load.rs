@@ -70,6 +70,7 @@ fn comparison(dir: &std::path::Path, out: &str) -> Comparison {
         methods: parse_methods(&["pt", "restir:hybrid"]).unwrap(),
         baseline: "pt".into(),
         replicas: 8,
+        first_seed: 0,
         frames: 4,
         equal_time: None,
         reference: ReferenceSource::Cache {

@@ -36,9 +36,14 @@ pub struct CompareArgs {
     /// The method efficiency ratios are taken against (one of --methods).
     #[arg(long, default_value = DEFAULT_BASELINE)]
     pub baseline: String,
-    /// Independent replicas per method (seeds 0..K).
+    /// Independent replicas per method (seeds S..S+K, S = --first-seed).
     #[arg(long, default_value_t = 8)]
     pub replicas: u32,
+    /// Seed S of the first replica. A run whose seeds do not overlap an earlier run's shares no
+    /// random number with it: `--first-seed 8` after a default run of 8 replicas is an
+    /// independent, confirmatory run.
+    #[arg(long, value_name = "S", default_value_t = 0)]
+    pub first_seed: u64,
     /// Frames of the camera trajectory; the tables measure the last one, the convergence record
     /// every one [default: 16, or the poses of --trajectory].
     #[arg(long)]
@@ -91,8 +96,8 @@ pub struct CompareArgs {
     /// Print results.json to stdout instead of the table.
     #[arg(long)]
     pub json: bool,
-    /// Render only shard i of n (0-based, i < n): the replicas of seeds ⌊i·N/n⌋..⌊(i+1)·N/n⌋
-    /// of every method, written to <out>/shard-i-of-n.json and .bin after obtaining the
+    /// Render only shard i of n (0-based, i < n): the replicas of seeds S + ⌊i·N/n⌋ .. S +
+    /// ⌊(i+1)·N/n⌋ of every method, written to <out>/shard-i-of-n.json and .bin after obtaining the
     /// references from --cache; `reshift merge` of all n writes the report of one run, every
     /// measured figure and image bit for bit (docs/cluster.md). Not with --equal-time.
     #[arg(long, value_name = "i/n")]
@@ -227,6 +232,14 @@ fn plan(args: &CompareArgs) -> CliResult<Comparison> {
         return Err(CliError("--methods: no method given".into()));
     }
     lab::limits::replicas(command_line(), "--replicas", args.replicas)?;
+    if args.first_seed.checked_add(args.replicas as u64).is_none() {
+        return Err(CliError(format!(
+            "--first-seed {}: with --replicas {} it passes the largest seed, {}",
+            args.first_seed,
+            args.replicas,
+            u64::MAX
+        )));
+    }
     if let Some(t) = args.equal_time
         && !(t.is_finite() && t > 0.0)
     {
@@ -275,6 +288,7 @@ fn plan(args: &CompareArgs) -> CliResult<Comparison> {
         methods,
         baseline: args.baseline.clone(),
         replicas: args.replicas,
+        first_seed: args.first_seed,
         frames,
         equal_time: args.equal_time,
         reference,

@@ -187,6 +187,7 @@ fn group_plan(
         methods: parse_methods(&specs)?,
         baseline: DEFAULT_BASELINE.into(),
         replicas: settings.replicas,
+        first_seed: 0,
         frames: FRAMES,
         equal_time: None,
         reference: ReferenceSource::Cache {

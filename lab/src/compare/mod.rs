@@ -4,7 +4,7 @@
 //!
 //! [`run`] takes a [`Comparison`], obtains the references ([`crate::reference_cache`]: the
 //! comparison's at the last frame, and cheaper ones at the earlier frames for the convergence
-//! record), renders the replicas (seeds `0..K`, in rounds of one seed over every method, each
+//! record), renders the replicas (seeds `S..S+K` from the plan's first seed, in rounds of one seed over every method, each
 //! timed on every frame on its backend's clock, [`engine::clock`]; with an equal-time budget a
 //! bare `pt` is first calibrated; `render`) and reduces them to [`MethodResult`]s: an
 //! [`Outcome`]. It writes
@@ -14,6 +14,7 @@
 mod render;
 pub mod shard;
 
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use engine::Backend;
@@ -60,8 +61,12 @@ pub struct Comparison {
     /// The spec of the method efficiency ratios are taken against; no ratios when it is not
     /// among `methods`.
     pub baseline: String,
-    /// Independent replicas per method (seeds `0..replicas`).
+    /// Independent replicas per method (seeds `first_seed..first_seed + replicas`).
     pub replicas: u32,
+    /// The seed of the first replica. Runs whose seed ranges do not overlap draw no random
+    /// number in common, so a run from the seed after an earlier run's last is independent of
+    /// it (a confirmatory run); 0 in every run that does not ask otherwise.
+    pub first_seed: u64,
     /// Frames of the camera trajectory; the tables measure the last one.
     pub frames: u32,
     /// `Some(seconds)`: equal time, [`EQUAL_TIME_SPEC`] is scaled to `seconds` per frame on the
@@ -180,6 +185,12 @@ impl Comparison {
         }
         let origin = Path::new("(comparison plan)");
         crate::limits::replicas(origin, "replicas", self.replicas)?;
+        if self.first_seed.checked_add(self.replicas as u64).is_none() {
+            return invalid(&format!(
+                "first seed {} + {} replicas passes the largest seed",
+                self.first_seed, self.replicas
+            ));
+        }
         limits::frames(origin, "frames", self.frames)?;
         if self.equal_time.is_some_and(|t| !(t.is_finite() && t > 0.0)) {
             return invalid("the equal-time budget must be a positive number of seconds");
@@ -209,6 +220,11 @@ impl Comparison {
         Ok(())
     }
 
+    /// The seeds of the replicas, `first_seed..first_seed + replicas` (checked by `check`).
+    pub fn seeds(&self) -> Range<u64> {
+        self.first_seed..self.first_seed.saturating_add(self.replicas as u64)
+    }
+
     /// The reference source of `frame`: the plan's for the last frame; for an earlier one, the
     /// cache at [`Comparison::frame_reference_spp`] (`None` without a cache or a convergence record).
     fn reference_of(&self, frame: u32) -> Option<ReferenceSource> {
@@ -229,20 +245,15 @@ impl Comparison {
 }
 
 /// Runs the comparison of `plan`, reporting to `progress` (phases `reference frame F` and
-/// `replicas`): [`references`], the replicas of seeds `0..K` (`render`) and [`reduce`]. A stop
-/// request ends it after the current replica with the whole rounds of replicas rendered so far
-/// (seeds `0..k` of every method, `render`; [`Outcome::interrupted`]), or, while a reference
+/// `replicas`): [`references`], the replicas of the plan's seeds (`render`) and [`reduce`]. A
+/// stop request ends it after the current replica with the whole rounds of replicas rendered so
+/// far (the first k seeds of every method, `render`; [`Outcome::interrupted`]), or, while a reference
 /// renders, with [`Error::Interrupted`].
 pub fn run(plan: &Comparison, progress: &mut dyn Progress) -> Result<Outcome, Error> {
     plan.check()?;
     let out = output_dir(&plan.out)?;
     let references = references(plan, progress)?;
-    let renders = render_replicas(
-        plan,
-        &references.frames(),
-        0..plan.replicas as u64,
-        progress,
-    )?;
+    let renders = render_replicas(plan, &references.frames(), plan.seeds(), progress)?;
     let interrupted = progress.stop_requested();
     reduce(plan, references, renders, interrupted, out)
 }

@@ -1,4 +1,4 @@
-//! Rendering a comparison's replicas: every method's replicas (seeds `0..K`, in rounds of one
+//! Rendering a comparison's replicas: every method's replicas (the plan's seeds, in rounds of one
 //! seed), each one's frames at the measured frames and its last frame through each denoiser,
 //! with an equal-time budget first calibrated on the bare path tracer ([`equal_time_method`]).
 //! Every replica is timed on every frame it renders, on its backend's clock
@@ -48,10 +48,11 @@ pub(super) struct DenoiseFailure {
     pub(super) line: String,
 }
 
-/// The replicas of `seeds` (of `0..K`: all of them, or a shard's,
+/// The replicas of `seeds` (of the plan's: all of them, or a shard's,
 /// [`crate::compare::shard`]) of every method, in the plan's order, each with its images at
 /// `frames` (ascending, the last frame last) and its last frame through each denoiser of the
-/// plan; the seed-0 replica also keeps its whole trajectory with the plan's `video`.
+/// plan; the replica of the plan's first seed (replica 0) also keeps its whole trajectory with
+/// the plan's `video`.
 ///
 /// Replicas are rendered in rounds: the first seed of every method, then the next, and so on, so the
 /// replicas of one seed, which the intervals pair ([`crate::uncertainty`]), are timed close
@@ -143,7 +144,7 @@ pub(super) fn render_replicas(
                 }
             }
             runs[i].replicas.push(replica);
-            if seed == 0 && plan.video {
+            if seed == plan.first_seed && plan.video {
                 let denoisers: Vec<Denoiser> = runs[i].denoised.iter().map(|(d, _)| *d).collect();
                 runs[i].denoised_trajectory = denoisers
                     .into_iter()

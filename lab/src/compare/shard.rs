@@ -45,8 +45,11 @@ pub struct ShardPlan {
     /// `WxH`.
     pub resolution: String,
     pub frames: u32,
-    /// N: the seeds `0..N` over all shards.
+    /// N: the seeds `S..S+N` over all shards.
     pub replicas: u32,
+    /// S, the seed of the first replica (absent in shards that predate it: 0).
+    #[serde(default)]
+    pub first_seed: u64,
     /// The frames every replica keeps (the convergence record's), ascending.
     pub measured_frames: Vec<u32>,
     /// The last frame's reference: `cache, S spp in batches of B` or `file <path>`.
@@ -91,7 +94,8 @@ pub struct MethodPart {
     pub replicas: Vec<Measured>,
     /// Per denoiser that denoised every replica, its denoised replicas in seed order.
     pub denoised: Vec<(String, Vec<Measured>)>,
-    /// Whether the payload holds replica 0's whole trajectory (the shard of seed 0, with video).
+    /// Whether the payload holds replica 0's whole trajectory (the shard of the first seed, with
+    /// video).
     pub trajectory: bool,
     /// Replica 0's trajectory through each denoiser: in the payload, or why it failed.
     pub denoised_trajectory: Vec<(String, Result<(), String>)>,
@@ -151,6 +155,13 @@ impl Measured {
     }
 }
 
+/// The seeds of `shard` of a run of `replicas` replicas from `first_seed`: the shard's part of
+/// `0..replicas` ([`seeds`]) from `first_seed` on (the plan's check keeps the sum in range).
+fn shard_seeds(shard: Shard, replicas: u32, first_seed: u64) -> std::ops::Range<u64> {
+    let part = seeds(shard, replicas);
+    first_seed.saturating_add(part.start)..first_seed.saturating_add(part.end)
+}
+
 /// The plan of `plan` as shard `shard` of it states it.
 fn shard_plan(plan: &Comparison, measured_frames: Vec<u32>, shard: Shard) -> ShardPlan {
     ShardPlan {
@@ -165,6 +176,7 @@ fn shard_plan(plan: &Comparison, measured_frames: Vec<u32>, shard: Shard) -> Sha
         ),
         frames: plan.frames,
         replicas: plan.replicas,
+        first_seed: plan.first_seed,
         measured_frames,
         reference: match &plan.reference {
             ReferenceSource::Cache { spp, batch_spp, .. } => {
@@ -202,7 +214,7 @@ pub fn run_shard(
     plan.check()?;
     let out = output_dir(&plan.out)?;
     let references = references(plan, progress)?;
-    let range = seeds(shard, plan.replicas);
+    let range = shard_seeds(shard, plan.replicas, plan.first_seed);
     let renders = render_replicas(plan, &references.frames(), range.clone(), progress)?;
     let rendered = renders.runs.iter().map(|r| r.replicas.len()).min();
     if progress.stop_requested() || rendered.unwrap_or(0) < (range.end - range.start) as usize {
@@ -384,14 +396,14 @@ fn read_runs(path: &Path, part: &CompareShard) -> Result<Vec<MethodRuns>, Error>
             p.methods.len()
         )));
     }
-    let expected = seeds(part.shard(), p.replicas);
+    let expected = shard_seeds(part.shard(), p.replicas, p.first_seed);
     if part.seeds != [expected.start, expected.end] {
         return Err(bad(format!(
             "holds seeds {}..{}, its part is {}..{}",
             part.seeds[0], part.seeds[1], expected.start, expected.end
         )));
     }
-    let holds_seed_0 = p.video && expected.contains(&0);
+    let holds_first_seed = p.video && expected.contains(&p.first_seed);
     let mut images: u64 = 0;
     for m in &part.methods {
         if m.replicas.len() as u64 != expected.end - expected.start {
@@ -402,9 +414,9 @@ fn read_runs(path: &Path, part: &CompareShard) -> Result<Vec<MethodRuns>, Error>
                 expected.end
             )));
         }
-        if m.trajectory != holds_seed_0 {
+        if m.trajectory != holds_first_seed {
             return Err(bad(format!(
-                "field 'trajectory' is {}: only the shard of seed 0 keeps one, with video",
+                "field 'trajectory' is {}: only the shard of the first seed keeps one, with video",
                 m.trajectory
             )));
         }
@@ -589,6 +601,7 @@ fn rebuilt_plan(path: &Path, shard: &CompareShard) -> Result<Comparison, Error> 
         methods: super::parse_methods(&p.methods)?,
         baseline: p.baseline.clone(),
         replicas: p.replicas,
+        first_seed: p.first_seed,
         frames: p.frames,
         equal_time: None,
         reference,

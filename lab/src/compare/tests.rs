@@ -23,6 +23,7 @@ fn a_comparison_writes_its_outputs_and_reuses_the_reference() {
         methods: parse_methods(&["pt:2", "restir:hybrid"]).unwrap(),
         baseline: "pt:2".into(),
         replicas: 3,
+        first_seed: 0,
         frames: 3,
         equal_time: None,
         reference: ReferenceSource::Cache {
@@ -194,6 +195,69 @@ fn a_comparison_writes_its_outputs_and_reuses_the_reference() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A run from `first_seed` S renders replica k with seed S + k: its replica 0 (the final image,
+/// and the video's trajectory) is the method's render of seed S, not of seed 0, and
+/// `results.json` records S. A first seed whose range passes the largest seed is refused.
+#[test]
+fn replicas_start_at_the_first_seed() {
+    let dir = std::env::temp_dir().join(format!("reshift-first-seed-{}", std::process::id()));
+    let plan = Comparison {
+        scene: with_resolution(Scene::builtin("bumpy").unwrap(), Some((8, 6))),
+        scene_key: "bumpy".into(),
+        methods: parse_methods(&["pt:2", "restir:reconnection"]).unwrap(),
+        baseline: "pt:2".into(),
+        replicas: 2,
+        first_seed: 5,
+        frames: 2,
+        equal_time: None,
+        reference: ReferenceSource::Cache {
+            dir: dir.join("cache"),
+            spp: 8,
+            batch_spp: 4,
+        },
+        frame_reference_spp: None,
+        out: dir.join("out"),
+        backend: Backend::Cpu,
+        video: true,
+        denoise: Vec::new(),
+    };
+    assert_eq!(plan.seeds(), 5..7);
+    let outcome = run(&plan, &mut Silent).unwrap();
+    let video = outcome.video.as_ref().unwrap();
+    for ((spec, method), (fin, trajectory)) in plan
+        .methods
+        .iter()
+        .zip(outcome.finals.iter().zip(&video.trajectories))
+    {
+        let render = |seed| {
+            let (t, _) = method
+                .render_trajectory_on(&Backend::Cpu, &plan.scene, 2, seed)
+                .unwrap();
+            t.frames
+        };
+        let (own, zero) = (render(5), render(0));
+        assert_eq!(fin.method, *spec);
+        assert_eq!(fin.image, own[1], "{spec}: replica 0 is seed 5's render");
+        assert_ne!(fin.image, zero[1], "{spec}: not seed 0's");
+        assert_eq!(
+            trajectory.frames, own,
+            "{spec}: the video is seed 5's trajectory"
+        );
+    }
+    let written = report::write(&plan, &outcome).unwrap();
+    assert_eq!(written.results.first_seed, 5);
+    assert_eq!(written.results.to_json()["first_seed"], 5);
+    let overflowing = Comparison {
+        first_seed: u64::MAX - 1,
+        ..plan
+    };
+    match run(&overflowing, &mut Silent) {
+        Err(Error::Invalid(line)) => assert!(line.contains("first seed"), "{line}"),
+        other => panic!("expected a refusal, got {:?}", other.err()),
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// Stops after `after` replicas and records the order they were rendered in.
 struct StopAfter {
     after: usize,
@@ -232,6 +296,7 @@ fn replicas_render_in_rounds_and_a_stop_keeps_whole_rounds() {
         methods: parse_methods(&["restir:hybrid", "pt:2"]).unwrap(),
         baseline: "pt:2".into(),
         replicas: 3,
+        first_seed: 0,
         frames: 2,
         equal_time: None,
         reference: ReferenceSource::Cache {

@@ -78,6 +78,7 @@ pub fn write(plan: &Comparison, outcome: &Outcome) -> Result<Written, Error> {
         height: reference.height,
         frames: plan.frames,
         replicas: plan.replicas,
+        first_seed: plan.first_seed,
         equal_time: plan.equal_time,
         baseline: baseline.map(|b| b.method.clone()),
         interrupted: outcome.interrupted,

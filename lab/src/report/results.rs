@@ -1,4 +1,4 @@
-//! `results.json` of a comparison (schema `reshift-compare/4`, docs/results-schema.md) as typed
+//! `results.json` of a comparison (schema `reshift-compare/5`, docs/results-schema.md) as typed
 //! structs. Optional and non-finite numbers are written as `null`, never NaN; keys are written
 //! in sorted order ([`Results::to_json`]).
 
@@ -16,7 +16,7 @@ use crate::regions::{Region, Regions};
 use crate::uncertainty::{CONFIDENCE, INTERVAL_METHOD, Interval};
 
 /// The schema name written into [`Results::schema`].
-pub const SCHEMA: &str = "reshift-compare/4";
+pub const SCHEMA: &str = "reshift-compare/5";
 
 /// The whole document.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -34,6 +34,8 @@ pub struct Results {
     pub frames: u32,
     pub frame: u32,
     pub replicas: u32,
+    /// The seed of the first replica: replica k ran with seed `first_seed + k`.
+    pub first_seed: u64,
     pub budget: Budget,
     /// The reference of the last frame.
     pub reference: ReferenceEntry,
@@ -104,6 +106,7 @@ pub struct RunEntry {
     pub height: u32,
     pub frames: u32,
     pub replicas: u32,
+    pub first_seed: u64,
     pub equal_time: Option<f64>,
     pub baseline: Option<String>,
     pub interrupted: bool,
@@ -276,6 +279,7 @@ impl Results {
             frames: run.frames,
             frame: run.frames - 1,
             replicas: run.replicas,
+            first_seed: run.first_seed,
             budget: Budget::new(run.equal_time),
             reference,
             frame_references,

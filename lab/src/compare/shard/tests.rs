@@ -19,6 +19,7 @@ fn plan(dir: &Path, methods: &[&str], replicas: u32) -> Comparison {
         methods: crate::compare::parse_methods(methods).unwrap(),
         baseline: methods[0].into(),
         replicas,
+        first_seed: 0,
         frames: 2,
         equal_time: None,
         reference: ReferenceSource::Cache {
@@ -136,6 +137,24 @@ fn merged_shards_measure_what_one_run_measures() {
         crate::report::write(&merged_plan, &merged).unwrap();
         assert!(out.join("results.json").is_file());
     }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Shards of a run from a first seed S hold seeds S + ⌊i·N/n⌋.. and merge into that run.
+#[test]
+fn shards_of_a_run_from_a_first_seed_merge_into_it() {
+    let dir = std::env::temp_dir().join(format!("reshift-shards-seed-{}", std::process::id()));
+    let plan = || Comparison {
+        first_seed: 4,
+        ..plan(&dir, &["pt:2", "restir:reconnection"], 3)
+    };
+    let whole = super::super::run(&plan(), &mut Silent).unwrap();
+    let parts = shards(&plan, &dir, 2);
+    let held: Vec<[u64; 2]> = parts.iter().map(|(_, p)| p.seeds).collect();
+    assert_eq!(held, [[4, 5], [5, 7]]);
+    let (merged_plan, merged) = merge(parts, dir.join("merged"), &mut Silent).unwrap();
+    assert_eq!(merged_plan.first_seed, 4);
+    assert_same_measurements(&merged, &whole);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

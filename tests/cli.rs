@@ -584,7 +584,8 @@ fn bias_tint_is_a_named_control_that_is_called_biased() {
 
 /// A bias test in 3 shards (`--shard i/n`) merges, from a folder or from files in any order,
 /// into what one run prints, table and JSON byte for byte; a shard of another plan, a missing or
-/// duplicated shard and a shard index out of range are one-line errors naming what is wrong.
+/// duplicated shard, a shard index out of range and a `--first-seed` whose replicas pass the
+/// largest seed are one-line errors naming what is wrong; a test from `--first-seed` says so.
 #[test]
 fn bias_shards_merge_into_one_run_and_refuse_other_plans() {
     let dir = scratch("bias-shards");
@@ -641,6 +642,22 @@ fn bias_shards_merge_into_one_run_and_refuse_other_plans() {
     fails_with(
         &["bias", "--method", "pt", "--shard", "0/3"],
         "a shard needs a fixed number of replicas (--replicas N)",
+    );
+    let seeded: Value =
+        serde_json::from_str(&test("pt", &["--first-seed", "9", "--json"])).unwrap();
+    assert_eq!(seeded["first_seed"], 9);
+    let first_seed = "18446744073709551613";
+    fails_with(
+        &[
+            "bias",
+            "--method",
+            "pt",
+            "--replicas",
+            "3",
+            "--first-seed",
+            first_seed,
+        ],
+        "--first-seed",
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -454,6 +454,7 @@ impl Design {
             spec: method.name(),
             method,
             replicas: Replicas::Fixed(n),
+            first_seed: 0,
             frames: FRAMES,
             protocol,
             reference_batches: batches,

@@ -5,7 +5,7 @@
 //! 1 − α", "biased" or "inconclusive" (`lab::bias::run`). By default the group-sequential
 //! design within `--budget`; `--replicas N` runs a fixed N. Here: the options, parsed into a
 //! `lab::bias::BiasPlan`; what it prints: the table with the overall verdict in words, or the
-//! JSON of the outcome (schema `reshift-bias/3`, docs/results-schema.md).
+//! JSON of the outcome (schema `reshift-bias/4`, docs/results-schema.md).
 
 use std::time::Duration;
 
@@ -39,10 +39,14 @@ pub struct BiasArgs {
     /// The method under test, e.g. restir:hybrid.
     #[arg(long)]
     pub method: String,
-    /// A fixed number of independent replicas (seeds 0..N), tested once at level α; without it,
-    /// the group-sequential design within --budget.
+    /// A fixed number of independent replicas (seeds S..S+N, S = --first-seed), tested once at
+    /// level α; without it, the group-sequential design within --budget.
     #[arg(long, conflicts_with = "budget")]
     pub replicas: Option<u32>,
+    /// Seed S of the first replica. A test whose seeds do not overlap an earlier test's shares
+    /// no random number with it: a confirmatory test of an earlier one's rows.
+    #[arg(long, value_name = "S", default_value_t = 0)]
+    pub first_seed: u64,
     /// Time the group-sequential design may take, on the backend's clock (process CPU time on
     /// the CPU backend), e.g. 90s, 10m, 1.5h.
     #[arg(long, default_value = "10m")]
@@ -69,11 +73,11 @@ pub struct BiasArgs {
     /// 1,1,1.03: blue 3% too bright). Biased by construction; the outcome names the factor.
     #[arg(long, value_name = "R,G,B", conflicts_with = "shard")]
     pub tint: Option<String>,
-    /// Print JSON (schema `reshift-bias/3`) instead of the table.
+    /// Print JSON (schema `reshift-bias/4`) instead of the table.
     #[arg(long)]
     pub json: bool,
-    /// Render only shard i of n (0-based, i < n): the replicas of seeds ⌊i·N/n⌋..⌊(i+1)·N/n⌋
-    /// (shard 0 also the reference), written to <out>/shard-i-of-n.json; `reshift merge` of
+    /// Render only shard i of n (0-based, i < n): the replicas of seeds S + ⌊i·N/n⌋ .. S +
+    /// ⌊(i+1)·N/n⌋ (shard 0 also the reference), written to <out>/shard-i-of-n.json; `reshift merge` of
     /// all n prints what one run prints, bit for bit (docs/cluster.md).
     /// Needs --replicas N (the fixed design).
     #[arg(long, value_name = "i/n")]
@@ -164,6 +168,7 @@ fn plan(args: &BiasArgs) -> CliResult<(BiasPlan, String)> {
             Some(n) => Replicas::Fixed(n),
             None => Replicas::Budget(parse_budget(&args.budget)?),
         },
+        first_seed: args.first_seed,
         frames: args.frames,
         protocol: Protocol {
             delta: args.delta,

@@ -2,7 +2,7 @@
 //! time budget ([`run`], `reshift bias` without `--replicas`).
 //!
 //! 1. Reference: `plan.reference_batches` batches, timed.
-//! 2. Pilot: [`PILOT`] replicas (seeds `0..PILOT`, part of the sample), timed; per row the
+//! 2. Pilot: [`PILOT`] replicas (the first `PILOT` seeds, part of the sample), timed; per row the
 //!    per-replica CV and the reference's relative standard error `ρ`.
 //! 3. Plan, per row: the reference batches `B` that bring the reference's share of the CI,
 //!    `z_{1−α/2}·ρ`, down to δ/4 (`ρ ∝ 1/√B`), and the replicas `N` that make the row equivalent
@@ -68,7 +68,8 @@ impl Replicas {
         self.seconds / self.len().max(1) as f64
     }
 
-    /// Renders replicas up to seed `n − 1` (`job::chunk` at a time) unless a stop is requested.
+    /// Renders replicas up to replica `n − 1` (`job::chunk` at a time) unless a stop is
+    /// requested.
     fn extend(
         &mut self,
         plan: &BiasPlan,
@@ -84,7 +85,7 @@ impl Replicas {
             }
             let seeds = self.len() as u64..(n as u64).min(self.len() as u64 + chunk(plan));
             let before = watch.read().seconds;
-            let rendered = render_chunk(plan, seeds)?;
+            let rendered = render_chunk(plan, plan.seeds(seeds))?;
             self.seconds += watch.read().seconds - before;
             for (rgb, nonfinite) in rendered {
                 self.nonfinite += nonfinite;

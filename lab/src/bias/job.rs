@@ -76,6 +76,7 @@ pub(super) fn outcome(
         resolution: format!("{}x{}", scene.camera.width(), scene.camera.height()),
         frames: plan.frames,
         replicas: counts.replicas,
+        first_seed: plan.first_seed,
         delta: protocol.delta,
         alpha: protocol.alpha,
         confidence: 1.0 - protocol.alpha,

@@ -9,7 +9,7 @@ use serde::{Serialize, Serializer};
 use super::{BiasRow, Protocol, Unplannable};
 
 /// The schema name written into [`BiasOutcome::schema`].
-pub const SCHEMA: &str = "reshift-bias/3";
+pub const SCHEMA: &str = "reshift-bias/4";
 
 /// The power for which a bias test plans the replicas a method needs ([`super::replicas_needed`]).
 pub const PLANNED_POWER: f64 = 0.9;
@@ -27,6 +27,8 @@ pub struct BiasOutcome {
     pub frames: u32,
     /// Replicas rendered: fewer than planned when a stop request ended the test.
     pub replicas: usize,
+    /// The seed of the first replica: replica k ran with seed `first_seed + k`.
+    pub first_seed: u64,
     pub delta: f64,
     pub alpha: f64,
     /// `1 − alpha`, each CI's confidence.

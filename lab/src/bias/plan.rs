@@ -5,6 +5,7 @@
 //! itself: the same scene name and camera, the method's reference settings, the tested frame,
 //! the batch count and samples per batch.
 
+use std::ops::Range;
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Duration;
@@ -25,7 +26,8 @@ use crate::reference_cache::REFERENCE_SEED;
 /// How many replicas a bias test runs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Replicas {
-    /// Exactly this many (seeds `0..n`), one test at level α (`--replicas`).
+    /// Exactly this many (seeds `S..S+n`, `S` the plan's first seed), one test at level α
+    /// (`--replicas`).
     Fixed(u32),
     /// As many as the group-sequential design needs and this much time (on the backend's
     /// clock, `engine::clock`) allows (`--budget`).
@@ -40,8 +42,11 @@ pub struct BiasPlan {
     /// The method under test as requested (the outcome's `method`), and the method.
     pub spec: String,
     pub method: Method,
-    /// Independent replicas (seeds `0..n`), fixed or within a budget.
+    /// Independent replicas (seeds `first_seed..first_seed + n`), fixed or within a budget.
     pub replicas: Replicas,
+    /// The seed of the first replica (`--first-seed`): a test whose seeds do not overlap an
+    /// earlier test's shares no random number with it (a confirmatory test); 0 unless asked.
+    pub first_seed: u64,
     /// Frames of the camera trajectory; the last one is tested.
     pub frames: u32,
     /// Tolerance δ and level α.
@@ -57,6 +62,11 @@ pub struct BiasPlan {
 }
 
 impl BiasPlan {
+    /// The seeds of replicas `k` in `indices`: `first_seed + k` (`validate` keeps them in range).
+    pub(super) fn seeds(&self, indices: Range<u64>) -> Range<u64> {
+        self.first_seed.saturating_add(indices.start)..self.first_seed.saturating_add(indices.end)
+    }
+
     /// The plan's values within range, as one line that names the option at fault (in `origin`):
     /// δ finite and > 0, 0 < α < 1; at least two replicas and two reference batches (for their
     /// standard errors), a budget > 0, every count within `sss::limits` and [`MAX_REPLICAS`],
@@ -102,6 +112,22 @@ impl BiasPlan {
                 2
             }
         };
+        let most = match self.replicas {
+            Replicas::Fixed(n) => n,
+            Replicas::Budget(_) => MAX_REPLICAS,
+        };
+        if self.first_seed.checked_add(most as u64).is_none() {
+            let reason = format!(
+                "with {most} replicas it passes the largest seed, {}",
+                u64::MAX
+            );
+            return Err(InputError::new(
+                origin,
+                "--first-seed",
+                self.first_seed.to_string(),
+                reason,
+            ));
+        }
         count(
             "--reference-batches",
             self.reference_batches,

@@ -15,7 +15,7 @@ use crate::progress::Progress;
 
 /// Runs the bias test of `plan`, reporting to `progress` (one phase, the replicas, named after
 /// the method). The regions and the reference are those of the last frame; replica `i` renders
-/// with seed `i`, several at once on the CPU (`job::chunk`). A stop request ends the replicas after
+/// with seed `first_seed + i`, several at once on the CPU (`job::chunk`). A stop request ends the replicas after
 /// the current chunk:
 /// the outcome of those rendered ([`BiasOutcome::interrupted`]), or [`Error::Interrupted`]
 /// before two.
@@ -33,7 +33,7 @@ fn fixed(plan: &BiasPlan, n: u32, progress: &mut dyn Progress) -> Result<BiasOut
     let reference = reference(plan)?;
     let name = plan.method.name();
     progress.begin(&name, n as u64, 0);
-    let replicas = render_replicas(plan, 0..n as u64, progress);
+    let replicas = render_replicas(plan, plan.seeds(0..n as u64), progress);
     progress.end();
     let replicas = replicas?;
     if replicas.rgb.len() < 2 {

@@ -37,8 +37,11 @@ pub struct ShardPlan {
     /// `WxH`.
     pub resolution: String,
     pub frames: u32,
-    /// N: the seeds `0..N` over all shards.
+    /// N: the seeds `S..S+N` over all shards.
     pub replicas: u32,
+    /// S, the seed of the first replica (absent in shards that predate it: 0).
+    #[serde(default)]
+    pub first_seed: u64,
     pub delta: Exact,
     pub alpha: Exact,
     pub reference_batches: u32,
@@ -142,7 +145,7 @@ pub fn run_shard(
         }
         _ => None,
     };
-    let seeds = seeds(shard, replicas);
+    let seeds = plan.seeds(seeds(shard, replicas));
     progress.begin(&plan.method.name(), seeds.end - seeds.start, 0);
     let images = render_replicas(plan, seeds.clone(), progress);
     progress.end();
@@ -167,6 +170,7 @@ pub fn run_shard(
             resolution: format!("{width}x{height}"),
             frames: plan.frames,
             replicas,
+            first_seed: plan.first_seed,
             delta: Exact(plan.protocol.delta),
             alpha: Exact(plan.protocol.alpha),
             reference_batches: plan.reference_batches,
@@ -239,7 +243,13 @@ pub fn merge(parts: Vec<(PathBuf, BiasShard)>) -> Result<(BiasPlan, BiasOutcome)
         0..p.reference_batches as u64,
     )?;
     for (path, part) in &parts {
-        well_formed(path, &part.replicas, seeds(part.shard(), p.replicas))?;
+        let part_seeds = seeds(part.shard(), p.replicas);
+        let first = |k: u64| p.first_seed.saturating_add(k);
+        well_formed(
+            path,
+            &part.replicas,
+            first(part_seeds.start)..first(part_seeds.end),
+        )?;
     }
     let replicas: Vec<&ReplicaMeans> = parts.iter().flat_map(|(_, s)| &s.replicas).collect();
     let summarized = |list: &[&ReplicaMeans]| {
@@ -308,6 +318,7 @@ fn rebuilt_plan(path: &Path, shard: &BiasShard) -> Result<BiasPlan, Error> {
         spec: p.method.clone(),
         method: Method::parse(&p.method)?,
         replicas: Replicas::Fixed(p.replicas),
+        first_seed: p.first_seed,
         frames: p.frames,
         protocol: Protocol {
             delta: p.delta.0,
@@ -334,6 +345,7 @@ mod tests {
             spec: method.to_string(),
             method: Method::parse(method).unwrap(),
             replicas: Replicas::Fixed(4),
+            first_seed: 0,
             frames: 2,
             protocol: Protocol {
                 delta: 0.05,
@@ -375,6 +387,39 @@ mod tests {
             assert_eq!(outcome.to_json_pretty(), whole);
             assert_eq!(merged_plan.method, plan.method);
         }
+    }
+
+    /// A test from a first seed S: its shards hold seeds S + ⌊i·N/n⌋.., merge into the whole run
+    /// bit for bit, and its outcome records S and differs from the test of seeds 0..N. A first
+    /// seed whose replicas pass the largest seed is one line naming `--first-seed`.
+    #[test]
+    fn a_test_from_a_first_seed_shards_and_merges() {
+        let seeded = BiasPlan {
+            first_seed: 5,
+            ..plan("restir:reconnection")
+        };
+        let whole = super::super::run(&seeded, &mut Silent).unwrap();
+        assert_eq!(whole.first_seed, 5);
+        let parts = shards(&seeded, 2);
+        let held: Vec<Vec<u64>> = (parts.iter())
+            .map(|(_, p)| p.replicas.iter().map(|r| r.seed).collect())
+            .collect();
+        assert_eq!(held, [vec![5, 6], vec![7, 8]]);
+        let (merged_plan, merged) = merge(parts).unwrap();
+        assert_eq!(merged_plan.first_seed, 5);
+        assert_eq!(merged.to_json_pretty(), whole.to_json_pretty());
+        let from_zero = super::super::run(&plan("restir:reconnection"), &mut Silent);
+        let from_zero = from_zero.unwrap();
+        assert_ne!(from_zero.rows, whole.rows);
+        let overflowing = BiasPlan {
+            first_seed: u64::MAX - 2,
+            ..plan("restir:reconnection")
+        };
+        let line = overflowing
+            .validate(Path::new("test"))
+            .unwrap_err()
+            .to_string();
+        assert!(line.contains("--first-seed"), "{line}");
     }
 
     /// Shards of another method or seed count refuse to merge, naming the field; shard 0 alone

@@ -372,6 +372,7 @@ fn small_plan() -> BiasPlan {
         spec: "pt".into(),
         method: methods::Method::parse("pt").expect("registered"),
         replicas: Replicas::Fixed(4),
+        first_seed: 0,
         frames: 1,
         protocol: PROTOCOL,
         reference_batches: 2,
@@ -545,7 +546,7 @@ fn run_tests_the_plan_and_stops_on_request() {
     assert!(matches!(early, Err(crate::Error::Interrupted(_))));
 }
 
-/// The JSON carries every field of schema `reshift-bias/3` and writes a number that does not
+/// The JSON carries every field of schema `reshift-bias/4` and writes a number that does not
 /// exist as `null`.
 #[test]
 fn the_outcome_serialises_to_the_schema() {
@@ -563,6 +564,7 @@ fn the_outcome_serialises_to_the_schema() {
         "alpha",
         "confidence",
         "delta",
+        "first_seed",
         "frames",
         "interrupted",
         "method",
@@ -647,6 +649,7 @@ fn default_design_detects_the_controls() {
             spec: method.name(),
             method,
             replicas: Replicas::Budget(std::time::Duration::from_secs(600)),
+            first_seed: 0,
             frames: 16,
             protocol: Protocol {
                 delta: 0.02,

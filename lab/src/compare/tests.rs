@@ -195,6 +195,38 @@ fn a_comparison_writes_its_outputs_and_reuses_the_reference() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `replicas` replicas of `methods` (the first the baseline) on `bumpy` at `width`×`height`, 2
+/// frames from seed 0, the last frame against a reference of 2 batches of `batch_spp` cached
+/// under `dir`; no denoiser, no video. (The shard tests build on it too.)
+pub(super) fn small_plan(
+    dir: &std::path::Path,
+    methods: &[&str],
+    replicas: u32,
+    (width, height): (u32, u32),
+    batch_spp: u32,
+) -> Comparison {
+    Comparison {
+        scene: with_resolution(Scene::builtin("bumpy").unwrap(), Some((width, height))),
+        scene_key: "bumpy".into(),
+        methods: parse_methods(methods).unwrap(),
+        baseline: methods[0].into(),
+        replicas,
+        first_seed: 0,
+        frames: 2,
+        equal_time: None,
+        reference: ReferenceSource::Cache {
+            dir: dir.join("cache"),
+            spp: 2 * batch_spp,
+            batch_spp,
+        },
+        frame_reference_spp: None,
+        out: dir.join("out"),
+        backend: Backend::Cpu,
+        video: false,
+        denoise: Vec::new(),
+    }
+}
+
 /// A run from `first_seed` S renders replica k with seed S + k: its replica 0 (the final image,
 /// and the video's trajectory) is the method's render of seed S, not of seed 0, and
 /// `results.json` records S. A first seed whose range passes the largest seed is refused.
@@ -202,24 +234,9 @@ fn a_comparison_writes_its_outputs_and_reuses_the_reference() {
 fn replicas_start_at_the_first_seed() {
     let dir = std::env::temp_dir().join(format!("reshift-first-seed-{}", std::process::id()));
     let plan = Comparison {
-        scene: with_resolution(Scene::builtin("bumpy").unwrap(), Some((8, 6))),
-        scene_key: "bumpy".into(),
-        methods: parse_methods(&["pt:2", "restir:reconnection"]).unwrap(),
-        baseline: "pt:2".into(),
-        replicas: 2,
         first_seed: 5,
-        frames: 2,
-        equal_time: None,
-        reference: ReferenceSource::Cache {
-            dir: dir.join("cache"),
-            spp: 8,
-            batch_spp: 4,
-        },
-        frame_reference_spp: None,
-        out: dir.join("out"),
-        backend: Backend::Cpu,
         video: true,
-        denoise: Vec::new(),
+        ..small_plan(&dir, &["pt:2", "restir:reconnection"], 2, (8, 6), 4)
     };
     assert_eq!(plan.seeds(), 5..7);
     let outcome = run(&plan, &mut Silent).unwrap();
@@ -291,24 +308,8 @@ impl Progress for StopAfter {
 fn replicas_render_in_rounds_and_a_stop_keeps_whole_rounds() {
     let dir = std::env::temp_dir().join(format!("reshift-rounds-{}", std::process::id()));
     let plan = Comparison {
-        scene: with_resolution(Scene::builtin("bumpy").unwrap(), Some((8, 6))),
-        scene_key: "bumpy".into(),
-        methods: parse_methods(&["restir:hybrid", "pt:2"]).unwrap(),
         baseline: "pt:2".into(),
-        replicas: 3,
-        first_seed: 0,
-        frames: 2,
-        equal_time: None,
-        reference: ReferenceSource::Cache {
-            dir: dir.join("cache"),
-            spp: 8,
-            batch_spp: 4,
-        },
-        frame_reference_spp: None,
-        out: dir.join("out"),
-        backend: Backend::Cpu,
-        video: false,
-        denoise: Vec::new(),
+        ..small_plan(&dir, &["restir:hybrid", "pt:2"], 3, (8, 6), 4)
     };
     let mut progress = StopAfter {
         after: 3,

@@ -1,37 +1,21 @@
 //! A comparison in shards against one run: every measured figure and image bit for bit, and
 //! the refusals of shards that are not one run.
 
-use engine::Backend;
 use engine::denoise::Denoiser;
-use sss::scene::Scene;
 
 use super::*;
 use crate::method_result::MethodResult;
 use crate::progress::Silent;
-use crate::scenes::with_resolution;
 
 /// A tiny comparison: 16×12, 2 frames, `replicas` replicas of `methods`, a 2×8 spp reference
 /// cached under `dir` (shared by the run, the shards and the merge), SVGF, video on.
 fn plan(dir: &Path, methods: &[&str], replicas: u32) -> Comparison {
     Comparison {
-        scene: with_resolution(Scene::builtin("bumpy").unwrap(), Some((16, 12))),
-        scene_key: "bumpy".into(),
-        methods: crate::compare::parse_methods(methods).unwrap(),
-        baseline: methods[0].into(),
-        replicas,
-        first_seed: 0,
-        frames: 2,
-        equal_time: None,
-        reference: ReferenceSource::Cache {
-            dir: dir.join("cache"),
-            spp: 16,
-            batch_spp: 8,
-        },
         frame_reference_spp: Some(16),
         out: dir.join("whole"),
-        backend: Backend::Cpu,
         denoise: vec![Denoiser::Svgf],
         video: true,
+        ..crate::compare::tests::small_plan(dir, methods, replicas, (16, 12), 8)
     }
 }
 

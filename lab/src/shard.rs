@@ -26,11 +26,12 @@ pub const MAX_SHARD_BYTES: u64 = 1 << 32;
 /// The version of the code that wrote a shard: shards of different versions do not merge.
 pub const CODE_VERSION: &str = env!("CARGO_PKG_VERSION");
 
-/// The seeds of `shard` among `0..replicas`: `⌊i·N/n⌋ .. ⌊(i+1)·N/n⌋`, like the batches of a
-/// reference shard.
-pub fn seeds(shard: Shard, replicas: u32) -> Range<u64> {
+/// The seeds of `shard` among the `replicas` seeds from `first_seed` (S):
+/// `S + ⌊i·N/n⌋ .. S + ⌊(i+1)·N/n⌋`, like the batches of a reference shard. The plans check that
+/// `S + N` is a seed.
+pub fn seeds(shard: Shard, replicas: u32, first_seed: u64) -> Range<u64> {
     let r = shard.batches(replicas);
-    r.start as u64..r.end as u64
+    first_seed.saturating_add(r.start as u64)..first_seed.saturating_add(r.end as u64)
 }
 
 /// `shard-i-of-n.json`.
@@ -267,14 +268,14 @@ mod tests {
         );
     }
 
-    /// Contiguous ranges that cover `0..N` once, also with more shards than seeds.
+    /// Contiguous ranges that cover `S..S+N` once, also with more shards than seeds.
     #[test]
     fn seeds_of_the_shards_cover_every_replica_once() {
-        for (n, count) in [(8, 2), (8, 3), (5, 4), (2, 3)] {
+        for (n, count, first) in [(8, 2, 0), (8, 3, 0), (5, 4, 7), (2, 3, 0), (3, 2, 100)] {
             let all: Vec<u64> = (0..count)
-                .flat_map(|index| seeds(Shard { index, count }, n))
+                .flat_map(|index| seeds(Shard { index, count }, n, first))
                 .collect();
-            assert_eq!(all, (0..n as u64).collect::<Vec<_>>());
+            assert_eq!(all, (first..first + n as u64).collect::<Vec<_>>());
         }
     }
 }

@@ -145,7 +145,7 @@ pub fn run_shard(
         }
         _ => None,
     };
-    let seeds = plan.seeds(seeds(shard, replicas));
+    let seeds = seeds(shard, replicas, plan.first_seed);
     progress.begin(&plan.method.name(), seeds.end - seeds.start, 0);
     let images = render_replicas(plan, seeds.clone(), progress);
     progress.end();
@@ -243,12 +243,10 @@ pub fn merge(parts: Vec<(PathBuf, BiasShard)>) -> Result<(BiasPlan, BiasOutcome)
         0..p.reference_batches as u64,
     )?;
     for (path, part) in &parts {
-        let part_seeds = seeds(part.shard(), p.replicas);
-        let first = |k: u64| p.first_seed.saturating_add(k);
         well_formed(
             path,
             &part.replicas,
-            first(part_seeds.start)..first(part_seeds.end),
+            seeds(part.shard(), p.replicas, p.first_seed),
         )?;
     }
     let replicas: Vec<&ReplicaMeans> = parts.iter().flat_map(|(_, s)| &s.replicas).collect();

@@ -155,13 +155,6 @@ impl Measured {
     }
 }
 
-/// The seeds of `shard` of a run of `replicas` replicas from `first_seed`: the shard's part of
-/// `0..replicas` ([`seeds`]) from `first_seed` on (the plan's check keeps the sum in range).
-fn shard_seeds(shard: Shard, replicas: u32, first_seed: u64) -> std::ops::Range<u64> {
-    let part = seeds(shard, replicas);
-    first_seed.saturating_add(part.start)..first_seed.saturating_add(part.end)
-}
-
 /// The plan of `plan` as shard `shard` of it states it.
 fn shard_plan(plan: &Comparison, measured_frames: Vec<u32>, shard: Shard) -> ShardPlan {
     ShardPlan {
@@ -214,7 +207,7 @@ pub fn run_shard(
     plan.check()?;
     let out = output_dir(&plan.out)?;
     let references = references(plan, progress)?;
-    let range = shard_seeds(shard, plan.replicas, plan.first_seed);
+    let range = seeds(shard, plan.replicas, plan.first_seed);
     let renders = render_replicas(plan, &references.frames(), range.clone(), progress)?;
     let rendered = renders.runs.iter().map(|r| r.replicas.len()).min();
     if progress.stop_requested() || rendered.unwrap_or(0) < (range.end - range.start) as usize {
@@ -396,7 +389,7 @@ fn read_runs(path: &Path, part: &CompareShard) -> Result<Vec<MethodRuns>, Error>
             p.methods.len()
         )));
     }
-    let expected = shard_seeds(part.shard(), p.replicas, p.first_seed);
+    let expected = seeds(part.shard(), p.replicas, p.first_seed);
     if part.seeds != [expected.start, expected.end] {
         return Err(bad(format!(
             "holds seeds {}..{}, its part is {}..{}",

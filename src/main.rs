@@ -18,6 +18,10 @@ use cli::common::{CliError, install_interrupt_handler};
     long_about = None
 )]
 struct Cli {
+    /// The asset directory: where scenes find the meshes they name with `asset = "…"` (paper
+    /// 001's public assets, e.g. a clone of its assets repository); overrides RESHIFT_ASSETS.
+    #[arg(long, global = true, value_name = "DIR")]
+    assets: Option<std::path::PathBuf>,
     #[command(subcommand)]
     command: Command,
 }
@@ -54,6 +58,9 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if let Some(dir) = &cli.assets {
+        sss::scene::assets::set_dir(dir);
+    }
     install_interrupt_handler();
     let result: Result<(), CliError> = match &cli.command {
         Command::Scenes(args) => {

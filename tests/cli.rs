@@ -2,42 +2,18 @@
 //! panic), `compare` and `bias` on every built-in scene with JSON validated against
 //! docs/results-schema.md, the reference cache, and sharded references merged bit for bit.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::Path;
 use std::process::{Command, Output};
+
+use common::{ok, one_line_error, reshift, scratch, stderr};
 
 use restir::mis::MisKind;
 use serde_json::Value;
 use shifts::ShiftKind;
 use shifts::preset::{PRESET_NAMES, Preset};
 use sss::scene::Scene;
-
-fn reshift(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_reshift"))
-        .args(args)
-        .output()
-        .expect("run reshift")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// A fresh folder for one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("reshift-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
-}
-
-fn ok(o: &Output) -> String {
-    assert!(o.status.success(), "exit {:?}\n{}", o.status, stderr(o));
-    stdout(o)
-}
 
 /// Writes a complete 8×6 reference of `bumpy` (2 batches of 2 spp) to `path`.
 fn small_reference(path: &Path) {
@@ -56,21 +32,9 @@ fn small_reference(path: &Path) {
     ]));
 }
 
-/// Exit status 1 and exactly one stderr line `reshift: …` of at most 200 characters after the
-/// prefix, containing `needle`, no panic.
+/// Exit status 1 and one stderr line `reshift: …` containing `needle` ([`one_line_error`]).
 fn fails_with(args: &[&str], needle: &str) {
-    let o = reshift(args);
-    let err = stderr(&o);
-    assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
-    assert!(!err.contains("panicked"), "{args:?}: {err}");
-    assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
-    let message = err.trim_end().trim_start_matches("reshift: ");
-    assert!(message.chars().count() <= 200, "{args:?}: {err}");
-    assert!(err.starts_with("reshift: "), "{args:?}: {err}");
-    assert!(
-        err.contains(needle),
-        "{args:?}: expected {needle:?} in {err}"
-    );
+    one_line_error(&reshift(args), &[needle]);
 }
 
 #[test]
@@ -96,12 +60,18 @@ fn every_subcommand_has_help() {
 #[test]
 fn scenes_and_methods_list_the_registries() {
     let text = ok(&reshift(&["scenes"]));
-    assert_eq!(text.lines().count(), Scene::BUILTIN.len());
-    for (name, about) in Scene::BUILTIN {
+    let all = Scene::BUILTIN.len() + Scene::WITH_ASSETS.len();
+    assert_eq!(text.lines().count(), all);
+    for (name, about) in Scene::BUILTIN.iter().chain(Scene::WITH_ASSETS) {
         assert!(text.contains(name) && text.contains(about), "{name}");
     }
+    let ajax = text
+        .lines()
+        .find(|l| l.starts_with("ajax "))
+        .expect("ajax listed");
+    assert!(ajax.ends_with("[assets]"), "{ajax}");
     let json: Value = serde_json::from_str(&ok(&reshift(&["scenes", "--json"]))).unwrap();
-    assert_eq!(json.as_array().unwrap().len(), Scene::BUILTIN.len());
+    assert_eq!(json.as_array().unwrap().len(), all);
     let methods = ok(&reshift(&["methods"]));
     assert!(
         methods.contains("pt[:spp]") && methods.contains("restir:"),
@@ -342,7 +312,7 @@ fn huge_sizes_in_files_are_one_line_errors() {
     let path = |name: &str| dir.join(name).to_str().unwrap().to_string();
     let scene = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/bumpy.toml"))
         .unwrap()
-        .replace("resolution = [160, 120]", "resolution = [100000, 100000]");
+        .replace("resolution = [256, 192]", "resolution = [100000, 100000]");
     std::fs::write(path("huge.toml"), scene).unwrap();
     let out = path("out");
     fails_with(

@@ -55,8 +55,8 @@ twin::contract! {
 
     /// A material, binding 6 of the scene. Derived values are computed on the host in `f32`
     /// exactly as `Translucent::d`, `r_max` and `r_max_all` compute them, so the GPU never
-    /// re-derives them with its own transcendentals. For a Lambert material only `kind` and
-    /// `albedo` are set.
+    /// re-derives them with its own transcendentals. For a Lambert material only `kind`,
+    /// `albedo`, `emission` and `two_sided` are set.
     #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
     pub struct GpuMaterial {
         /// A `MaterialKind` code.
@@ -77,12 +77,16 @@ twin::contract! {
         /// `Translucent::fresnel().normalization`, `1 − F_dr(ior)` (computed with logarithms on
         /// the host).
         pub fresnel_normalization: f32,
+        /// `Lambert::emission` (zero for other materials).
+        pub emission: [f32; 3],
+        /// `Lambert::two_sided` (1: the back face emits too).
+        pub two_sided: u32,
     }
 
     /// One `sss::scene::Light` with its selection CDF value and pmf, binding 7 of the scene.
     /// Points by kind: quad (corner, edge_u, edge_v), triangle (vertices), sphere (centre),
     /// point (position), directional (direction); `emission` is the radiance, intensity or
-    /// irradiance.
+    /// irradiance; `two_sided` (1) makes a triangle emit from both faces.
     #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
     pub struct GpuLight {
         /// A `LightKind` code.
@@ -94,6 +98,7 @@ twin::contract! {
         pub p1: [f32; 3],
         pub p2: [f32; 3],
         pub emission: [f32; 3],
+        pub two_sided: u32,
     }
 
     /// A `sss::scene::Camera` at one frame, filled from the camera's own methods.

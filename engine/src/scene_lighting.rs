@@ -299,6 +299,7 @@ mod tests {
                 Vec3::new(0.0, 1.0, 1.0),
             ],
             radiance: Vec3::ONE,
+            two_sided: false,
         };
         assert!(intersect_light(&triangle, Vec3::new(0.2, 0.0, 0.2), Vec3::Y).is_some());
         assert!(intersect_light(&triangle, Vec3::new(0.8, 0.0, 0.8), Vec3::Y).is_none());

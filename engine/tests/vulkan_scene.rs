@@ -259,7 +259,8 @@ struct SceneResult {
 }
 
 /// One light of each kind around a translucent ball on a Lambert floor, with a moving,
-/// jittered camera: the quad and triangle face down, the sphere is sampled by its cone.
+/// jittered camera: the quad and triangle face down, a two-sided triangle stands upright (both
+/// faces seen from the query points), the sphere is sampled by its cone.
 const ALL_LIGHT_KINDS: &str = r#"
 [camera]
 resolution = [64, 48]
@@ -302,6 +303,12 @@ radiance = [4.0, 4.0, 4.0]
 type = "triangle"
 vertices = [[1.5, 1.8, -0.5], [2.0, 2.1, 0.3], [1.2, 1.9, 0.8]]
 radiance = [2.0, 4.0, 6.0]
+
+[[lights]]
+type = "triangle"
+vertices = [[-1.8, 0.6, 1.5], [-1.2, 1.4, 1.2], [-1.9, 1.3, 0.4]]
+radiance = [1.0, 3.0, 2.0]
+two_sided = true
 
 [[lights]]
 type = "sphere"

@@ -134,6 +134,21 @@ pub fn cost_below(rows: &[MethodResult], a: &str, b: &str, region: Region) -> Qu
     )
 }
 
+/// The quantities "MSE best/other" in `region` for every other method of `methods`: all below 1
+/// when `best` has the lowest error of them.
+pub fn lowest_of(
+    rows: &[MethodResult],
+    best: &str,
+    methods: &[&str],
+    region: Region,
+) -> Vec<Quantity> {
+    methods
+        .iter()
+        .filter(|&&m| m != best)
+        .map(|m| mse_below(rows, best, m, region))
+        .collect()
+}
+
 /// A method name without the `restir:` prefix.
 pub fn short(method: &str) -> &str {
     method.trim_start_matches("restir:")

@@ -15,6 +15,7 @@ pub mod ground_truth;
 mod materials;
 mod mfp_scaling;
 pub mod model_gap;
+mod paper_scenes;
 mod setup;
 mod shift_comparison;
 
@@ -37,6 +38,8 @@ pub enum Experiment {
     ModelGap,
     Ablation,
     Denoised,
+    PaperAjax,
+    PaperAjaxManyLights,
 }
 
 /// An experiment's default replicas, resolution and reference spp (the command line's).
@@ -48,7 +51,7 @@ pub struct Defaults {
 }
 
 impl Experiment {
-    pub const ALL: [Experiment; 11] = [
+    pub const ALL: [Experiment; 13] = [
         Experiment::ShiftComparison,
         Experiment::ManyLights,
         Experiment::Materials,
@@ -60,6 +63,8 @@ impl Experiment {
         Experiment::ModelGap,
         Experiment::Ablation,
         Experiment::Denoised,
+        Experiment::PaperAjax,
+        Experiment::PaperAjaxManyLights,
     ];
 
     /// The name on the command line and of the default output folder `out/experiment-<name>`.
@@ -76,6 +81,8 @@ impl Experiment {
             Experiment::ModelGap => "model-gap",
             Experiment::Ablation => "ablation",
             Experiment::Denoised => "denoised",
+            Experiment::PaperAjax => "paper-ajax",
+            Experiment::PaperAjaxManyLights => "paper-ajax-many-lights",
         }
     }
 
@@ -115,6 +122,12 @@ impl Experiment {
             Experiment::Denoised => {
                 "Fig. 6 and 7 with and without each denoiser (OIDN, SVGF) at equal time, at the resolution and twice it"
             }
+            Experiment::PaperAjax => {
+                "Fig. 6 on the paper's own scene (`ajax`, assets): pt at 1/6/12 spp and equal time, the presets and the best configuration, raw and denoised"
+            }
+            Experiment::PaperAjaxManyLights => {
+                "Fig. 7 on the paper's own scene (`ajax-many-lights`, assets), as paper-ajax"
+            }
         }
     }
 
@@ -124,7 +137,9 @@ impl Experiment {
     /// total over the replicas) run small; `ablation` (14 rows per method in 6 comparisons, up to
     /// 384×288) at 128×96 with 4 replicas and 1024-spp references; the figures at 128×96, 16
     /// replicas, 8192-spp references; `denoised` (4 comparisons with every denoiser) at 256×192 and
-    /// 512×384, 8 replicas, 4096-spp references, as the main job.
+    /// 512×384, 8 replicas, 4096-spp references, as the main job; `paper-ajax` and
+    /// `paper-ajax-many-lights` at half the paper's size (360×540), 6 replicas, 1024-spp
+    /// references (docs/experiments.md, "Paper 001 on its own scene", for their cost).
     pub fn defaults(self) -> Defaults {
         match self {
             Experiment::GroundTruth => Defaults {
@@ -146,6 +161,11 @@ impl Experiment {
                 replicas: 8,
                 resolution: (256, 192),
                 reference_spp: 4096,
+            },
+            Experiment::PaperAjax | Experiment::PaperAjaxManyLights => Defaults {
+                replicas: 6,
+                resolution: (360, 540),
+                reference_spp: 1024,
             },
             _ => Defaults {
                 replicas: 16,
@@ -186,6 +206,10 @@ impl Experiment {
             Experiment::ModelGap => model_gap::run(settings, progress),
             Experiment::Ablation => ablation::run(settings, progress),
             Experiment::Denoised => denoised::run(settings, name, progress),
+            Experiment::PaperAjax => paper_scenes::run(settings, "ajax", name, progress),
+            Experiment::PaperAjaxManyLights => {
+                paper_scenes::run(settings, "ajax-many-lights", name, progress)
+            }
         }
     }
 }

@@ -6,7 +6,7 @@ use lab::method_result::MethodResult;
 use lab::progress::Progress;
 use lab::regions::Region;
 
-use crate::findings::{self, Finding, Quantity, all_below, cost_below, mse_below};
+use crate::findings::{self, Finding, Quantity, all_below, cost_below, lowest_of, mse_below};
 
 use super::setup::{Report, Settings, compare, equal_time_comparison};
 
@@ -36,13 +36,7 @@ pub fn run(
 /// or of MSE·s ratios (equal time) ([`findings`]).
 fn shift_findings(r: &[MethodResult]) -> Vec<Finding> {
     let [reconnection, delayed, hybrid, sequential] = PRESETS;
-    let others = |best: &str, region| -> Vec<Quantity> {
-        PRESETS
-            .iter()
-            .filter(|&&m| m != best)
-            .map(|m| mse_below(r, best, m, region))
-            .collect()
-    };
+    let others = |best: &str, region| lowest_of(r, best, &PRESETS, region);
     let mut findings = vec![
         all_below(
             "reconnection has lower error than delayed reconnection in shadowed regions".into(),

@@ -5,6 +5,7 @@
 
 use std::path::Path;
 
+use geometry::load::gltf::parse_gltf;
 use geometry::load::{MeshFormat, parse_mesh};
 use sss::InputError;
 use sss::error::MAX_MESSAGE_CHARS;
@@ -12,10 +13,11 @@ use sss::integrator::Reference;
 use sss::scene::Scene;
 
 /// Every target by name (the name of its corpus folder `fuzz/corpus/<name>`).
-pub const TARGETS: [(&str, fn(&[u8])); 5] = [
+pub const TARGETS: [(&str, fn(&[u8])); 6] = [
     ("scene_toml", scene_toml),
     ("obj", obj),
     ("ply", ply),
+    ("gltf", gltf),
     ("checkpoint", checkpoint),
     ("merge", merge),
 ];
@@ -53,6 +55,32 @@ pub fn obj(data: &[u8]) {
 /// A PLY mesh.
 pub fn ply(data: &[u8]) {
     check(parse_mesh(data, Path::new("fuzz.ply"), MeshFormat::Ply));
+}
+
+/// A glTF file: a `.glb` if it starts with the GLB magic `glTF`, else `.gltf` JSON. External
+/// buffers cannot be read (only the GLB BIN chunk and `data:` URIs); every placed primitive must
+/// index its own vertices.
+pub fn gltf(data: &[u8]) {
+    let name = if data.starts_with(b"glTF") {
+        "fuzz.glb"
+    } else {
+        "fuzz.gltf"
+    };
+    let mut no_files = |_: &str| Err(InputError::new(name, "(file)", "", "not read when fuzzing"));
+    if let Some(scene) = check(parse_gltf(data, Path::new(name), &mut no_files)) {
+        for primitive in &scene.primitives {
+            let vertices = primitive.mesh.positions.len();
+            assert!(
+                primitive
+                    .mesh
+                    .indices
+                    .iter()
+                    .flatten()
+                    .all(|&i| (i as usize) < vertices)
+            );
+        }
+        scene.merged();
+    }
 }
 
 /// A reference checkpoint; one that loads must be written back to the same bytes, and its mean

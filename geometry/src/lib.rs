@@ -1,4 +1,4 @@
-//! `geometry` (DESIGN §4): triangle meshes, procedural shapes, OBJ/PLY loading within their
+//! `geometry` (DESIGN §4): triangle meshes, procedural shapes, OBJ/PLY/glTF loading within their
 //! [`limits`], and the BVH with closest-hit, any-hit and all-hits-on-object queries; and the
 //! [`InputError`] every loader of the workspace returns.
 //!

@@ -10,12 +10,19 @@ use std::path::Path;
 
 use crate::InputError;
 
-/// Largest mesh file (OBJ or PLY), in bytes.
+/// Largest mesh file (OBJ, PLY, glTF or GLB), and largest external glTF buffer, in bytes.
 pub const MAX_MESH_FILE_BYTES: u64 = 1 << 31;
-/// Most vertices of one mesh file.
+/// Most vertices of one mesh file (of a glTF file: of all its placed primitives together).
 pub const MAX_MESH_VERTICES: u64 = 1 << 25;
-/// Most triangles of one mesh file (after fan and strip triangulation).
+/// Most triangles of one mesh file (after fan and strip triangulation; of a glTF file: of all its
+/// placed primitives together, a mesh placed by several nodes counted once per node).
 pub const MAX_MESH_TRIANGLES: u64 = 1 << 25;
+/// Most nodes on the path from a glTF scene's root to any node, both included.
+pub const MAX_GLTF_NODE_DEPTH: u32 = 64;
+/// Most triangle primitives one glTF file places, a mesh placed by several nodes counted once per
+/// node: each is a mesh of its own, so tiny instanced primitives are bounded apart from their
+/// triangles.
+pub const MAX_GLTF_PRIMITIVES: u64 = 1 << 20;
 /// Largest coordinate of a position or extent, in scene units: squared distances and bounding
 /// boxes stay far inside `f32` range (the built-in scenes span a few units).
 pub const MAX_COORDINATE: f32 = 1e7;

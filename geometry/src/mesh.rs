@@ -40,6 +40,33 @@ impl TriangleMesh {
         }
     }
 
+    /// The meshes as one: their vertices in order, each one's triangles re-indexed; shading
+    /// normals only if every mesh has them. The meshes have at most `u32::MAX` vertices together
+    /// (the loaders' limits keep them far below).
+    pub fn merged<'a, I>(meshes: I) -> TriangleMesh
+    where
+        I: IntoIterator<Item = &'a TriangleMesh>,
+        I::IntoIter: Clone,
+    {
+        let meshes = meshes.into_iter();
+        let with_normals = meshes.clone().all(|m| m.normals.is_some());
+        let mut merged = TriangleMesh {
+            normals: with_normals.then(Vec::new),
+            ..TriangleMesh::default()
+        };
+        for mesh in meshes {
+            let offset = u32::try_from(merged.positions.len()).expect("at most u32::MAX vertices");
+            merged.positions.extend_from_slice(&mesh.positions);
+            merged
+                .indices
+                .extend(mesh.indices.iter().map(|t| t.map(|i| i + offset)));
+            if let (Some(all), Some(normals)) = (&mut merged.normals, &mesh.normals) {
+                all.extend_from_slice(normals);
+            }
+        }
+        merged
+    }
+
     /// Removes triangles with zero area or a non-finite vertex; returns how many were removed.
     pub fn drop_degenerate(&mut self) -> usize {
         let before = self.indices.len();
@@ -162,6 +189,22 @@ mod tests {
             (face - naive).length() > 1e-2,
             "negative control: the plain matrix is wrong here"
         );
+    }
+
+    #[test]
+    fn merging_offsets_indices_and_keeps_normals_only_if_all_have_them() {
+        let mesh = two_triangles();
+        let merged = TriangleMesh::merged(&[mesh.clone(), mesh.clone()]);
+        assert_eq!(merged.positions.len(), 8);
+        assert_eq!(merged.indices[2..], [[4, 5, 6], [4, 5, 7]]);
+        assert_eq!(merged.normals.as_ref().map(Vec::len), Some(8));
+        let flat = TriangleMesh {
+            normals: None,
+            ..mesh.clone()
+        };
+        assert_eq!(TriangleMesh::merged([&mesh, &flat]).normals, None);
+        let none: [&TriangleMesh; 0] = [];
+        assert_eq!(TriangleMesh::merged(none).triangle_count(), 0);
     }
 
     #[test]

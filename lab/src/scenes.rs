@@ -19,12 +19,12 @@ pub struct LoadedScene {
     pub key: String,
 }
 
-/// `spec`: a built-in name, or a path to a scene file (anything with a `/` or ending in
-/// `.toml`). Unknown names list the built-ins.
+/// `spec`: a built-in name (of `Scene::BUILTIN` or `Scene::WITH_ASSETS`), or a path to a scene
+/// file (anything with a `/` or ending in `.toml`). Unknown names list the built-ins.
 pub fn load_scene(spec: &str) -> Result<LoadedScene, InputError> {
-    if let Some(scene) = Scene::builtin(spec) {
+    if let Some(scene) = Scene::named(spec) {
         return Ok(LoadedScene {
-            scene,
+            scene: scene?,
             key: spec.to_string(),
         });
     }
@@ -41,16 +41,14 @@ pub fn load_scene(spec: &str) -> Result<LoadedScene, InputError> {
         let key = format!("file-{}-{:016x}", scene.name, fnv1a(&text));
         return Ok(LoadedScene { scene, key });
     }
-    // Short enough for sss::error::MAX_MESSAGE_CHARS with a name of up to ~27 characters; the
-    // presets are sss::material::MEASURED_NAMES.
-    let names: Vec<&str> = Scene::BUILTIN.iter().map(|(n, _)| *n).collect();
+    // The built-in names are listed by `reshift scenes`, the presets by sss::material::MEASURED_NAMES.
     Err(InputError::new(
         "(command line)",
         "--scene",
         format!("{spec:?}"),
         format!(
-            "unknown scene: {}, {SPHERE_PREFIX}<preset> or *.toml",
-            names.join(", ")
+            "unknown scene: neither a built-in one (`reshift scenes` lists them), \
+             {SPHERE_PREFIX}<preset> nor a *.toml file"
         ),
     ))
 }
@@ -75,7 +73,7 @@ pub fn material_sphere(name: &str) -> Option<Scene> {
 /// [`material_sphere`]'s scene, `{material}` a measured preset.
 const SPHERE_TEMPLATE: &str = r#"
 [camera]
-resolution = [160, 120]
+resolution = [256, 192]
 vfov = 35.0
 eye = [0.0, 1.1, 3.0]
 target = [0.0, 0.5, 0.0]
@@ -162,7 +160,10 @@ mod tests {
         let small = with_resolution(bumpy.scene, Some((8, 6)));
         assert_eq!((small.camera.width(), small.camera.height()), (8, 6));
         let e = load_scene("nope").err().unwrap().to_string();
-        assert!(e.contains("unknown scene") && e.contains("bumpy"), "{e}");
+        assert!(
+            e.contains("unknown scene") && e.contains("reshift scenes"),
+            "{e}"
+        );
     }
 
     /// Every measured material has its sphere, named by its key, with lit and shadowed parts of
@@ -193,7 +194,7 @@ mod tests {
         assert!(material_sphere("marble").is_none());
         let e = load_scene("sphere-granite").err().unwrap().to_string();
         assert!(
-            e.contains("unknown scene: bumpy, ")
+            e.contains("unknown scene: neither a built-in one (`reshift scenes` lists them)")
                 && e.contains("sphere-granite")
                 && e.contains("sphere-<preset>")
                 && !e.contains(" … "),

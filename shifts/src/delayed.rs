@@ -227,6 +227,7 @@ mod tests {
                         vec3(1.0, 2.5, 1.0),
                     ],
                     radiance: Vec3::ONE,
+                    two_sided: false,
                 },
                 Light::Sphere {
                     center: vec3(0.5, 3.0, 0.2),

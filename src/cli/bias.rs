@@ -16,7 +16,7 @@ use glam::Vec3;
 use lab::bias::shard::{BiasShard, run_shard};
 use lab::bias::{
     self, BiasOutcome, BiasPlan, BiasRow, PLANNED_POWER, Protocol, Replicas, SequentialEntry,
-    Table, Tinted, overall,
+    Table, Tinted, default_resolution, overall,
 };
 use lab::limits::MAX_REPLICAS;
 use lab::output::{output_dir, write_text};
@@ -60,9 +60,10 @@ pub struct BiasArgs {
     /// Frames of the camera trajectory; the last one is tested.
     #[arg(long, default_value_t = 16)]
     pub frames: u32,
-    /// Image size WxH.
-    #[arg(long, default_value = "64x48")]
-    pub resolution: String,
+    /// Image size WxH [default: the scene's aspect ratio at about 64x48's 3072 pixels; 64x48
+    /// for the built-in 4:3 scenes].
+    #[arg(long)]
+    pub resolution: Option<String>,
     /// Independent path-traced reference batches.
     #[arg(long, default_value_t = 32)]
     pub reference_batches: u32,
@@ -158,8 +159,11 @@ fn plan(args: &BiasArgs) -> CliResult<(BiasPlan, String)> {
         let factor = parse_tint(text)?;
         method = Method::new(Tinted { method, factor });
     }
-    let resolution = parse_resolution(&args.resolution)?;
     let loaded = load_scene(&args.scene)?;
+    let resolution = match &args.resolution {
+        Some(text) => parse_resolution(text)?,
+        None => default_resolution(loaded.scene.camera.width(), loaded.scene.camera.height()),
+    };
     let plan = BiasPlan {
         scene: with_resolution(loaded.scene, Some(resolution)),
         spec: method.name(),

@@ -60,9 +60,9 @@ pub struct CompareArgs {
     /// the wall time on 2 cores), wall seconds on Vulkan.
     #[arg(long, value_name = "SECONDS")]
     pub equal_time: Option<f64>,
-    /// Image size WxH.
-    #[arg(long, default_value = "256x192")]
-    pub resolution: String,
+    /// Image size WxH [default: the scene's own; 256x192 for the built-in procedural scenes].
+    #[arg(long)]
+    pub resolution: Option<String>,
     /// Output folder [default: out/compare-<scene>].
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -271,7 +271,11 @@ fn plan(args: &CompareArgs) -> CliResult<Comparison> {
             }
         }
     };
-    let resolution = parse_resolution(&args.resolution)?;
+    let resolution = args
+        .resolution
+        .as_deref()
+        .map(parse_resolution)
+        .transpose()?;
     let backend = args.backend.open()?;
     let (LoadedScene { scene, key }, frames) = scene_and_frames(
         load_scene(&args.scene)?,
@@ -283,7 +287,7 @@ fn plan(args: &CompareArgs) -> CliResult<Comparison> {
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("out/compare-{}", file_stem(&key))));
     Ok(Comparison {
-        scene: with_resolution(scene, Some(resolution)),
+        scene: with_resolution(scene, resolution),
         scene_key: key,
         methods,
         baseline: args.baseline.clone(),

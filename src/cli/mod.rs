@@ -26,25 +26,25 @@ pub struct ListArgs {
     pub json: bool,
 }
 
-/// `reshift scenes`: built-in scenes with a one-line description.
+/// `reshift scenes`: built-in scenes with a one-line description; those that read the asset
+/// directory (`--assets`, `RESHIFT_ASSETS`) say so.
 pub fn scenes(args: &ListArgs) {
+    let all = Scene::BUILTIN
+        .iter()
+        .map(|s| (s, false))
+        .chain(Scene::WITH_ASSETS.iter().map(|s| (s, true)));
     if args.json {
-        let list: Vec<_> = Scene::BUILTIN
-            .iter()
-            .map(|(name, about)| json!({ "name": name, "description": about }))
+        let list: Vec<_> = all
+            .map(|((name, about), assets)| {
+                json!({ "name": name, "description": about, "assets": assets })
+            })
             .collect();
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&list).expect("JSON values")
-        );
+        print_json(Value::Array(list));
     } else {
-        let width = Scene::BUILTIN
-            .iter()
-            .map(|(n, _)| n.len())
-            .max()
-            .unwrap_or(0);
-        for (name, about) in Scene::BUILTIN {
-            println!("{name:width$}  {about}");
+        let width = all.clone().map(|((n, _), _)| n.len()).max().unwrap_or(0);
+        for ((name, about), assets) in all {
+            let needs = if assets { " [assets]" } else { "" };
+            println!("{name:width$}  {about}{needs}");
         }
     }
 }

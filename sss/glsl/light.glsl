@@ -53,6 +53,11 @@ vec3 light_emission(uint light) {
     return vec3(l.emission[0], l.emission[1], l.emission[2]);
 }
 
+// Light::Triangle's two_sided (quads and other kinds: false).
+bool light_two_sided(uint light) {
+    return scene_lights[light].two_sided != 0u;
+}
+
 // Light::is_delta.
 bool light_is_delta(uint light) {
     uint kind = scene_lights[light].kind;
@@ -74,7 +79,8 @@ vec3 light_radiance(uint light, vec3 point, vec3 toward) {
     uint kind = scene_lights[light].kind;
     precise vec3 out_dir = toward - point;
     if (kind == LIGHT_QUAD || kind == LIGHT_TRIANGLE) {
-        return glam_dot(light_face_normal(light), out_dir) > 0.0 ? light_emission(light) : vec3(0.0);
+        bool emits = light_two_sided(light) || glam_dot(light_face_normal(light), out_dir) > 0.0;
+        return emits ? light_emission(light) : vec3(0.0);
     }
     if (kind == LIGHT_SPHERE) {
         precise vec3 outward = point - light_p0(light);
@@ -88,11 +94,12 @@ vec3 light_radiance(uint light, vec3 point, vec3 toward) {
     return light_emission(light);
 }
 
-// area_to_solid_angle: ‖p − x‖² / (area · cos θ_l), 0 from behind.
-float light_area_to_solid_angle(vec3 x, vec3 p, vec3 n, float area) {
+// area_to_solid_angle: ‖p − x‖² / (area · cos θ_l), 0 from behind unless two-sided (|cos θ_l|).
+float light_area_to_solid_angle(vec3 x, vec3 p, vec3 n, float area, bool two_sided) {
     precise vec3 to_x = x - p;
     float d2 = glam_length_squared(to_x);
-    precise float cos_l = glam_dot(n, to_x) / sqrt(d2);
+    precise float cos_facing = glam_dot(n, to_x) / sqrt(d2);
+    precise float cos_l = two_sided ? abs(cos_facing) : cos_facing;
     if (cos_l > 0.0 && area > 0.0 && d2 > 0.0) {
         precise float pdf = d2 / (area * cos_l);
         return pdf;
@@ -163,7 +170,7 @@ float light_pdf(uint light, vec3 x, vec3 point) {
         vec3 n = light_face_normal(light);
         float len = glam_length(n);
         precise float area = kind == LIGHT_QUAD ? len : 0.5 * len;
-        return light_area_to_solid_angle(x, point, glam_normalize(n), area);
+        return light_area_to_solid_angle(x, point, glam_normalize(n), area, light_two_sided(light));
     }
     if (kind == LIGHT_SPHERE) {
         return light_sphere_pdf(light_p0(light), scene_lights[light].radius, x, point);
@@ -194,7 +201,11 @@ bool light_sample_point(uint light, vec3 x, vec2 u, out vec3 point, out vec3 nor
         precise float b2 = su * u.y;
         precise vec3 p = (1.0 - su) * light_p0(light) + b1 * light_p1(light) + b2 * light_p2(light);
         point = p;
-        normal = glam_normalize(light_face_normal(light));
+        // A two-sided emitter's normal at x3 faces x2, as a one-sided one's must.
+        vec3 winding = glam_normalize(light_face_normal(light));
+        precise vec3 to_x = x - p;
+        bool flip = light_two_sided(light) && glam_dot(winding, to_x) < 0.0;
+        normal = flip ? -winding : winding;
         pdf = light_pdf(light, x, p);
         return pdf > 0.0;
     }

@@ -21,6 +21,13 @@ vec3 material_albedo(GpuMaterial m) {
     return vec3(m.albedo[0], m.albedo[1], m.albedo[2]);
 }
 
+// Lambert::emitted: L_e toward a viewer on the front (winding) side, or on either side of a
+// two-sided emitter; zero for other materials.
+vec3 material_emitted(GpuMaterial m, bool front) {
+    vec3 emission = vec3(m.emission[0], m.emission[1], m.emission[2]);
+    return front || m.two_sided != 0u ? emission : vec3(0.0);
+}
+
 // Translucent::d.
 vec3 material_d(GpuMaterial m) {
     return vec3(m.d[0], m.d[1], m.d[2]);

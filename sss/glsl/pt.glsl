@@ -144,8 +144,8 @@ vec3 pt_estimate_translucent(GpuMaterial material, ExitPoint x1, uint hits_polic
     return value;
 }
 
-// estimate_lambert: (albedo/π) L_e max(0, n·ωi) / p_light, visibility tested.
-vec3 pt_estimate_lambert(vec3 albedo, GPixel x1, inout Stream rng) {
+// direct_lambert: (albedo/π) L_e max(0, n·ωi) / p_light, visibility tested.
+vec3 pt_direct_lambert(vec3 albedo, GPixel x1, inout Stream rng) {
     vec3 position = pt_vec3(x1.position);
     vec3 geometric_normal = pt_vec3(x1.geometric_normal);
     float u0 = stream_next_f32(rng);
@@ -167,6 +167,15 @@ vec3 pt_estimate_lambert(vec3 albedo, GPixel x1, inout Stream rng) {
     return value;
 }
 
+// estimate_lambert: the emission toward the camera on the side of x1's winding normal it sees,
+// plus the direct lighting.
+vec3 pt_estimate_lambert(GpuMaterial material, GPixel x1, inout Stream rng) {
+    bool front = glam_dot(scene_geometric_normal(x1.prim), pt_vec3(x1.view)) > 0.0;
+    vec3 emitted = material_emitted(material, front);
+    precise vec3 value = emitted + pt_direct_lambert(material_albedo(material), x1, rng);
+    return value;
+}
+
 // estimate with the radius sampling, profile (and, under the dipole profile, the dipoles of x1's
 // material) of `options`: one f32 estimate of the radiance leaving x1 toward the camera
 // (Shading::prepare picks the branch by x1's material).
@@ -178,7 +187,7 @@ vec3 pt_estimate_with(GPixel x1, uint hits_policy, PtOptions options, inout Stre
             material);
         return pt_estimate_translucent(material, exit_point, hits_policy, options, rng);
     }
-    return pt_estimate_lambert(material_albedo(material), x1, rng);
+    return pt_estimate_lambert(material, x1, rng);
 }
 
 // estimate with the default settings (exact radii, Burley profile).

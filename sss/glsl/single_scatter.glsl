@@ -359,7 +359,7 @@ SingleScatterOrders single_scatter_estimate(GPixel x1, RandomWalkMedium medium,
     GpuMaterial material = scene_material(x1.object);
     if (!material_is_translucent(material)) {
         SingleScatterOrders lambert = SingleScatterOrders(vec3(0.0), vec3(0.0), vec3(0.0), false);
-        lambert.zero = pt_estimate_lambert(material_albedo(material), x1, rng);
+        lambert.zero = pt_estimate_lambert(material, x1, rng);
         return lambert;
     }
     vec3 view = pt_vec3(x1.view);

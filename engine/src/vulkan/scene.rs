@@ -29,6 +29,8 @@ impl GpuMaterial {
             Material::Lambert(l) => GpuMaterial {
                 kind: Self::LAMBERT,
                 albedo: l.albedo.to_array(),
+                emission: l.emission.to_array(),
+                two_sided: l.two_sided as u32,
                 ..GpuMaterial::default()
             },
             Material::Translucent(t) => {
@@ -43,6 +45,7 @@ impl GpuMaterial {
                     g: t.g,
                     kappa_dist: 2.0 * d.max_element(),
                     fresnel_normalization: t.fresnel().normalization,
+                    ..GpuMaterial::default()
                 }
             }
         }
@@ -64,7 +67,9 @@ impl GpuLight {
                 edge_v,
                 radiance,
             } => (Self::QUAD, 0.0, [corner, edge_u, edge_v], radiance),
-            Light::Triangle { vertices, radiance } => (Self::TRIANGLE, 0.0, vertices, radiance),
+            Light::Triangle {
+                vertices, radiance, ..
+            } => (Self::TRIANGLE, 0.0, vertices, radiance),
             Light::Sphere {
                 center,
                 radius,
@@ -103,6 +108,13 @@ impl GpuLight {
             p1: p1.to_array(),
             p2: p2.to_array(),
             emission: emission.to_array(),
+            two_sided: matches!(
+                light,
+                Light::Triangle {
+                    two_sided: true,
+                    ..
+                }
+            ) as u32,
         }
     }
 }
@@ -270,16 +282,19 @@ mod tests {
         assert_eq!(offset_of!(GpuTriangle, object), 72);
         assert_eq!(
             (size_of::<GpuMaterial>(), align_of::<GpuMaterial>()),
-            (60, 4)
+            (76, 4)
         );
         assert_eq!(offset_of!(GpuMaterial, d), 16);
         assert_eq!(offset_of!(GpuMaterial, r_max), 28);
         assert_eq!(offset_of!(GpuMaterial, r_max_all), 40);
         assert_eq!(offset_of!(GpuMaterial, kappa_dist), 52);
-        assert_eq!((size_of::<GpuLight>(), align_of::<GpuLight>()), (64, 4));
+        assert_eq!(offset_of!(GpuMaterial, emission), 60);
+        assert_eq!(offset_of!(GpuMaterial, two_sided), 72);
+        assert_eq!((size_of::<GpuLight>(), align_of::<GpuLight>()), (68, 4));
         assert_eq!(offset_of!(GpuLight, pmf), 12);
         assert_eq!(offset_of!(GpuLight, p0), 16);
         assert_eq!(offset_of!(GpuLight, emission), 52);
+        assert_eq!(offset_of!(GpuLight, two_sided), 64);
         assert_eq!((size_of::<GpuCamera>(), align_of::<GpuCamera>()), (68, 4));
         assert_eq!(offset_of!(GpuCamera, jitter), 48);
         assert_eq!(offset_of!(GpuCamera, tan_half_fov), 56);

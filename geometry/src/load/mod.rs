@@ -1,10 +1,12 @@
-//! Mesh files: Wavefront OBJ ([`obj`]) and PLY ([`ply`]: ascii and binary; vertices, faces
-//! and triangle strips), read within the limits of [`crate::limits`].
+//! Mesh files: Wavefront OBJ ([`obj`]), PLY ([`ply`]: ascii and binary; vertices, faces
+//! and triangle strips) and glTF 2.0 ([`gltf`]: `.gltf` and `.glb`; the default scene's triangle
+//! primitives, placed by their nodes), read within the limits of [`crate::limits`].
 //!
 //! Every problem is an [`InputError`] naming the file, the element and the value.
 //! Degenerate triangles are kept here; callers drop and count them with
 //! [`TriangleMesh::drop_degenerate`].
 
+pub mod gltf;
 pub mod obj;
 pub mod ply;
 
@@ -21,10 +23,15 @@ use crate::limits::{MAX_COORDINATE, MAX_MESH_FILE_BYTES, read_file};
 pub enum MeshFormat {
     Obj,
     Ply,
+    /// glTF 2.0 JSON (`.gltf`): all primitives of the default scene, placed by their nodes and
+    /// merged into one mesh ([`gltf::GltfScene::merged`]).
+    Gltf,
+    /// Binary glTF 2.0 (`.glb`), read as [`MeshFormat::Gltf`].
+    Glb,
 }
 
 impl MeshFormat {
-    /// The format of `path` by its extension (`.obj` or `.ply`, any case).
+    /// The format of `path` by its extension (`.obj`, `.ply`, `.gltf` or `.glb`, any case).
     pub fn of(path: &Path) -> Result<MeshFormat, InputError> {
         let extension = path
             .extension()
@@ -33,11 +40,13 @@ impl MeshFormat {
         match extension.as_deref() {
             Some("obj") => Ok(MeshFormat::Obj),
             Some("ply") => Ok(MeshFormat::Ply),
+            Some("gltf") => Ok(MeshFormat::Gltf),
+            Some("glb") => Ok(MeshFormat::Glb),
             _ => Err(InputError::new(
                 path,
                 "extension",
                 format!("{:?}", path.extension().unwrap_or_default()),
-                "unsupported mesh format (expected .obj or .ply)",
+                "unsupported mesh format (expected .obj, .ply, .gltf or .glb)",
             )),
         }
     }
@@ -49,7 +58,8 @@ pub fn load_mesh(path: &Path) -> Result<TriangleMesh, InputError> {
     parse_mesh(&read_file(path, MAX_MESH_FILE_BYTES)?, path, format)
 }
 
-/// Parses the bytes of a mesh file; `path` names it in errors. Normals are normalised.
+/// Parses the bytes of a mesh file; `path` names it in errors, and a glTF file's external buffers
+/// are read from its folder. Normals are normalised.
 pub fn parse_mesh(
     bytes: &[u8],
     path: &Path,
@@ -58,6 +68,10 @@ pub fn parse_mesh(
     let mut mesh = match format {
         MeshFormat::Obj => obj::parse(bytes, path)?,
         MeshFormat::Ply => ply::parse(bytes, path)?,
+        MeshFormat::Gltf | MeshFormat::Glb => gltf::parse_gltf(bytes, path, &mut |relative| {
+            gltf::read_beside(path, relative)
+        })?
+        .merged(),
     };
     if let Some(normals) = &mut mesh.normals {
         normals.iter_mut().for_each(|n| *n = n.normalize_or_zero());

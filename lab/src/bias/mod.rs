@@ -43,7 +43,7 @@ pub use outcome::{
     BiasOutcome, LookEntry, Needs, NonFinite, PLANNED_POWER, Planned, ReferenceEntry, RowDesign,
     SCHEMA, SequentialEntry,
 };
-pub use plan::{BiasPlan, ReferenceBatches, Replicas};
+pub use plan::{BiasPlan, DEFAULT_PIXELS, ReferenceBatches, Replicas, default_resolution};
 pub use planning::{Unplannable, replicas_needed};
 pub use render::{
     Images, reference_batches, reference_images, reference_images_with, replica_images, test_bytes,

@@ -23,6 +23,31 @@ use crate::error::Error;
 use crate::limits::MAX_REPLICAS;
 use crate::reference_cache::REFERENCE_SEED;
 
+/// Pixels of a bias test's image unless the user gives a size: 64 × 48, the size its recorded
+/// verdicts and power plans were made at.
+pub const DEFAULT_PIXELS: u32 = 64 * 48;
+
+/// The default size of a bias test on a scene of `width × height`: the scene's aspect ratio at
+/// about [`DEFAULT_PIXELS`] pixels (64 × 48 for a 4:3 scene; 45 × 68 for the portrait 720 × 1080),
+/// each side at least 1.
+pub fn default_resolution(width: u32, height: u32) -> (u32, u32) {
+    let aspect = width as f64 / height.max(1) as f64;
+    let h = (DEFAULT_PIXELS as f64 / aspect).sqrt();
+    let w = (h * aspect).round().max(1.0);
+    (w as u32, h.round().max(1.0) as u32)
+}
+
+#[cfg(test)]
+#[test]
+fn default_resolution_keeps_the_aspect_at_about_3072_pixels() {
+    assert_eq!(default_resolution(256, 192), (64, 48));
+    assert_eq!(default_resolution(160, 120), (64, 48));
+    assert_eq!(default_resolution(720, 1080), (45, 68));
+    assert_eq!(default_resolution(128, 128), (55, 55));
+    let (w, h) = default_resolution(1, 16384);
+    assert!(w >= 1 && h <= 16384, "{w}x{h}");
+}
+
 /// How many replicas a bias test runs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Replicas {

@@ -31,10 +31,75 @@ const SPP: u32 = 4;
 /// full Monte Carlo noise.
 const RATIO: f64 = 1e-3;
 
-fn scene(name: &str) -> Scene {
-    let mut scene = Scene::builtin(name).expect("built-in scene");
-    scene.camera = scene.camera.with_resolution(SIZE, SIZE);
-    scene
+/// Emitters that are geometry: a translucent ball lit by a one-sided emissive panel facing down
+/// and a two-sided one facing the camera's side, both in view (the second from its back).
+const EMITTERS: &str = r#"
+[camera]
+resolution = [32, 32]
+vfov = 60.0
+eye = [0.2, 1.2, 3.0]
+target = [0.0, 0.9, 0.0]
+
+[[materials]]
+name = "wax"
+type = "translucent"
+albedo = [0.8, 0.6, 0.4]
+mfp = [0.1, 0.05, 0.02]
+
+[[materials]]
+name = "floor"
+type = "lambert"
+albedo = [0.5, 0.5, 0.5]
+
+[[materials]]
+name = "down"
+type = "lambert"
+albedo = [0.3, 0.3, 0.3]
+emission = [3.0, 2.5, 2.0]
+
+[[materials]]
+name = "both"
+type = "lambert"
+albedo = [0.6, 0.6, 0.6]
+emission = [1.0, 2.0, 4.0]
+two_sided = true
+
+[[objects]]
+name = "ball"
+material = "wax"
+shape = { type = "sphere", radius = 0.4 }
+transform = { translate = [0.0, 0.4, 0.0] }
+
+[[objects]]
+name = "floor"
+material = "floor"
+shape = { type = "quad", size = [6.0, 6.0] }
+
+[[objects]]
+name = "down"
+material = "down"
+shape = { type = "quad", size = [1.0, 1.0] }
+transform = { translate = [-0.6, 1.8, 0.0], rotate = [180.0, 0.0, 0.0] }
+
+[[objects]]
+name = "both"
+material = "both"
+shape = { type = "quad", size = [0.8, 0.8] }
+transform = { translate = [0.9, 1.0, -0.5], rotate = { axis = [0.0, 0.0, 1.0], degrees = 80.0 } }
+"#;
+
+/// The scenes of the parity test at [`SIZE`]²: [`SCENES`] and [`EMITTERS`].
+fn scenes() -> Vec<(&'static str, Scene)> {
+    let emitters = Scene::from_toml_str(EMITTERS, std::path::Path::new("emitters.toml"));
+    SCENES
+        .iter()
+        .map(|&name| (name, Scene::builtin(name).expect("built-in scene")))
+        .chain([("emitters", emitters.expect("the emitter scene"))])
+        .map(|(name, mut scene)| {
+            scene.camera = scene.camera.with_resolution(SIZE, SIZE);
+            (name, scene)
+        })
+        .collect()
 }
 
 /// Largest number of probe hits the CPU path tracer sees over `spp` samples of every pixel (the
@@ -62,7 +127,8 @@ fn max_probe_hits(
 }
 
 /// `method_pt` at 4 spp on the CPU's G-buffer reproduces `pt::render` with the same seed on
-/// `bumpy`, `materials` and `half-shadow` (32×32, frame 3), for both hit policies:
+/// `bumpy`, `materials`, `half-shadow` and a scene of one- and two-sided emissive meshes
+/// (32×32, frame 3), for both hit policies:
 /// relMSE(GPU, CPU) ≤ 1e-3 · relMSE(CPU seed 12, CPU seed 11), no sample left out, and every CPU
 /// probe has at most `KEPT_HITS` hits (else the GPU's capped hit list could not match).
 /// Negative control: the GPU image of seed 12 against the CPU image of seed 11 fails the same
@@ -72,8 +138,7 @@ fn pt_method_matches_the_cpu() {
     let Some((mut context, kernel)) = kernel_or_skip("pt parity", PT) else {
         return;
     };
-    for name in SCENES {
-        let scene = scene(name);
+    for (name, scene) in scenes() {
         let gbuffer = GBuffer::render(&scene, FRAME);
         let all = 0..gbuffer.pixels.len();
         let uploads = [SEED, OTHER_SEED]

@@ -100,7 +100,7 @@ void main() {
         // pt_estimate's Lambert branch, called directly so that its translucent branch is not
         // compiled in.
         Stream rng = pt_sample_stream(pixel, frame_params.frame, sample_index, scene_seed());
-        value = pt_estimate_lambert(material_albedo(scene_materials[material]), x1, rng);
+        value = pt_estimate_lambert(scene_materials[material], x1, rng);
     } else {
         vec3 position = pt_vec3(x1.position);
         vec3 view = pt_vec3(x1.view);

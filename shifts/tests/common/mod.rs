@@ -48,7 +48,12 @@ impl Fixture {
 
     /// The fixture of built-in scene `name` whose domains have the target `target`.
     pub fn with_target(name: &str, target: Target) -> Fixture {
-        let scene = Scene::builtin(name).unwrap_or_else(|| panic!("no built-in scene {name}"));
+        let mut scene = Scene::builtin(name).unwrap_or_else(|| panic!("no built-in scene {name}"));
+        // The framing the conformance checks were designed and measured on (`bumpy` was 160 ×
+        // 120 in its file then; its pixel pairs and charts are these).
+        if name == "bumpy" {
+            scene.camera = scene.camera.with_resolution(160, 120);
+        }
         let frames = [GBuffer::render(&scene, 0), GBuffer::render(&scene, 1)];
         Fixture {
             scene,

@@ -1,6 +1,7 @@
 //! The path-tracing baseline (DESIGN §4): camera ray → G-buffer hit x1 → BSSRDF IS → x2 → light
 //! sample at x2 (NEE) → shadow ray x2→x3, estimate `f / (p_disk · p_light)` [001 §2.1, §3.1].
-//! Lambert surfaces get direct lighting by NEE.
+//! Lambert surfaces get direct lighting by NEE, and emitters add their emission where the camera
+//! sees an emitting side.
 //!
 //! Hit policies (both unbiased, with the same 9-technique MIS `p_disk`):
 //! * [`HitPolicy::All`] sums `f(x2_j) / (p_disk(x2_j) p_light)` over every hit of the probe
@@ -224,8 +225,15 @@ pub fn estimate_bssrdf(
     }
 }
 
-/// Direct lighting of a Lambert surface: `(albedo/π) L_e max(0, n·ωi) / p_light`, visibility tested.
+/// The radiance leaving a Lambert surface toward the camera: what it emits toward a viewer on
+/// the side of x1's winding normal that the camera sees, plus its direct lighting.
 fn estimate_lambert(scene: &Scene, material: &Lambert, x1: &GPixel, rng: &mut Stream) -> Vec3 {
+    let front = scene.geometry.geometric_normal(x1.prim).dot(x1.view) > 0.0;
+    material.emitted(front) + direct_lambert(scene, material, x1, rng)
+}
+
+/// Direct lighting of a Lambert surface: `(albedo/π) L_e max(0, n·ωi) / p_light`, visibility tested.
+fn direct_lambert(scene: &Scene, material: &Lambert, x1: &GPixel, rng: &mut Stream) -> Vec3 {
     let Some(light) = scene.lights.sample(
         x1.position,
         [rng.next_f32(), rng.next_f32(), rng.next_f32()],

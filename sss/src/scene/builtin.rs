@@ -1,5 +1,6 @@
 //! The built-in scenes: the TOML files of `scenes/`, embedded so they work from any directory.
-//! They recreate paper 001 §6's evaluation setups with procedural geometry.
+//! [`BUILTIN`] recreate paper 001 §6's evaluation setups with procedural geometry;
+//! [`WITH_ASSETS`] are paper 001's own scenes, whose meshes come from the asset directory.
 
 /// `(name, one-line description)` of every built-in scene.
 pub const BUILTIN: &[(&str, &str)] = &[
@@ -49,6 +50,19 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ),
 ];
 
+/// `(name, one-line description)` of every scene of the project that reads its meshes from the
+/// asset directory (`super::assets`): paper 001's own scenes.
+pub const WITH_ASSETS: &[(&str, &str)] = &[
+    (
+        "ajax",
+        "paper 001's Ajax bust (glTF assets), backdrop and one large two-sided emissive plane, 720x1080 (001 Fig. 6)",
+    ),
+    (
+        "ajax-many-lights",
+        "the Ajax bust and backdrop lit by 512 small seeded emissive rectangles, 720x1080 (001 Fig. 7)",
+    ),
+];
+
 /// The TOML text of built-in scene `name`.
 pub fn source(name: &str) -> Option<&'static str> {
     Some(match name {
@@ -63,6 +77,8 @@ pub fn source(name: &str) -> Option<&'static str> {
         "slab" => include_str!("../../../scenes/slab.toml"),
         "half-shadow" => include_str!("../../../scenes/half-shadow.toml"),
         "far-knot" => include_str!("../../../scenes/far-knot.toml"),
+        "ajax" => include_str!("../../../scenes/ajax.toml"),
+        "ajax-many-lights" => include_str!("../../../scenes/ajax-many-lights.toml"),
         _ => return None,
     })
 }
@@ -93,7 +109,11 @@ mod tests {
             })
             .collect();
         on_disk.sort();
-        let mut names: Vec<String> = BUILTIN.iter().map(|(n, _)| n.to_string()).collect();
+        let mut names: Vec<String> = BUILTIN
+            .iter()
+            .chain(WITH_ASSETS)
+            .map(|(n, _)| n.to_string())
+            .collect();
         names.sort();
         assert_eq!(on_disk, names);
         for (name, description) in BUILTIN {
@@ -124,6 +144,79 @@ mod tests {
         }
         assert!(Scene::builtin("nonexistent").is_none());
         assert_eq!(Scene::builtin("materials").unwrap().objects.len(), 11);
+    }
+
+    /// Paper 001's scenes load from the shared assets as `SCENES.md` places them: `ajax` has the
+    /// bust (60 000 triangles, translucent, d = 0.5 · mfp / s(A) with the diffuse-transmission
+    /// fit, ior 1.45 from the file), the backdrop (3 200) and the emissive plane (2 two-sided
+    /// triangles, the only lights, at the documented corners); `ajax-many-lights` has 512
+    /// rectangles and their 1 024 two-sided lights instead of the plane.
+    #[test]
+    fn paper_scenes_load_from_the_shared_assets() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        if crate::scene::assets::shared_or_skip(root, "paper scenes").is_none() {
+            return;
+        }
+        let ajax = Scene::builtin("ajax").unwrap();
+        let names: Vec<&str> = ajax.objects.iter().map(|o| o.name.as_str()).collect();
+        assert_eq!(names, ["ajax", "backdrop", "light"]);
+        let triangles = |object: u32| {
+            (0..ajax.geometry.triangle_count())
+                .filter(|&p| ajax.geometry.object_of(p) == object)
+                .count()
+        };
+        assert_eq!(
+            [triangles(0), triangles(1), triangles(2)],
+            [60_000, 3_200, 2]
+        );
+        let Material::Translucent(skin) = *ajax.material_of_object(0) else {
+            panic!("the bust is translucent")
+        };
+        assert_eq!(skin.ior, 1.45);
+        let d = skin.d();
+        for (got, want) in d.to_array().into_iter().zip([0.46591, 0.09007, 0.04315]) {
+            assert!((got - want).abs() < 1e-4, "d = {d}");
+        }
+        assert_eq!(ajax.lights.len(), 2);
+        let mut corners = Vec::new();
+        for light in ajax.lights.iter() {
+            let Light::Triangle {
+                vertices,
+                radiance,
+                two_sided,
+            } = *light
+            else {
+                panic!("{light:?}")
+            };
+            assert!(two_sided && radiance == Vec3::splat(16.5), "{light:?}");
+            corners.extend(vertices);
+        }
+        for want in [
+            vec3(-30.0, 27.314, -21.686),
+            vec3(2.0, 27.314, -21.686),
+            vec3(-30.0, 4.686, -44.314),
+            vec3(2.0, 4.686, -44.314),
+        ] {
+            assert!(
+                corners.iter().any(|c| c.distance(want) < 2e-3),
+                "corner {want} not in {corners:?}"
+            );
+        }
+        let many = Scene::builtin("ajax-many-lights").unwrap();
+        assert_eq!(many.objects.len(), 2 + 512);
+        assert_eq!(many.lights.len(), 1024);
+        assert!(many.lights.iter().all(|l| matches!(
+            l,
+            Light::Triangle {
+                two_sided: true,
+                ..
+            }
+        )));
+        assert_eq!(
+            many.lights,
+            Scene::builtin("ajax-many-lights").unwrap().lights,
+            "seeded"
+        );
     }
 
     #[test]

@@ -16,6 +16,7 @@ pub struct SceneFile {
     #[serde(default)]
     pub lights: Vec<LightDesc>,
     pub many_lights: Option<ManyLightsDesc>,
+    pub emitter_field: Option<EmitterFieldDesc>,
 }
 
 /// `[camera]`: the start (`eye`, `target`) and end (`eye_end`, `target_end`, default: the start)
@@ -35,7 +36,9 @@ pub struct CameraDesc {
 }
 
 /// `[[materials]]`: `type = "translucent"` (parameters, or a measured `preset` with optional
-/// overrides) or `type = "lambert"` (albedo only).
+/// overrides) or `type = "lambert"` (albedo, and an emission that makes the object an emitter).
+/// A material named like a material of a glTF object overrides it there; the fields it leaves
+/// out that the glTF material has (`ior`; `emission`, `two_sided`) come from the glTF file.
 #[derive(Debug, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum MaterialDesc {
@@ -53,6 +56,10 @@ pub enum MaterialDesc {
     Lambert {
         name: String,
         albedo: [f32; 3],
+        /// Emitted radiance `L_e`; an object of this material is an emitter that is geometry.
+        emission: Option<[f32; 3]>,
+        /// Whether the back face emits too.
+        two_sided: Option<bool>,
     },
 }
 
@@ -84,27 +91,48 @@ pub enum BoundaryDesc {
     IndexMatched,
 }
 
-/// `[[objects]]`: a procedural `shape` or a `mesh` file, placed by `transform`.
+/// `[[objects]]`: a procedural `shape`, a `mesh` file or an `asset` file, placed by
+/// `transform`. `material` is required but for glTF files, whose primitives otherwise keep the
+/// file's own materials.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ObjectDesc {
     pub name: String,
-    pub material: String,
+    pub material: Option<String>,
     pub shape: Option<ShapeDesc>,
-    /// OBJ or PLY file, relative to the scene file's folder.
+    /// OBJ, PLY or glTF file, relative to the scene file's folder.
     pub mesh: Option<String>,
+    /// A mesh file relative to the asset directory (`--assets`, `RESHIFT_ASSETS`).
+    pub asset: Option<String>,
     #[serde(default)]
     pub transform: TransformDesc,
 }
 
-/// `transform = { translate, rotate, scale }`: scale, then rotate about X, then Y, then Z
-/// (degrees), then translate.
+/// `transform = { translate, rotate, scale }`: scale, then rotate (about X, then Y, then Z, or
+/// about one axis; degrees), then translate.
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TransformDesc {
     pub translate: Option<[f32; 3]>,
-    pub rotate: Option<[f32; 3]>,
+    pub rotate: Option<RotateDesc>,
     pub scale: Option<ScaleDesc>,
+}
+
+/// Euler angles (`rotate = [x, y, z]`, degrees, applied X then Y then Z) or a rotation about
+/// one axis (`rotate = { axis = [x, y, z], degrees = a }`, right-handed).
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(untagged)]
+pub enum RotateDesc {
+    Euler([f32; 3]),
+    Axis(AxisAngleDesc),
+}
+
+/// A rotation of `degrees` about `axis` (any non-zero length).
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AxisAngleDesc {
+    pub axis: [f32; 3],
+    pub degrees: f32,
 }
 
 /// A uniform (`scale = 2`) or per-axis (`scale = [1, 2, 1]`) scale.
@@ -167,6 +195,7 @@ pub enum LightDesc {
     Triangle {
         vertices: [[f32; 3]; 3],
         radiance: [f32; 3],
+        two_sided: Option<bool>,
     },
     Sphere {
         center: [f32; 3],
@@ -194,6 +223,28 @@ pub struct ManyLightsDesc {
     pub radius: f32,
     pub total_power: f32,
     pub color: Option<[f32; 3]>,
+}
+
+/// `[emitter_field]`: `count` emissive rectangles (objects, hence geometry, and lights): each
+/// the 2 × 2 square `[−1, 1]²` of the xz-plane scaled per axis by draws in `scale`, rotated by
+/// a draw in [0, π) about a random axis of the positive octant, centred uniformly in `region`,
+/// emitting one of `colors` (chosen uniformly) times a strength uniform in [0, `strength`).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EmitterFieldDesc {
+    pub count: u32,
+    pub seed: u64,
+    pub region: RegionDesc,
+    /// `[min, max]` of the per-axis scale of the 2 × 2 square.
+    pub scale: [f32; 2],
+    /// The upper end of the strength that multiplies a colour.
+    pub strength: f32,
+    /// Emission colours (default: red, green, blue, yellow, magenta, cyan, white).
+    pub colors: Option<Vec<[f32; 3]>>,
+    /// Diffuse reflectance of the rectangles (default 1).
+    pub albedo: Option<[f32; 3]>,
+    /// Whether both faces emit (default true).
+    pub two_sided: Option<bool>,
 }
 
 /// An axis-aligned box.

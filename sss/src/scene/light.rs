@@ -2,8 +2,10 @@
 //! area, spheres sampled by the solid angle of their visible cap, and delta point and directional
 //! lights. A light is picked with probability proportional to its power.
 //!
-//! Area lights are not part of the BVH: they neither occlude nor show up in camera rays unless a
-//! scene also adds an object with matching geometry.
+//! The lights of a scene file's `[[lights]]` are not part of the BVH: they neither occlude nor
+//! show up in camera rays unless the scene also adds an object with matching geometry. An
+//! emissive object's triangles are lights too ([`Light::Triangle`], one- or two-sided as its
+//! material says) and are geometry: those emitters occlude and are seen.
 //!
 //! Every sampler is paired with its solid-angle pdf ([`Lights::sample`] ↔ [`Lights::pdf`]); for
 //! delta lights the sample's `pdf` is only the selection probability and its `radiance` is the
@@ -31,8 +33,13 @@ pub enum Light {
         edge_v: Vec3,
         radiance: Vec3,
     },
-    /// Triangle emitting `radiance` from the side of `(v1 − v0) × (v2 − v0)` only.
-    Triangle { vertices: [Vec3; 3], radiance: Vec3 },
+    /// Triangle emitting `radiance` from the side of `(v1 − v0) × (v2 − v0)`, and from both
+    /// sides when `two_sided` (a triangle of a two-sided emissive mesh).
+    Triangle {
+        vertices: [Vec3; 3],
+        radiance: Vec3,
+        two_sided: bool,
+    },
     /// Sphere emitting `radiance` outward from its whole surface.
     Sphere {
         center: Vec3,
@@ -93,7 +100,11 @@ impl Light {
             Light::Triangle {
                 vertices: [v0, v1, v2],
                 radiance,
-            } => PI * 0.5 * (v1 - v0).cross(v2 - v0).length() * luminance(radiance),
+                two_sided,
+            } => {
+                let sides = if two_sided { 2.0 } else { 1.0 };
+                sides * PI * 0.5 * (v1 - v0).cross(v2 - v0).length() * luminance(radiance)
+            }
             Light::Sphere {
                 radius, radiance, ..
             } => 4.0 * PI * PI * radius * radius * luminance(radiance),
@@ -123,8 +134,9 @@ impl Light {
             Light::Triangle {
                 vertices: [v0, v1, v2],
                 radiance,
+                two_sided,
             } => {
-                if (v1 - v0).cross(v2 - v0).dot(toward - point) > 0.0 {
+                if two_sided || (v1 - v0).cross(v2 - v0).dot(toward - point) > 0.0 {
                     radiance
                 } else {
                     Vec3::ZERO
@@ -170,10 +182,17 @@ impl Light {
             Light::Triangle {
                 vertices: [v0, v1, v2],
                 radiance,
+                two_sided,
             } => {
                 let [b0, b1, b2] = sample_uniform_triangle(u);
                 let point = b0 * v0 + b1 * v1 + b2 * v2;
-                let normal = (v1 - v0).cross(v2 - v0).normalize();
+                let winding = (v1 - v0).cross(v2 - v0).normalize();
+                // A two-sided emitter's normal at x3 faces x2, as a one-sided one's must.
+                let normal = if two_sided && winding.dot(x - point) < 0.0 {
+                    -winding
+                } else {
+                    winding
+                };
                 let pdf = self.pdf(x, point);
                 (pdf > 0.0).then_some(PointOnLight {
                     point,
@@ -224,14 +243,15 @@ impl Light {
         match *self {
             Light::Quad { edge_u, edge_v, .. } => {
                 let n = edge_u.cross(edge_v);
-                area_to_solid_angle(x, point, n.normalize(), n.length())
+                area_to_solid_angle(x, point, n.normalize(), n.length(), false)
             }
             Light::Triangle {
                 vertices: [v0, v1, v2],
+                two_sided,
                 ..
             } => {
                 let n = (v1 - v0).cross(v2 - v0);
-                area_to_solid_angle(x, point, n.normalize(), 0.5 * n.length())
+                area_to_solid_angle(x, point, n.normalize(), 0.5 * n.length(), two_sided)
             }
             Light::Sphere { center, radius, .. } => sphere_pdf(center, radius, x, point),
             Light::Point { .. } | Light::Directional { .. } => 0.0,
@@ -240,11 +260,16 @@ impl Light {
 }
 
 /// Uniform area density `1/area` converted to solid angle at `x`: `‖p − x‖² / (area · cos θ_l)`
-/// with `cos θ_l = n · (x − p)/‖x − p‖`; 0 from behind.
-fn area_to_solid_angle(x: Vec3, p: Vec3, n: Vec3, area: f32) -> f32 {
+/// with `cos θ_l = n · (x − p)/‖x − p‖`; 0 from behind, unless `two_sided` (then `|cos θ_l|`).
+fn area_to_solid_angle(x: Vec3, p: Vec3, n: Vec3, area: f32, two_sided: bool) -> f32 {
     let to_x = x - p;
     let d2 = to_x.length_squared();
-    let cos_l = n.dot(to_x) / d2.sqrt();
+    let cos_facing = n.dot(to_x) / d2.sqrt();
+    let cos_l = if two_sided {
+        cos_facing.abs()
+    } else {
+        cos_facing
+    };
     if cos_l > 0.0 && area > 0.0 && d2 > 0.0 {
         d2 / (area * cos_l)
     } else {

@@ -1,33 +1,43 @@
 //! Scene file → [`Scene`]: TOML parsing with field paths in every error, semantic validation, and
-//! construction of materials, meshes, lights and camera.
+//! construction of materials ([`material`]), objects and their meshes ([`objects`], [`shape`]),
+//! lights (the file's, the generated ones and the emitters' triangles) and camera.
 
-use std::collections::HashMap;
+mod material;
+mod objects;
+mod shape;
+
 use std::path::Path;
 
 use geometry::limits::MAX_COORDINATE;
-use geometry::{Geometry, TriangleMesh, load_mesh, shapes};
-use glam::{Affine3A, Quat, Vec3};
+use geometry::{Geometry, TriangleMesh};
+use glam::Vec3;
 
-use super::format::{
-    BoundaryDesc, CameraDesc, FitDesc, LightDesc, ManyLightsDesc, MaterialDesc, ObjectDesc,
-    ScaleDesc, SceneFile, ShapeDesc, TransformDesc,
-};
+use super::emitter_field::{DEFAULT_COLORS, EmitterField};
+use super::format::{CameraDesc, EmitterFieldDesc, LightDesc, ManyLightsDesc, SceneFile};
 use super::light::{Light, Lights};
 use super::many_lights::ManyLights;
 use super::parse::parse;
-use super::{Camera, Object, Scene};
+use super::{Camera, Scene};
 use crate::InputError;
-use crate::limits::{self, MAX_EMISSION, MAX_LIGHTS, MAX_SCENE_TRIANGLES, MAX_SHAPE_TRIANGLES};
-use crate::material::{BoundaryKind, Lambert, MEASURED_NAMES, Material, Translucent, measured};
-use crate::profile::ScaleFit;
+use crate::limits::{self, MAX_EMISSION, MAX_LIGHTS};
+use crate::material::Material;
+use objects::Placed;
 
 /// Parses and builds a scene; `origin` names the file in errors and anchors relative mesh paths.
 pub fn scene_from_toml(text: &str, origin: &Path) -> Result<Scene, InputError> {
     let file: SceneFile = parse(text, origin)?;
     let ctx = Ctx { file: origin };
     let camera = ctx.camera(&file.camera)?;
-    let (materials, material_ids) = ctx.materials(&file.materials)?;
-    let (objects, meshes, dropped_degenerate) = ctx.objects(&file.objects, &material_ids)?;
+    let mut materials = ctx.materials(&file.materials)?;
+    let mut placed = ctx.objects(&file.objects, &mut materials)?;
+    if let Some(field) = &file.emitter_field {
+        for (i, (mesh, lambert)) in ctx.emitter_field(field)?.generate().into_iter().enumerate() {
+            materials.list.push(Material::Lambert(lambert));
+            let id = materials.list.len() as u32 - 1;
+            placed.push(&ctx, "emitter_field", format!("emitter[{i}]"), id, mesh)?;
+        }
+    }
+    let materials = materials.list;
     if file.lights.len() as u64 > MAX_LIGHTS {
         return Err(ctx.err(
             "lights",
@@ -39,13 +49,20 @@ pub fn scene_from_toml(text: &str, origin: &Path) -> Result<Scene, InputError> {
     if let Some(many) = &file.many_lights {
         lights.extend(ctx.many_lights(many, lights.len())?.generate());
     }
+    ctx.emitters(&placed, &materials, &mut lights)?;
     if lights.is_empty() {
         return Err(ctx.err(
             "lights",
             "[]",
-            "the scene has no lights (add [[lights]] or [many_lights])",
+            "the scene has no lights (add [[lights]], [many_lights] or an emissive material)",
         ));
     }
+    let Placed {
+        objects,
+        meshes,
+        dropped: dropped_degenerate,
+        ..
+    } = placed;
     let (lo, hi) = meshes
         .iter()
         .map(TriangleMesh::bounds)
@@ -135,7 +152,7 @@ impl Ctx<'_> {
     }
 
     /// A positive number (a length) no larger than [`MAX_COORDINATE`], or an error at `field`.
-    fn positive(&self, field: &str, x: f32) -> Result<f32, InputError> {
+    pub(super) fn positive(&self, field: &str, x: f32) -> Result<f32, InputError> {
         if x > 0.0 && x <= MAX_COORDINATE {
             Ok(x)
         } else {
@@ -195,346 +212,6 @@ impl Ctx<'_> {
         ))
     }
 
-    fn materials(
-        &self,
-        descs: &[MaterialDesc],
-    ) -> Result<(Vec<Material>, HashMap<String, u32>), InputError> {
-        let mut ids = HashMap::new();
-        let mut materials = Vec::with_capacity(descs.len());
-        for (i, desc) in descs.iter().enumerate() {
-            let field = format!("materials[{i}]");
-            if ids.insert(desc.name().to_string(), i as u32).is_some() {
-                return Err(self.err(
-                    format!("{field}.name"),
-                    format!("{:?}", desc.name()),
-                    "duplicate material name",
-                ));
-            }
-            materials.push(self.material(desc, &field)?);
-        }
-        Ok((materials, ids))
-    }
-
-    fn material(&self, desc: &MaterialDesc, field: &str) -> Result<Material, InputError> {
-        match desc {
-            MaterialDesc::Lambert { albedo, .. } => {
-                if !albedo.iter().all(|a| (0.0..=1.0).contains(a)) {
-                    return Err(self.err(
-                        format!("{field}.albedo"),
-                        format!("{albedo:?}"),
-                        "each channel must lie in [0, 1]",
-                    ));
-                }
-                Ok(Material::Lambert(Lambert {
-                    albedo: Vec3::from_array(*albedo),
-                }))
-            }
-            MaterialDesc::Translucent {
-                preset,
-                albedo,
-                mfp,
-                scale,
-                ior,
-                g,
-                fit,
-                boundary,
-                ..
-            } => {
-                let base = match preset {
-                    Some(p) => measured(p).ok_or_else(|| {
-                        self.err(
-                            format!("{field}.preset"),
-                            format!("{p:?}"),
-                            format!("unknown preset; known: {}", MEASURED_NAMES.join(", ")),
-                        )
-                    })?,
-                    None => {
-                        let missing = |member: &str| {
-                            self.err(
-                                format!("{field}.{member}"),
-                                "(missing)",
-                                "required unless `preset` is given",
-                            )
-                        };
-                        Translucent {
-                            albedo: Vec3::from_array(albedo.ok_or_else(|| missing("albedo"))?),
-                            mfp: Vec3::from_array(mfp.ok_or_else(|| missing("mfp"))?),
-                            scale: 1.0,
-                            ior: 1.3,
-                            g: 0.0,
-                            fit: ScaleFit::Searchlight,
-                            boundary: BoundaryKind::Diffuse,
-                        }
-                    }
-                };
-                let m = Translucent {
-                    albedo: albedo.map_or(base.albedo, Vec3::from_array),
-                    mfp: mfp.map_or(base.mfp, Vec3::from_array),
-                    scale: scale.unwrap_or(base.scale),
-                    ior: ior.unwrap_or(base.ior),
-                    g: g.unwrap_or(base.g),
-                    fit: fit.map_or(base.fit, |f| match f {
-                        FitDesc::Searchlight => ScaleFit::Searchlight,
-                        FitDesc::DiffuseTransmission => ScaleFit::DiffuseTransmission,
-                        FitDesc::Dmfp => ScaleFit::Dmfp,
-                    }),
-                    boundary: boundary.map_or(base.boundary, |b| match b {
-                        BoundaryDesc::Diffuse => BoundaryKind::Diffuse,
-                        BoundaryDesc::Dielectric => BoundaryKind::Dielectric,
-                        BoundaryDesc::IndexMatched => BoundaryKind::IndexMatched,
-                    }),
-                };
-                m.validate(self.file, field)?;
-                Ok(Material::Translucent(m))
-            }
-        }
-    }
-
-    /// Objects, their world-space meshes (degenerate triangles dropped), and the dropped count.
-    fn objects(
-        &self,
-        descs: &[ObjectDesc],
-        material_ids: &HashMap<String, u32>,
-    ) -> Result<(Vec<Object>, Vec<TriangleMesh>, usize), InputError> {
-        if descs.is_empty() {
-            return Err(self.err("objects", "[]", "the scene has no objects"));
-        }
-        let mut names = HashMap::new();
-        let mut objects = Vec::with_capacity(descs.len());
-        let mut meshes = Vec::with_capacity(descs.len());
-        let (mut dropped, mut triangles) = (0, 0u64);
-        for (i, desc) in descs.iter().enumerate() {
-            let field = format!("objects[{i}]");
-            if names.insert(desc.name.as_str(), i).is_some() {
-                return Err(self.err(
-                    format!("{field}.name"),
-                    format!("{:?}", desc.name),
-                    "duplicate object name",
-                ));
-            }
-            let material = *material_ids.get(&desc.material).ok_or_else(|| {
-                let mut known: Vec<&str> = material_ids.keys().map(String::as_str).collect();
-                known.sort_unstable();
-                self.err(
-                    format!("{field}.material"),
-                    format!("{:?}", desc.material),
-                    format!("no material of that name; defined: [{}]", known.join(", ")),
-                )
-            })?;
-            let local = match (&desc.shape, &desc.mesh) {
-                (Some(shape), None) => self.shape(shape, &format!("{field}.shape"))?,
-                (None, Some(mesh)) => self.mesh(mesh, &format!("{field}.mesh"))?,
-                _ => {
-                    return Err(self.err(
-                        &field,
-                        format!("{:?}", desc.name),
-                        "give exactly one of `shape` and `mesh`",
-                    ));
-                }
-            };
-            let transform = format!("{field}.transform");
-            let mut mesh = local.transformed(&self.transform(&desc.transform, &transform)?);
-            if let Some(p) = mesh
-                .positions
-                .iter()
-                .find(|p| !(p.is_finite() && within_coordinates(p.to_array())))
-            {
-                return Err(self.err(
-                    transform,
-                    format!("{:?}", p.to_array()),
-                    format!("moves a vertex beyond |coordinate| ≤ {MAX_COORDINATE:e}"),
-                ));
-            }
-            dropped += mesh.drop_degenerate();
-            if mesh.indices.is_empty() {
-                return Err(self.err(
-                    &field,
-                    format!("{:?}", desc.name),
-                    "no non-degenerate triangles",
-                ));
-            }
-            triangles += mesh.triangle_count() as u64;
-            if triangles > MAX_SCENE_TRIANGLES {
-                return Err(self.err(
-                    &field,
-                    format!("{triangles} triangles so far"),
-                    format!("the scene has more than {MAX_SCENE_TRIANGLES} triangles"),
-                ));
-            }
-            objects.push(Object {
-                name: desc.name.clone(),
-                material,
-            });
-            meshes.push(mesh);
-        }
-        Ok((objects, meshes, dropped))
-    }
-
-    fn transform(&self, t: &TransformDesc, field: &str) -> Result<Affine3A, InputError> {
-        let translate = self.vec3(
-            &format!("{field}.translate"),
-            t.translate.unwrap_or([0.0; 3]),
-        )?;
-        let rotate = self.vec3(&format!("{field}.rotate"), t.rotate.unwrap_or([0.0; 3]))?;
-        let scale = match t.scale {
-            None => Vec3::ONE,
-            Some(ScaleDesc::Uniform(s)) => Vec3::splat(s),
-            Some(ScaleDesc::PerAxis(s)) => Vec3::from_array(s),
-        };
-        if !(scale.is_finite() && scale.cmpne(Vec3::ZERO).all()) {
-            return Err(self.err(
-                format!("{field}.scale"),
-                format!("{scale}"),
-                "must be finite and non-zero",
-            ));
-        }
-        let r = rotate * (std::f32::consts::PI / 180.0);
-        // X first, then Y, then Z (extrinsic).
-        let rotation =
-            Quat::from_rotation_z(r.z) * Quat::from_rotation_y(r.y) * Quat::from_rotation_x(r.x);
-        Ok(Affine3A::from_scale_rotation_translation(
-            scale, rotation, translate,
-        ))
-    }
-
-    fn shape(&self, shape: &ShapeDesc, field: &str) -> Result<TriangleMesh, InputError> {
-        let pos = |member: &str, x: f32| self.positive(&format!("{field}.{member}"), x);
-        let at_least = |member: &str, x: u32, min: u32| {
-            if x >= min {
-                Ok(x)
-            } else {
-                Err(self.err(
-                    format!("{field}.{member}"),
-                    x.to_string(),
-                    format!("must be ≥ {min}"),
-                ))
-            }
-        };
-        let budget = |triangles: u64| {
-            if triangles <= MAX_SHAPE_TRIANGLES {
-                Ok(())
-            } else {
-                Err(self.err(
-                    field,
-                    format!("{triangles} triangles"),
-                    format!("more than {MAX_SHAPE_TRIANGLES} triangles"),
-                ))
-            }
-        };
-        Ok(match *shape {
-            ShapeDesc::Sphere {
-                radius,
-                segments,
-                rings,
-            } => {
-                let (s, r) = (
-                    at_least("segments", segments.unwrap_or(64), 3)?,
-                    at_least("rings", rings.unwrap_or(32), 2)?,
-                );
-                budget(2 * s as u64 * r as u64)?;
-                shapes::uv_sphere(pos("radius", radius)?, s, r)
-            }
-            ShapeDesc::Box { size } => {
-                let size = Vec3::from_array(size);
-                if !(size.is_finite() && size.cmpgt(Vec3::ZERO).all()) {
-                    return Err(self.err(
-                        format!("{field}.size"),
-                        format!("{size}"),
-                        "each extent must be finite and > 0",
-                    ));
-                }
-                shapes::cuboid(0.5 * size)
-            }
-            ShapeDesc::Slab { size, thickness } => shapes::slab(
-                pos("size[0]", size[0])?,
-                pos("size[1]", size[1])?,
-                pos("thickness", thickness)?,
-            ),
-            ShapeDesc::Quad { size } => {
-                shapes::quad(pos("size[0]", size[0])?, pos("size[1]", size[1])?)
-            }
-            ShapeDesc::Torus {
-                major_radius,
-                minor_radius,
-                segments,
-                sides,
-            } => {
-                let (s, k) = (
-                    at_least("segments", segments.unwrap_or(96), 3)?,
-                    at_least("sides", sides.unwrap_or(32), 3)?,
-                );
-                budget(2 * s as u64 * k as u64)?;
-                shapes::torus(
-                    pos("major_radius", major_radius)?,
-                    pos("minor_radius", minor_radius)?,
-                    s,
-                    k,
-                )
-            }
-            ShapeDesc::TorusKnot {
-                p,
-                q,
-                radius,
-                tube_radius,
-                segments,
-                sides,
-            } => {
-                let (s, k) = (
-                    at_least("segments", segments.unwrap_or(384), 3)?,
-                    at_least("sides", sides.unwrap_or(24), 3)?,
-                );
-                budget(2 * s as u64 * k as u64)?;
-                let (p, q) = (at_least("p", p, 1)?, at_least("q", q, 1)?);
-                shapes::torus_knot(
-                    p,
-                    q,
-                    pos("radius", radius)?,
-                    pos("tube_radius", tube_radius)?,
-                    s,
-                    k,
-                )
-            }
-            ShapeDesc::BumpySphere {
-                radius,
-                amplitude,
-                frequency,
-                seed,
-                subdivisions,
-            } => {
-                let subdivisions = subdivisions.unwrap_or(5);
-                budget(20u64.saturating_mul(4u64.saturating_pow(subdivisions)))?;
-                if !(amplitude.is_finite() && amplitude >= 0.0 && amplitude < radius) {
-                    return Err(self.err(
-                        format!("{field}.amplitude"),
-                        amplitude.to_string(),
-                        "must be finite, ≥ 0 and < radius",
-                    ));
-                }
-                shapes::bumpy_sphere(
-                    pos("radius", radius)?,
-                    amplitude,
-                    pos("frequency", frequency)?,
-                    seed.unwrap_or(0),
-                    subdivisions,
-                )
-            }
-        })
-    }
-
-    /// A mesh file relative to the scene file's folder. A missing file is reported against the
-    /// scene field; errors inside the mesh name the mesh file.
-    fn mesh(&self, mesh: &str, field: &str) -> Result<TriangleMesh, InputError> {
-        let path = self.file.parent().unwrap_or(Path::new("")).join(mesh);
-        if !path.is_file() {
-            return Err(self.err(
-                field,
-                format!("{mesh:?}"),
-                format!("mesh file not found at {}", path.display()),
-            ));
-        }
-        load_mesh(&path)
-    }
-
     fn lights(&self, descs: &[LightDesc]) -> Result<Vec<Light>, InputError> {
         descs
             .iter()
@@ -566,7 +243,11 @@ impl Ctx<'_> {
                             radiance: self.emission(&f("radiance"), radiance)?,
                         }
                     }
-                    LightDesc::Triangle { vertices, radiance } => {
+                    LightDesc::Triangle {
+                        vertices,
+                        radiance,
+                        two_sided,
+                    } => {
                         let v0 = self.vec3(&f("vertices[0]"), vertices[0])?;
                         let v1 = self.vec3(&f("vertices[1]"), vertices[1])?;
                         let v2 = self.vec3(&f("vertices[2]"), vertices[2])?;
@@ -580,6 +261,7 @@ impl Ctx<'_> {
                         Light::Triangle {
                             vertices: [v0, v1, v2],
                             radiance: self.emission(&f("radiance"), radiance)?,
+                            two_sided: two_sided.unwrap_or(false),
                         }
                     }
                     LightDesc::Sphere {
@@ -651,6 +333,120 @@ impl Ctx<'_> {
             ));
         }
         Ok(many)
+    }
+}
+
+impl Ctx<'_> {
+    /// The triangles of every emissive object as lights ([`Light::Triangle`], one- or two-sided
+    /// as its material), appended to `lights` in object order, within [`MAX_LIGHTS`].
+    fn emitters(
+        &self,
+        placed: &Placed,
+        materials: &[Material],
+        lights: &mut Vec<Light>,
+    ) -> Result<(), InputError> {
+        for (object, mesh) in placed.objects.iter().zip(&placed.meshes) {
+            let Material::Lambert(lambert) = materials[object.material as usize] else {
+                continue;
+            };
+            if !lambert.is_emitter() {
+                continue;
+            }
+            if (lights.len() + mesh.triangle_count()) as u64 > MAX_LIGHTS {
+                return Err(self.err(
+                    "objects",
+                    format!(
+                        "{:?}: {} emissive triangles",
+                        object.name,
+                        mesh.triangle_count()
+                    ),
+                    format!("the scene has more than {MAX_LIGHTS} lights"),
+                ));
+            }
+            lights.extend((0..mesh.triangle_count()).map(|t| Light::Triangle {
+                vertices: mesh.triangle(t),
+                radiance: lambert.emission,
+                two_sided: lambert.two_sided,
+            }));
+        }
+        Ok(())
+    }
+
+    /// The `[emitter_field]` generator, its fields checked.
+    fn emitter_field(&self, f: &EmitterFieldDesc) -> Result<EmitterField, InputError> {
+        limits::count(
+            self.file,
+            "emitter_field.count",
+            f.count as u64,
+            1,
+            MAX_LIGHTS / 2,
+        )?;
+        let min = self.vec3("emitter_field.region.min", f.region.min)?;
+        let max = self.vec3("emitter_field.region.max", f.region.max)?;
+        if !min.cmple(max).all() {
+            return Err(self.err(
+                "emitter_field.region.max",
+                format!("{max}"),
+                format!("must be ≥ region.min {min} per axis"),
+            ));
+        }
+        let [scale_min, scale_max] = f.scale;
+        self.positive("emitter_field.scale[0]", scale_min)?;
+        if !(self.positive("emitter_field.scale[1]", scale_max)? >= scale_min) {
+            return Err(self.err(
+                "emitter_field.scale",
+                format!("{:?}", f.scale),
+                "must be [min, max] with 0 < min ≤ max",
+            ));
+        }
+        if !(f.strength > 0.0 && f.strength <= MAX_EMISSION) {
+            return Err(self.err(
+                "emitter_field.strength",
+                f.strength.to_string(),
+                format!("must lie in (0, {MAX_EMISSION:e}]"),
+            ));
+        }
+        let colors = f.colors.clone().unwrap_or(DEFAULT_COLORS.to_vec());
+        if colors.is_empty() || colors.len() > 1024 {
+            return Err(self.err(
+                "emitter_field.colors",
+                format!("{} colours", colors.len()),
+                "give 1 to 1024 colours",
+            ));
+        }
+        let colors = (0..colors.len())
+            .map(|i| self.emission(&format!("emitter_field.colors[{i}]"), colors[i]))
+            .collect::<Result<Vec<_>, _>>()?;
+        if let Some(c) = colors
+            .iter()
+            .find(|c| (*c * f.strength).max_element() > MAX_EMISSION)
+        {
+            return Err(self.err(
+                "emitter_field.strength",
+                f.strength.to_string(),
+                format!("times colour {c} exceeds {MAX_EMISSION:e}"),
+            ));
+        }
+        let albedo = f.albedo.unwrap_or([1.0; 3]);
+        if !albedo.iter().all(|a| (0.0..=1.0).contains(a)) {
+            return Err(self.err(
+                "emitter_field.albedo",
+                format!("{albedo:?}"),
+                "each channel must lie in [0, 1]",
+            ));
+        }
+        Ok(EmitterField {
+            count: f.count,
+            seed: f.seed,
+            min,
+            max,
+            scale_min,
+            scale_max,
+            strength: f.strength,
+            colors,
+            albedo: Vec3::from_array(albedo),
+            two_sided: f.two_sided.unwrap_or(true),
+        })
     }
 }
 

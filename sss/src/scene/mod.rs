@@ -2,8 +2,10 @@
 //! trajectory and jitter, lights with power-proportional selection, the G-buffer, and the
 //! built-in evaluation scenes of paper 001 §6 (`scenes/*.toml`).
 
+pub mod assets;
 mod builtin;
 mod camera;
+mod emitter_field;
 mod format;
 mod gbuffer;
 mod light;
@@ -35,8 +37,9 @@ pub struct Object {
     pub material: u32,
 }
 
-/// A loaded scene. Area lights are not in `geometry` (they neither occlude nor appear in camera
-/// rays) unless the scene file adds objects with matching geometry.
+/// A loaded scene. The file's area lights are not in `geometry` (they neither occlude nor appear
+/// in camera rays) unless the scene file adds objects with matching geometry; emissive objects
+/// are in both: geometry, and one light per triangle.
 pub struct Scene {
     /// The file stem of the scene file.
     pub name: String,
@@ -53,8 +56,10 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// The built-in scenes: `(name, one-line description)`.
+    /// The built-in scenes of procedural geometry: `(name, one-line description)`.
     pub const BUILTIN: &[(&str, &str)] = builtin::BUILTIN;
+    /// The built-in scenes that read their meshes from the asset directory ([`assets`]).
+    pub const WITH_ASSETS: &[(&str, &str)] = builtin::WITH_ASSETS;
 
     /// Loads a scene file (at most [`MAX_SCENE_FILE_BYTES`]); mesh paths are relative to its
     /// folder.
@@ -76,15 +81,20 @@ impl Scene {
         load::scene_from_toml(text, origin)
     }
 
-    /// The built-in scene `name` (see [`Scene::BUILTIN`]), or `None` for an unknown name.
-    pub fn builtin(name: &str) -> Option<Scene> {
+    /// The built-in scene `name` of [`Scene::BUILTIN`] or [`Scene::WITH_ASSETS`], or `None` for
+    /// an unknown name; a scene of the second list fails where the asset directory is not set or
+    /// lacks its files.
+    pub fn named(name: &str) -> Option<Result<Scene, InputError>> {
         let text = builtin::source(name)?;
         let origin = Path::new("scenes").join(format!("{name}.toml"));
-        // Built-in files are tested to parse; a failure here is a bug in the shipped file.
-        Some(
-            Scene::from_toml_str(text, &origin)
-                .unwrap_or_else(|e| panic!("built-in scene {name}: {e}")),
-        )
+        Some(Scene::from_toml_str(text, &origin))
+    }
+
+    /// The built-in scene `name` (see [`Scene::BUILTIN`]), or `None` for an unknown name.
+    /// Panics where it fails to load: built-in files are tested to parse, and a scene of
+    /// [`Scene::WITH_ASSETS`] needs its assets ([`Scene::named`] returns the error).
+    pub fn builtin(name: &str) -> Option<Scene> {
+        Some(Scene::named(name)?.unwrap_or_else(|e| panic!("built-in scene {name}: {e}")))
     }
 
     pub fn material_of_object(&self, object: u32) -> &Material {

@@ -209,6 +209,7 @@ fn candidates_report_their_density() {
                 Vec3::new(0.0, 1.2, -0.8),
             ],
             radiance: Vec3::splat(10.0),
+            two_sided: false,
         },
         Light::Directional {
             direction: Vec3::new(0.3, -0.2, 1.0).normalize(),

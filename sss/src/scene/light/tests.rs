@@ -39,6 +39,7 @@ fn triangle() -> Light {
             vec3(-0.7, 1.4, 0.2),
         ],
         radiance: vec3(1.0, 2.0, 3.0),
+        two_sided: false,
     }
 }
 
@@ -231,9 +232,9 @@ fn irradiance(light: &Light) -> f64 {
             ];
             luminance(radiance) as f64 * polygon_irradiance(&poly, X, n)
         }
-        Light::Triangle { vertices, radiance } => {
-            luminance(radiance) as f64 * polygon_irradiance(&vertices, X, n)
-        }
+        Light::Triangle {
+            vertices, radiance, ..
+        } => luminance(radiance) as f64 * polygon_irradiance(&vertices, X, n),
         Light::Sphere {
             center,
             radius,

@@ -1,6 +1,10 @@
 use super::*;
 use crate::error::MAX_MESSAGE_CHARS;
+use crate::material::BoundaryKind;
+use crate::profile::ScaleFit;
+use crate::scene::Object;
 use crate::scene::Scene;
+use crate::scene::format::{RotateDesc, ScaleDesc, TransformDesc};
 
 const ORIGIN: &str = "tests/minimal.toml";
 
@@ -359,7 +363,7 @@ fn transform_order_is_scale_rotate_xyz_translate() {
     };
     let t = TransformDesc {
         translate: Some([1.0, 2.0, 3.0]),
-        rotate: Some([90.0, 90.0, 0.0]),
+        rotate: Some(RotateDesc::Euler([90.0, 90.0, 0.0])),
         scale: Some(ScaleDesc::PerAxis([2.0, 1.0, 1.0])),
     };
     let xf = ctx.transform(&t, "t").unwrap();

@@ -1,5 +1,5 @@
-//! `reshift gpu-report` end to end on whatever Vulkan device there is (lavapipe in CI) at a tiny
-//! size: it exits 0, writes the markdown file it prints, and the file has the device table, a
+//! `reshift gpu-report` end to end on whatever Vulkan device there is (lavapipe in CI) at tiny
+//! sizes, on `bumpy` and on paper 001's `ajax` (portrait): it exits 0, writes the markdown file it prints, and the file has the device table, a
 //! passing parity row per preset, a timed row for every pass of every preset and for every
 //! memoryless method, and the equal-time comparison's table. Skips without Vulkan unless
 //! `RESHIFT_REQUIRE_VULKAN=1`.
@@ -8,17 +8,41 @@ use std::process::Command;
 
 use engine::Preset;
 use engine::plan::Plan;
+use sss::scene::assets::shared_or_skip;
 
 #[test]
 fn gpu_report_writes_the_markdown_tables() {
-    let dir = std::env::temp_dir().join(format!("reshift-gpu-report-{}", std::process::id()));
+    report("bumpy", None, ["24x16", "32x24"]);
+}
+
+/// The report on paper 001's own scene (`ajax`, from the shared assets) at portrait sizes, as
+/// `reshift gpu-report --scene ajax --sizes 720x1080` measures it on a GPU; skips without the
+/// assets unless `RESHIFT_REQUIRE_ASSETS=1`.
+#[test]
+fn gpu_report_runs_on_the_paper_scene() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    if let Some(assets) = shared_or_skip(root, "gpu_report_runs_on_the_paper_scene") {
+        report("ajax", Some(&assets), ["16x24", "24x36"]);
+    }
+}
+
+/// Runs the report on `scene` at `sizes` (the parity and comparison runs at the first) and
+/// checks its tables.
+fn report(scene: &str, assets: Option<&std::path::Path>, sizes: [&str; 2]) {
+    let dir =
+        std::env::temp_dir().join(format!("reshift-gpu-report-{scene}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let out = dir.join("report.md");
     let cache = dir.join("cache");
-    let output = Command::new(env!("CARGO_BIN_EXE_reshift"))
-        .args(["gpu-report", "--sizes", "24x16,32x24", "--frames", "3"])
-        .args(["--parity-size", "24x16", "--parity-frames", "2"])
-        .args(["--compare-size", "24x16", "--compare-frames", "2"])
+    let mut command = Command::new(env!("CARGO_BIN_EXE_reshift"));
+    if let Some(dir) = assets {
+        command.arg("--assets").arg(dir);
+    }
+    let output = command
+        .args(["gpu-report", "--scene", scene, "--frames", "3"])
+        .args(["--sizes", &sizes.join(",")])
+        .args(["--parity-size", sizes[0], "--parity-frames", "2"])
+        .args(["--compare-size", sizes[0], "--compare-frames", "2"])
         .args(["--reference-spp", "8", "--reference-batch-spp", "4"])
         .arg("--cache")
         .arg(&cache)
@@ -64,7 +88,7 @@ fn gpu_report_writes_the_markdown_tables() {
             preset.name
         );
         let method = format!("restir:{}", preset.name);
-        for size in ["24×16", "32×24"] {
+        for size in sizes.map(|s| s.replace('x', "×")) {
             let labels = Plan::lower(&preset).steps.into_iter().map(|s| s.label);
             for pass in labels.chain(["**frame**".to_string()]) {
                 let row = rows
@@ -83,9 +107,10 @@ fn gpu_report_writes_the_markdown_tables() {
         "image-space:1",
         "adaptive",
     ] {
+        let size = sizes[1].replace('x', "×");
         assert!(
             rows.iter()
-                .any(|r| r[1] == "32×24" && r[2] == method && r[4].parse::<f64>().is_ok()),
+                .any(|r| r[1] == size && r[2] == method && r[4].parse::<f64>().is_ok()),
             "no timed row of {method}:\n{md}"
         );
     }

@@ -4,7 +4,8 @@
 //! both ends of the path: `S = (A/π) R̄(r) · F_t(μo) F_t(μi)` against `(A/π) R̄(r) · w(μo) w(μi)`.
 //!
 //! * Both images are the path tracer's (BSSRDF importance sampling, NEE) on the same random
-//!   streams, so each replica's ratio of region means is paired: replica `k` runs with seed `k`,
+//!   streams (each sample's estimator runs twice on copies of its stream), so each replica's
+//!   ratio of region means is paired: replica `k` runs with seed `k`,
 //!   its translucent pixels are split into the lab's regions (lit, penumbra, shadowed), and per
 //!   region and channel the ratio `mean(w) / mean(F_t)` is averaged over the replicas on the log
 //!   scale with its 95% interval ([`lab::uncertainty`]).
@@ -25,37 +26,35 @@ use sss::integrator::pt::{self, Shading, sample_stream};
 use sss::scene::{FRAMES, GBuffer, Scene};
 
 /// Disney's diffuse transmission weight `1 − ½ (1 − μ)⁵` of paper 001's implementation.
-fn disney(mu: f32) -> f32 {
+fn disney_weight(mu: f32) -> f32 {
     let b = (1.0 - mu).clamp(0.0, 1.0);
     1.0 - 0.5 * b.powi(5)
 }
 
-/// One pixel's estimate under both weights, `(reshift's, Disney's)`, from one shared stream.
+/// One pixel's estimate under both weights, `(reshift's, Disney's)`: the estimator twice on
+/// copies of one stream, so both draw the same probe, hits and light samples.
 fn both(scene: &Scene, shading: &Shading, rng: &mut restir::rng::Stream) -> (Vec3, Vec3) {
     let Shading::Translucent { material, x1, .. } = shading else {
         return (Vec3::ZERO, Vec3::ZERO);
     };
     let mut hits = Vec::new();
-    let mut disney_sum = Vec3::ZERO;
-    let reshift = pt::estimate_bssrdf(
-        scene,
-        x1,
-        &PtSettings::default(),
-        rng,
-        &mut hits,
-        |x2, wi, le| {
-            let f = contribution(material, x1, x2, wi, le);
-            let mu_i = x2.shading_normal.dot(wi);
-            let mu_o = x1.shading_normal.dot(x1.view);
-            let ft = x1.fresnel_out * x1.fresnel.eval(mu_i);
-            if ft > 0.0 {
-                // The estimator divides by the same p_disk · p_light for both weights.
-                disney_sum += f * (disney(mu_o) * disney(mu_i) / ft);
-            }
-            f
-        },
-    );
-    (reshift, disney_sum)
+    let settings = PtSettings::default();
+    let mut copy = rng.clone();
+    let reshift = pt::estimate_bssrdf(scene, x1, &settings, rng, &mut hits, |x2, wi, le| {
+        contribution(material, x1, x2, wi, le)
+    });
+    let mu_o = x1.shading_normal.dot(x1.view);
+    let disney = pt::estimate_bssrdf(scene, x1, &settings, &mut copy, &mut hits, |x2, wi, le| {
+        let mu_i = x2.shading_normal.dot(wi);
+        let ft = x1.fresnel_out * x1.fresnel.eval(mu_i);
+        let f = contribution(material, x1, x2, wi, le);
+        if ft > 0.0 {
+            f * (disney_weight(mu_o) * disney_weight(mu_i) / ft)
+        } else {
+            Vec3::ZERO
+        }
+    });
+    (reshift, disney)
 }
 
 fn main() {

@@ -138,7 +138,7 @@ impl Experiment {
     /// 384×288) at 128×96 with 4 replicas and 1024-spp references; the figures at 128×96, 16
     /// replicas, 8192-spp references; `denoised` (4 comparisons with every denoiser) at 256×192 and
     /// 512×384, 8 replicas, 4096-spp references, as the main job; `paper-ajax` and
-    /// `paper-ajax-many-lights` at half the paper's size (360×540), 6 replicas, 1024-spp
+    /// `paper-ajax-many-lights` at half the paper's size (360×540), 8 replicas, 2048-spp
     /// references (docs/experiments.md, "Paper 001 on its own scene", for their cost).
     pub fn defaults(self) -> Defaults {
         match self {
@@ -163,9 +163,9 @@ impl Experiment {
                 reference_spp: 4096,
             },
             Experiment::PaperAjax | Experiment::PaperAjaxManyLights => Defaults {
-                replicas: 6,
+                replicas: 8,
                 resolution: (360, 540),
-                reference_spp: 1024,
+                reference_spp: 2048,
             },
             _ => Defaults {
                 replicas: 16,

@@ -18,6 +18,13 @@
 //!     wide across the edge, so its shadowed half is lit through the medium: lit and shadowed
 //!     pixels (a directional light casts no penumbra).
 //!
+//!   - `ajax` (paper 001's own scene from the shared assets: the scanned Ajax bust, 60 000
+//!     triangles, the paper's material) framed 3° wide on the bust's edge beside the face: every
+//!     translucent pixel is in the penumbra of the large emitter ([`AJAX`]); the tests skip
+//!     without the assets unless `RESHIFT_REQUIRE_ASSETS=1`. Its rows are the five presets and
+//!     reshift's best configuration ([`BEST`]), N 575–767 (measured CVs 0.040–0.084), each
+//!     also chained on Vulkan, with two near-δ controls (blue × 1.03, delayed J × 1.03).
+//!
 //!   Every region is tested in at least one scene.
 //! * N per preset and scene: the smallest N for which [`restir::stats::replicas_for`] plans a
 //!   probability ≥ [`FAMILY_POWER`] that the preset, were it unbiased, is equivalent in all 12
@@ -112,6 +119,7 @@ use lab::regions::{Region, Regions};
 use methods::Method;
 use methods::restir::Restir;
 use restir::stats::{EquivalencePlan, Verdict, family_power, replicas_for, student_t_quantile};
+use sss::scene::assets::shared_or_skip;
 use sss::scene::{Camera, GBuffer, Scene};
 
 /// δ = 2% on the relative bias of each region mean in each channel; α = 0.01 (99% CIs, Holm
@@ -132,7 +140,7 @@ const SIDE: u32 = 32;
 const CONTROL_BIAS: f64 = 0.03;
 
 /// Per-replica CVs of one preset on one design: rows are regions, columns channels.
-type Cvs = [[f64; 4]; 3];
+type Cvs = &'static [[f64; 4]];
 
 /// A test scene: its framing, the regions it shows, what was measured of it, and what the tests
 /// compute once per run.
@@ -140,7 +148,7 @@ struct Design {
     name: &'static str,
     scene: fn() -> Scene,
     /// The non-empty regions of the framing, in table order.
-    regions: [Region; 3],
+    regions: &'static [Region],
     /// Per preset, the per-replica coefficient of variation of each region's mean (rows:
     /// `regions`, columns: [`Channel::ALL`]), measured on the CPU with N = 512 (seeds 0..512).
     cv: [(&'static str, Cvs); 6],
@@ -159,7 +167,7 @@ struct Design {
     /// ≈ 1e-7; the rest comes from replicas whose sampling decisions diverged ([`DIVERGED`]):
     /// 6 of 64 for sequential-exact on bumpy (its re-traced intersection index), none
     /// elsewhere (measured 2026-11-24).
-    paired_cv: [(&'static str, f64); 5],
+    paired_cv: &'static [(&'static str, f64)],
     /// The CPU test of each registered preset (in the order of `cv`), run once: its CPU test
     /// and the CPU part of its Vulkan test's chain read it.
     outcomes: [OnceLock<BiasOutcome>; 6],
@@ -167,13 +175,13 @@ struct Design {
 
 /// Per-replica CVs of `restir:hybrid/channels=rgb` (per-channel reservoirs) on `bumpy`, measured
 /// by [`measure_cv`].
-const CHANNELS_BUMPY: Cvs = [
+const CHANNELS_BUMPY: Cvs = &[
     [0.036, 0.034, 0.039, 0.032],
     [0.041, 0.038, 0.045, 0.036],
     [0.056, 0.053, 0.061, 0.050],
 ];
 /// The same on `half-shadow`.
-const CHANNELS_HALF_SHADOW: Cvs = [
+const CHANNELS_HALF_SHADOW: Cvs = &[
     [0.048, 0.037, 0.043, 0.037],
     [0.048, 0.039, 0.047, 0.038],
     [0.065, 0.059, 0.077, 0.057],
@@ -195,11 +203,11 @@ static BUMPY: Design = Design {
         );
         Scene { camera, ..bumpy }
     },
-    regions: [Region::Translucent, Region::Lit, Region::Penumbra],
+    regions: &[Region::Translucent, Region::Lit, Region::Penumbra],
     cv: [
         (
             "reconnection",
-            [
+            &[
                 [0.059, 0.051, 0.080, 0.049],
                 [0.067, 0.063, 0.101, 0.060],
                 [0.088, 0.081, 0.130, 0.077],
@@ -207,7 +215,7 @@ static BUMPY: Design = Design {
         ),
         (
             "delayed",
-            [
+            &[
                 [0.055, 0.040, 0.062, 0.039],
                 [0.064, 0.046, 0.071, 0.044],
                 [0.086, 0.060, 0.088, 0.058],
@@ -215,7 +223,7 @@ static BUMPY: Design = Design {
         ),
         (
             "hybrid",
-            [
+            &[
                 [0.055, 0.040, 0.063, 0.039],
                 [0.065, 0.046, 0.074, 0.044],
                 [0.081, 0.064, 0.090, 0.061],
@@ -223,7 +231,7 @@ static BUMPY: Design = Design {
         ),
         (
             "sequential",
-            [
+            &[
                 [0.062, 0.058, 0.098, 0.055],
                 [0.069, 0.065, 0.112, 0.062],
                 [0.094, 0.088, 0.145, 0.083],
@@ -231,7 +239,7 @@ static BUMPY: Design = Design {
         ),
         (
             "sequential-exact",
-            [
+            &[
                 [0.062, 0.058, 0.098, 0.055],
                 [0.069, 0.065, 0.112, 0.062],
                 [0.094, 0.088, 0.145, 0.083],
@@ -244,7 +252,7 @@ static BUMPY: Design = Design {
     spp_per_batch: 128,
     framing: OnceLock::new(),
     reference: OnceLock::new(),
-    paired_cv: [
+    paired_cv: &[
         ("reconnection", 7.1e-7),
         ("delayed", 1.7e-7),
         ("hybrid", 1.0e-7),
@@ -270,11 +278,11 @@ static HALF_SHADOW: Design = Design {
         );
         Scene { camera, ..plane }
     },
-    regions: [Region::Translucent, Region::Lit, Region::Shadowed],
+    regions: &[Region::Translucent, Region::Lit, Region::Shadowed],
     cv: [
         (
             "reconnection",
-            [
+            &[
                 [0.058, 0.044, 0.058, 0.042],
                 [0.060, 0.044, 0.064, 0.042],
                 [0.073, 0.063, 0.096, 0.060],
@@ -282,7 +290,7 @@ static HALF_SHADOW: Design = Design {
         ),
         (
             "delayed",
-            [
+            &[
                 [0.057, 0.042, 0.056, 0.041],
                 [0.060, 0.043, 0.063, 0.041],
                 [0.073, 0.065, 0.098, 0.061],
@@ -290,7 +298,7 @@ static HALF_SHADOW: Design = Design {
         ),
         (
             "hybrid",
-            [
+            &[
                 [0.058, 0.042, 0.057, 0.041],
                 [0.061, 0.043, 0.064, 0.041],
                 [0.075, 0.066, 0.098, 0.062],
@@ -298,7 +306,7 @@ static HALF_SHADOW: Design = Design {
         ),
         (
             "sequential",
-            [
+            &[
                 [0.064, 0.046, 0.062, 0.045],
                 [0.065, 0.046, 0.069, 0.045],
                 [0.079, 0.066, 0.098, 0.063],
@@ -306,7 +314,7 @@ static HALF_SHADOW: Design = Design {
         ),
         (
             "sequential-exact",
-            [
+            &[
                 [0.064, 0.046, 0.062, 0.045],
                 [0.065, 0.046, 0.069, 0.045],
                 [0.079, 0.066, 0.098, 0.063],
@@ -319,7 +327,7 @@ static HALF_SHADOW: Design = Design {
     spp_per_batch: 256,
     framing: OnceLock::new(),
     reference: OnceLock::new(),
-    paired_cv: [
+    paired_cv: &[
         ("reconnection", 1.1e-7),
         ("delayed", 5.8e-8),
         ("hybrid", 5.7e-8),
@@ -328,6 +336,93 @@ static HALF_SHADOW: Design = Design {
     ],
     outcomes: [const { OnceLock::new() }; 6],
 };
+
+/// reshift's best measured configuration on `bumpy` (the main job's), tested on `ajax`.
+const BEST: &str = "reconnection/shade=all/neighbours=2";
+
+/// `ajax` (paper 001's own scene: the scanned Ajax bust, 60 000 triangles, with the paper's
+/// material, `scenes/ajax.toml`) from its own eye path through a 3° field of view on the bust's
+/// edge against the dark background beside the face: every translucent pixel is in the penumbra
+/// of the large two-sided emitter (it lights the bust from behind; no pixel of this side sees
+/// all of it, and its fully shadowed pixels are 10–40× darker in blue, which ±2% would need
+/// ~5 000 replicas for), and the probes of the silhouette's pixels cross the mesh several
+/// times. Needs the shared assets ([`ajax`]).
+static AJAX: Design = Design {
+    name: "ajax",
+    scene: || {
+        let ajax = Scene::builtin("ajax").expect("the asset directory is set (ajax())");
+        let target = Vec3::new(4.0, 10.0, -8.0);
+        let camera = Camera::new(
+            [SIDE, SIDE],
+            3.0,
+            [
+                Vec3::new(36.612, 8.049, -12.967),
+                Vec3::new(35.798, 8.049, -14.853),
+            ],
+            [target, target],
+            Vec3::Y,
+            ajax.camera.jittered(),
+        );
+        Scene { camera, ..ajax }
+    },
+    regions: &[Region::Translucent, Region::Penumbra],
+    // The translucent and penumbra pixels are the same ones here, hence the equal rows.
+    cv: [
+        (
+            "reconnection",
+            &[[0.080, 0.056, 0.079, 0.049], [0.080, 0.056, 0.079, 0.049]],
+        ),
+        (
+            "delayed",
+            &[[0.080, 0.048, 0.065, 0.040], [0.080, 0.048, 0.065, 0.040]],
+        ),
+        (
+            "hybrid",
+            &[[0.081, 0.049, 0.067, 0.040], [0.081, 0.049, 0.067, 0.040]],
+        ),
+        (
+            "sequential",
+            &[[0.084, 0.059, 0.082, 0.052], [0.084, 0.059, 0.082, 0.052]],
+        ),
+        (
+            "sequential-exact",
+            &[[0.084, 0.059, 0.082, 0.052], [0.084, 0.059, 0.082, 0.052]],
+        ),
+        (
+            BEST,
+            &[[0.066, 0.054, 0.075, 0.047], [0.066, 0.054, 0.075, 0.047]],
+        ),
+    ],
+    reference_rel_se: 0.0012,
+    reference_batches: 64,
+    spp_per_batch: 128,
+    framing: OnceLock::new(),
+    reference: OnceLock::new(),
+    paired_cv: &[
+        ("reconnection", 1.2e-7),
+        ("delayed", 9.4e-8),
+        ("hybrid", 9.9e-8),
+        ("sequential", 2.0e-7),
+        ("sequential-exact", 2.3e-7),
+        (BEST, 1.1e-7),
+    ],
+    outcomes: [const { OnceLock::new() }; 6],
+};
+
+/// [`AJAX`], where the shared assets are (`../shared/assets/restir-sss`); `None` after saying
+/// why `test` skips, unless `RESHIFT_REQUIRE_ASSETS=1`, which makes it fail.
+fn ajax(test: &str) -> Option<&'static Design> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    shared_or_skip(root, test).map(|_| &AJAX)
+}
+
+/// Every design whose scene can load: [`BUMPY`], [`HALF_SHADOW`] and, with the assets, [`AJAX`].
+fn designs(test: &str) -> Vec<&'static Design> {
+    [&BUMPY, &HALF_SHADOW]
+        .into_iter()
+        .chain(ajax(test))
+        .collect()
+}
 
 /// The scene of a design and its regions (those of `lab::bias::run`: the tested frame
 /// classified with the lab's reference seed), computed once per run.
@@ -347,9 +442,9 @@ impl Design {
     }
 
     /// The measured per-replica CVs of `preset`.
-    fn measured_cv(&self, preset: &str) -> &Cvs {
+    fn measured_cv(&self, preset: &str) -> Cvs {
         let found = self.cv.iter().find(|(name, _)| *name == preset);
-        &found.unwrap_or_else(|| panic!("no CVs of {preset}")).1
+        found.unwrap_or_else(|| panic!("no CVs of {preset}")).1
     }
 
     /// The planned tests of every row of `preset`: the plan and the measured CV times
@@ -750,6 +845,11 @@ impl Design {
     }
 }
 
+/// The preset of `restir:<name>` (a registered preset, or one with modifiers such as [`BEST`]).
+fn restir_preset(name: &str) -> Preset {
+    methods::restir::preset(Some(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
 /// The per-replica CV of a paired row, from its CI: `half-width / t_{1−α/2, N−1} · √N`.
 fn paired_cv(row: &BiasRow, protocol: &Protocol) -> f64 {
     let n = row.equivalence.n as f64;
@@ -771,7 +871,7 @@ fn hybrid_gpu(backend: &Backend) -> &'static Images {
 /// reference.
 fn assert_gpu_equivalent(backend: &Backend, design: &Design, name: &str) {
     let start = Instant::now();
-    let preset = Preset::named(name).expect("registered preset");
+    let preset = restir_preset(name);
     let n = design.paired_replicas(name);
     let computed;
     let gpu = if name == "hybrid" && design.name == BUMPY.name {
@@ -826,7 +926,7 @@ const PAIRED_CONTROL_BIAS: f64 = 1.5 * PAIRED.delta;
 /// a difference of 1.5δ in any one row (at least 0.99).
 #[test]
 fn paired_plan_detects_one_and_a_half_delta_in_any_row() {
-    for design in [&BUMPY, &HALF_SHADOW] {
+    for design in designs("paired_plan_detects_one_and_a_half_delta_in_any_row") {
         for (preset, _) in design.paired_cv {
             let n = design.paired_replicas(preset) as usize;
             let tests = design.paired_planned(preset);
@@ -850,7 +950,7 @@ fn paired_plan_detects_one_and_a_half_delta_in_any_row() {
 /// least 0.99).
 #[test]
 fn power_plan_detects_3pct_in_any_row() {
-    for design in [&BUMPY, &HALF_SHADOW] {
+    for design in designs("power_plan_detects_3pct_in_any_row") {
         let plan = design.plan();
         println!(
             "{}: δ = ±{}%, α = {}, reference s.e. ≤ {}%, {FRAMES} frames",
@@ -977,6 +1077,76 @@ vulkan_tests!(
     vulkan_sequential_exact_is_equivalent_within_2pct_on_half_shadow
 );
 
+/// `$cpu` runs `$name` on the CPU backend on [`AJAX`], and `$gpu` on the Vulkan backend paired
+/// with the CPU's replicas and chained through the CPU's test (each skips without the assets,
+/// the second without Vulkan).
+macro_rules! ajax_tests {
+    ($name:expr, $cpu:ident, $gpu:ident) => {
+        #[test]
+        fn $cpu() {
+            if let Some(design) = ajax(stringify!($cpu)) {
+                assert_equivalent(design, $name);
+            }
+        }
+
+        #[test]
+        fn $gpu() {
+            if let Some(design) = ajax(stringify!($gpu))
+                && let Some(backend) = backend_or_skip(stringify!($gpu))
+            {
+                assert_gpu_equivalent(&backend, design, $name);
+            }
+        }
+    };
+}
+
+ajax_tests!(
+    "reconnection",
+    reconnection_is_equivalent_within_2pct_on_ajax,
+    vulkan_reconnection_is_equivalent_within_2pct_on_ajax
+);
+ajax_tests!(
+    "delayed",
+    delayed_is_equivalent_within_2pct_on_ajax,
+    vulkan_delayed_is_equivalent_within_2pct_on_ajax
+);
+ajax_tests!(
+    "hybrid",
+    hybrid_is_equivalent_within_2pct_on_ajax,
+    vulkan_hybrid_is_equivalent_within_2pct_on_ajax
+);
+ajax_tests!(
+    "sequential",
+    sequential_is_equivalent_within_2pct_on_ajax,
+    vulkan_sequential_is_equivalent_within_2pct_on_ajax
+);
+ajax_tests!(
+    "sequential-exact",
+    sequential_exact_is_equivalent_within_2pct_on_ajax,
+    vulkan_sequential_exact_is_equivalent_within_2pct_on_ajax
+);
+ajax_tests!(
+    BEST,
+    best_configuration_is_equivalent_within_2pct_on_ajax,
+    vulkan_best_configuration_is_equivalent_within_2pct_on_ajax
+);
+
+/// The near-δ controls on the scanned mesh: the hybrid with its blue channel × 1.03, and
+/// delayed reconnection with its Jacobian × 1.03, each at its preset's N.
+#[test]
+fn control_blue_3pct_high_is_biased_on_ajax() {
+    if let Some(design) = ajax("control_blue_3pct_high_is_biased_on_ajax") {
+        assert_tint_detected(design, "hybrid");
+    }
+}
+
+#[test]
+fn control_delayed_jacobian_3pct_high_is_biased_on_ajax() {
+    if let Some(design) = ajax("control_delayed_jacobian_3pct_high_is_biased_on_ajax") {
+        assert_shift_detected(design, ShiftKind::DelayedJacobianOff, "delayed");
+    }
+}
+
 #[test]
 fn control_vulkan_blue_high_differs_from_cpu_on_bumpy() {
     if let Some(backend) = backend_or_skip("control_vulkan_blue_high_differs_from_cpu_on_bumpy") {
@@ -1000,10 +1170,10 @@ fn control_vulkan_blue_3pct_high_is_not_equivalent_on_bumpy() {
 #[ignore = "a measurement, run by hand"]
 fn measure_paired_cv() {
     let backend = backend_or_skip("measure_paired_cv").expect("Vulkan");
-    for design in [&BUMPY, &HALF_SHADOW] {
+    for design in measured_designs("measure_paired_cv") {
         let scene = &design.framing().scene;
         for (name, _) in design.paired_cv {
-            let preset = Preset::named(name).expect("registered preset");
+            let preset = restir_preset(name);
             let gpu = design.gpu_images(&backend, &preset, PAIRED_MEASURE_N);
             let cpu = replica_images(&Backend::Cpu, scene, &preset, PAIRED_MEASURE_N, FRAMES)
                 .expect("preset runs");
@@ -1130,6 +1300,20 @@ fn sequential_exact_rao_blackwellised_matches_selected_per_channel() {
     }
 }
 
+/// The designs of a measurement run by hand: those named in `RESHIFT_CV_DESIGNS`
+/// (comma-separated; every design whose scene can load by default).
+fn measured_designs(test: &str) -> Vec<&'static Design> {
+    let wanted = std::env::var("RESHIFT_CV_DESIGNS").ok();
+    designs(test)
+        .into_iter()
+        .filter(|d| {
+            wanted
+                .as_ref()
+                .is_none_or(|w| w.split(',').any(|n| n == d.name))
+        })
+        .collect()
+}
+
 /// Replicas behind the measured CVs of [`Design::cv`].
 const CV_MEASURE_N: u32 = 512;
 
@@ -1141,7 +1325,7 @@ const CV_MEASURE_N: u32 = 512;
 #[ignore = "a measurement, run by hand"]
 fn measure_cv() {
     let wanted = std::env::var("RESHIFT_CV_PRESETS").ok();
-    for design in [&BUMPY, &HALF_SHADOW] {
+    for design in measured_designs("measure_cv") {
         for (name, _) in &design.cv {
             if wanted
                 .as_ref()
@@ -1178,7 +1362,7 @@ const TIGHT_REFERENCE: u32 = 4;
 #[test]
 #[ignore = "a measurement, run by hand (about 25 CPU-minutes)"]
 fn record_verdicts_at_1pct() {
-    for design in [&BUMPY, &HALF_SHADOW] {
+    for design in measured_designs("record_verdicts_at_1pct") {
         let batches = TIGHT_REFERENCE * design.reference_batches;
         let tight = EquivalencePlan {
             delta: TIGHT.delta,

@@ -40,13 +40,13 @@ impl ValueEnum for Name {
 #[derive(Args, Clone, Debug)]
 pub struct ExperimentArgs {
     pub name: Name,
-    /// Independent replicas per method [default: 16; ablation 4].
+    /// Independent replicas per method [default: 16; ablation 4; paper-ajax* 8].
     #[arg(long)]
     pub replicas: Option<u32>,
-    /// Image size WxH [default: 128x96; ground-truth and model-gap 32x24].
+    /// Image size WxH [default: 128x96; ground-truth and model-gap 32x24; paper-ajax* 360x540].
     #[arg(long)]
     pub resolution: Option<String>,
-    /// Samples per pixel of the references [default: 8192; ablation 1024]; ground-truth: of the
+    /// Samples per pixel of the references [default: 8192; ablation 1024; paper-ajax* 2048]; ground-truth: of the
     /// random walk [4096]; model-gap: of each estimator over all replicas [256].
     #[arg(long)]
     pub reference_spp: Option<u32>,

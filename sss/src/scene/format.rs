@@ -245,6 +245,8 @@ pub struct EmitterFieldDesc {
     pub albedo: Option<[f32; 3]>,
     /// Whether both faces emit (default true).
     pub two_sided: Option<bool>,
+    /// A box that no rectangle may reach into (rectangles drawn there are drawn again).
+    pub exclude: Option<RegionDesc>,
 }
 
 /// An axis-aligned box.

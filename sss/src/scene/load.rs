@@ -12,7 +12,7 @@ use geometry::limits::MAX_COORDINATE;
 use geometry::{Geometry, TriangleMesh};
 use glam::Vec3;
 
-use super::emitter_field::{DEFAULT_COLORS, EmitterField};
+use super::emitter_field::{DEFAULT_COLORS, EmitterField, MAX_DRAWS};
 use super::format::{CameraDesc, EmitterFieldDesc, LightDesc, ManyLightsDesc, SceneFile};
 use super::light::{Light, Lights};
 use super::many_lights::ManyLights;
@@ -31,7 +31,14 @@ pub fn scene_from_toml(text: &str, origin: &Path) -> Result<Scene, InputError> {
     let mut materials = ctx.materials(&file.materials)?;
     let mut placed = ctx.objects(&file.objects, &mut materials)?;
     if let Some(field) = &file.emitter_field {
-        for (i, (mesh, lambert)) in ctx.emitter_field(field)?.generate().into_iter().enumerate() {
+        let generated = ctx.emitter_field(field)?.generate().map_err(|i| {
+            ctx.err(
+                "emitter_field.exclude",
+                format!("rectangle {i}"),
+                format!("leaves no room: every one of {MAX_DRAWS} draws reached into the box"),
+            )
+        })?;
+        for (i, (mesh, lambert)) in generated.into_iter().enumerate() {
             materials.list.push(Material::Lambert(lambert));
             let id = materials.list.len() as u32 - 1;
             placed.push(&ctx, "emitter_field", format!("emitter[{i}]"), id, mesh)?;
@@ -446,6 +453,15 @@ impl Ctx<'_> {
             colors,
             albedo: Vec3::from_array(albedo),
             two_sided: f.two_sided.unwrap_or(true),
+            exclude: f
+                .exclude
+                .as_ref()
+                .map(|r| {
+                    let lo = self.vec3("emitter_field.exclude.min", r.min)?;
+                    let hi = self.vec3("emitter_field.exclude.max", r.max)?;
+                    Ok([lo, hi])
+                })
+                .transpose()?,
         })
     }
 }

@@ -384,3 +384,81 @@ fn transform_order_is_scale_rotate_xyz_translate() {
         "objects[3].transform.scale"
     );
 }
+
+/// Two triangles (z = 0 facing +z, z = 1 facing −z) in one buffer, each its own primitive of
+/// its own material: "wax" (overridden by the scene file, its ior 1.6 inherited) and "lamp"
+/// (emissive 2 × 3, two-sided, base colour 0.25 grey, left to the file).
+const TWO_MATERIALS_GLTF: &str = r#"{
+  "asset": {"version": "2.0"},
+  "extensionsUsed": ["KHR_materials_ior", "KHR_materials_emissive_strength"],
+  "scene": 0,
+  "scenes": [{"nodes": [0]}],
+  "nodes": [{"mesh": 0}],
+  "meshes": [{"primitives": [
+    {"attributes": {"POSITION": 0}, "material": 0},
+    {"attributes": {"POSITION": 1}, "material": 1}
+  ]}],
+  "materials": [
+    {"name": "wax", "extensions": {"KHR_materials_ior": {"ior": 1.6}}},
+    {"name": "lamp", "doubleSided": true, "emissiveFactor": [1.0, 0.5, 0.25],
+     "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 3.0}},
+     "pbrMetallicRoughness": {"baseColorFactor": [0.25, 0.25, 0.25, 1.0]}}
+  ],
+  "accessors": [
+    {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+     "min": [0, 0, 0], "max": [1, 1, 0]},
+    {"bufferView": 0, "byteOffset": 36, "componentType": 5126, "count": 3, "type": "VEC3",
+     "min": [0, 0, 1], "max": [1, 1, 1]}
+  ],
+  "bufferViews": [{"buffer": 0, "byteLength": 72}],
+  "buffers": [{"byteLength": 72, "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAIA/AAAAAAAAgD8AAIA/AACAPwAAAAAAAIA/"}]
+}"#;
+
+/// A glTF object without a `material` becomes one object per material of its primitives
+/// (`name/<material>`): the scene file's `wax` overrides the file's and takes the file's ior,
+/// the file's emissive `lamp` becomes a two-sided Lambert emitter whose triangle is a light, and
+/// the object's transform applies after the file's nodes. With a `material`, the file is one
+/// object of it.
+#[test]
+fn gltf_objects_keep_or_override_the_files_materials() {
+    let dir = scratch("gltf-materials");
+    std::fs::write(dir.join("two.gltf"), TWO_MATERIALS_GLTF).unwrap();
+    let text = edit(
+        "[[objects]]\nname = \"ball\"\nmaterial = \"wax\"\nshape = { type = \"sphere\", radius = 0.5 }",
+        "[[objects]]\nname = \"thing\"\nmesh = \"two.gltf\"\ntransform = { translate = [0.0, 0.0, -2.0] }",
+    );
+    let scene = Scene::from_toml_str(&text, &dir.join("scene.toml")).unwrap();
+    let names: Vec<&str> = scene.objects.iter().map(|o| o.name.as_str()).collect();
+    assert_eq!(names, ["thing/wax", "thing/lamp"]);
+    let Material::Translucent(wax) = *scene.material_of_object(0) else {
+        panic!("wax is translucent")
+    };
+    assert_eq!((wax.ior, wax.albedo), (1.6, Vec3::new(0.8, 0.6, 0.4)));
+    let Material::Lambert(lamp) = *scene.material_of_object(1) else {
+        panic!("lamp is Lambert")
+    };
+    assert_eq!(lamp.emission, Vec3::new(3.0, 1.5, 0.75));
+    assert!(lamp.two_sided && lamp.albedo == Vec3::splat(0.25));
+    // The point light of MINIMAL, then the lamp's one triangle, at z = 1 − 2.
+    assert_eq!(scene.lights.len(), 2);
+    let Light::Triangle {
+        vertices,
+        radiance,
+        two_sided,
+    } = *scene.lights.get(1)
+    else {
+        panic!("the lamp's triangle")
+    };
+    assert!(two_sided && radiance == lamp.emission);
+    assert!(vertices.iter().all(|v| v.z == -1.0), "{vertices:?}");
+    let one = edit(
+        "[[objects]]\nname = \"ball\"\nmaterial = \"wax\"\nshape = { type = \"sphere\", radius = 0.5 }",
+        "[[objects]]\nname = \"thing\"\nmaterial = \"floor\"\nmesh = \"two.gltf\"",
+    );
+    let scene = Scene::from_toml_str(&one, &dir.join("scene.toml")).unwrap();
+    assert_eq!((scene.objects.len(), scene.lights.len()), (1, 1));
+    assert_eq!(scene.geometry.triangle_count(), 2);
+    let missing = edit("material = \"wax\"\nshape", "shape");
+    assert_rejected(&missing, "objects[0].material", "(missing)");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -1421,6 +1421,71 @@ fn render_on_the_vulkan_backend_or_a_one_line_error() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `render --timing` (paper 001's protocol, small: 16×12, 3 warm-up and 2 timed frames, 2
+/// repeats) prints one row per pass of the preset's plan and one for the frame, each over
+/// `timed × repeats` frames, on the CPU and on Vulkan (the device's timestamps; lavapipe in CI);
+/// a method without the engine's passes and a zero count are one-line errors.
+#[test]
+fn render_timing_prints_the_protocol_table() {
+    let args = |backend: &'static str| {
+        [
+            "render",
+            "--scene",
+            "bumpy",
+            "--method",
+            "restir:hybrid",
+            "--resolution",
+            "16x12",
+            "--timing",
+            "--warmup",
+            "3",
+            "--timed",
+            "2",
+            "--repeats",
+            "2",
+            "--json",
+            "--backend",
+            backend,
+        ]
+    };
+    let mut backends = vec!["cpu"];
+    if vulkan_or_reason("render_timing_prints_the_protocol_table").is_ok() {
+        backends.push("vulkan");
+    }
+    for backend in backends {
+        let json: Value = serde_json::from_str(&ok(&reshift(&args(backend)))).unwrap();
+        assert_eq!(json["schema"], "reshift-timing/1");
+        let labels: Vec<&str> = json["rows"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|r| r["label"].as_str().unwrap())
+            .collect();
+        assert_eq!(
+            labels,
+            [
+                "gbuffer",
+                "candidates",
+                "temporal:hybrid",
+                "spatial4:hybrid",
+                "shade",
+                "frame"
+            ],
+            "{backend}"
+        );
+        for row in json["rows"].as_array().unwrap() {
+            assert_eq!(row["frames"], 4, "{backend}: {row}");
+            assert!(row["median_ms"].as_f64().unwrap() > 0.0, "{backend}: {row}");
+        }
+    }
+    let mut pt = args("cpu").to_vec();
+    pt[4] = "pt:1";
+    fails_with(&pt, "--timing: --method pt:1");
+    let mut zero = args("cpu").to_vec();
+    zero[13] = "0";
+    fails_with(&zero, "`--repeats` = 0");
+}
+
 /// `compare --backend vulkan` (bumpy, 16×12, 2 frames, 2 replicas) writes results.json that
 /// validates against docs/results-schema.md, with finite errors for every method.
 #[test]

@@ -7,8 +7,9 @@ use std::sync::{Arc, Mutex, MutexGuard};
 
 use sss::scene::Scene;
 
+use crate::stream::{Keep, Stream};
 use crate::vulkan::{Context, DeviceInfo, DeviceKind, GBUFFER, Renderer, VulkanError};
-use crate::{PipelineError, Preset, Run, RunConfig, cpu};
+use crate::{PipelineError, Preset, Run, RunConfig};
 
 /// The backend of a run. Cloning a Vulkan backend shares its renderer.
 #[derive(Clone, Default)]
@@ -56,8 +57,9 @@ impl Backend {
         }
     }
 
-    /// Renders `config.frames` frames of `scene`'s camera trajectory with `preset`. The
-    /// resolution is the scene camera's (set it with `Camera::with_resolution`).
+    /// Renders `config.frames` frames of `scene`'s camera trajectory with `preset`: a loop over
+    /// a [`Stream`] that keeps every frame. The resolution is the scene camera's (set it with
+    /// `Camera::with_resolution`).
     pub fn run(
         &self,
         scene: &Scene,
@@ -68,10 +70,7 @@ impl Backend {
         if config.frames == 0 {
             return Err(PipelineError::Config("frames = 0; need at least 1".into()));
         }
-        match self.renderer() {
-            None => cpu::run(scene, preset, config),
-            Some(mut renderer) => renderer.run(scene, preset, config),
-        }
+        Stream::new(self, scene, preset, config)?.run(config.frames, Keep::Every)
     }
 }
 

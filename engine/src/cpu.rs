@@ -24,7 +24,8 @@ use crate::diagnostics::{Counters, HybridChoice, Recorder};
 use crate::image::Image;
 use crate::plan::{PassKernel, Plan, Resource, Role, Rotation, Slot, Step};
 use crate::reuse::{self, PassInput, Previous, Reused, ShiftCounts, StepTelemetry};
-use crate::{Backend, PassTiming, PipelineError, Run, RunConfig, purpose};
+use crate::stream::frame::{Finished, Frame};
+use crate::{Backend, PipelineError, RunConfig, purpose};
 
 /// Fills `out` (row-major, rows of `width`) with `kernel(pixel)` in parallel over rows; the
 /// first error in pixel order wins, so errors are as deterministic as results.
@@ -61,82 +62,109 @@ struct Cell {
     rao_blackwellised: Option<Vec3>,
 }
 
-/// Runs `preset` (already validated) for `config.frames` frames: its [`Plan`], step by step,
-/// on three reservoir vectors that the plan's [`Rotation`] assigns to its slots.
-pub(crate) fn run(
-    scene: &Scene,
-    preset: &Preset,
-    config: &RunConfig,
-) -> Result<Run, PipelineError> {
-    let plan = Plan::lower(preset);
-    let camera = &scene.camera;
-    let (width, height) = (camera.width(), camera.height());
-    let n = width as usize * height as usize;
-    let mut seconds = vec![Vec::with_capacity(config.frames as usize); plan.steps.len()];
-    let reuse_labels = plan
-        .passes()
-        .filter(|(_, step)| step.spec.is_some_and(|s| s.shift().is_some()))
-        .map(|(_, step)| step.label.clone());
-    let mut state = RunState {
-        scene,
-        config,
-        shade: preset.shade,
-        target: preset.target,
-        width,
-        cells: vec![Cell::default(); n],
-        rao_blackwellised: vec![None; n],
-        reservoirs: std::array::from_fn(|_| vec![PixelReservoir::empty(); n]),
-        rotation: Rotation::FIRST,
-        gbuffer: None,
-        previous_gbuffer: None,
-        counters: config
-            .collect_diagnostics
-            .then(|| Counters::new(width, height, reuse_labels.collect())),
-        recorder: None,
-    };
-    let pass_labels: Vec<String> = preset.passes.iter().map(PassSpec::label).collect();
-    let mut frames = Vec::with_capacity(config.frames as usize);
-    let mut nan_count = 0;
-    for frame in 0..config.frames {
+/// A preset's stream on the CPU: its [`Plan`], run step by step frame after frame on three
+/// reservoir vectors that the plan's [`Rotation`] assigns to its slots, and the state the
+/// frames share (the previous frame's G-buffer and reservoirs, the diagnostics).
+pub(crate) struct CpuStream<'a> {
+    plan: Plan,
+    state: RunState<'a>,
+    pass_labels: Vec<String>,
+    /// The frame [`CpuStream::frame`] renders next.
+    next: u32,
+}
+
+impl<'a> CpuStream<'a> {
+    /// The stream of `preset` (already validated) on `scene`; `config.frames` is the frame
+    /// whose reuse telemetry is recorded (the last of a run) when diagnostics are collected.
+    pub(crate) fn new(scene: &'a Scene, preset: &Preset, config: &RunConfig) -> CpuStream<'a> {
+        let plan = Plan::lower(preset);
+        let camera = &scene.camera;
+        let (width, height) = (camera.width(), camera.height());
+        let n = width as usize * height as usize;
+        let reuse_labels = plan
+            .passes()
+            .filter(|(_, step)| step.spec.is_some_and(|s| s.shift().is_some()))
+            .map(|(_, step)| step.label.clone());
+        let state = RunState {
+            scene,
+            config: *config,
+            shade: preset.shade,
+            target: preset.target,
+            width,
+            cells: vec![Cell::default(); n],
+            rao_blackwellised: vec![None; n],
+            reservoirs: std::array::from_fn(|_| vec![PixelReservoir::empty(); n]),
+            rotation: Rotation::FIRST,
+            gbuffer: None,
+            previous_gbuffer: None,
+            counters: config
+                .collect_diagnostics
+                .then(|| Counters::new(width, height, reuse_labels.collect())),
+            recorder: None,
+        };
+        CpuStream {
+            plan,
+            state,
+            pass_labels: preset.passes.iter().map(PassSpec::label).collect(),
+            next: 0,
+        }
+    }
+
+    /// The labels of the plan's steps, in execution order.
+    pub(crate) fn labels(&self) -> Vec<String> {
+        self.plan.steps.iter().map(|s| s.label.clone()).collect()
+    }
+
+    /// Renders the next frame: each step of the plan, timed.
+    pub(crate) fn frame(&mut self) -> Result<Frame, PipelineError> {
+        let frame = self.next;
+        let (width, height) = (self.state.width, self.state.scene.camera.height());
+        let config = self.state.config;
         if config.collect_diagnostics && frame + 1 == config.frames {
-            state.recorder = Some(Recorder::new(width, height, frame, pass_labels.clone()));
+            let labels = self.pass_labels.clone();
+            self.state.recorder = Some(Recorder::new(width, height, frame, labels));
         }
-        for (step, seconds) in plan.steps.iter().zip(&mut seconds) {
+        let mut steps = Vec::with_capacity(self.plan.steps.len());
+        let mut shaded = None;
+        for step in &self.plan.steps {
             let watch = Stopwatch::start(&Backend::Cpu);
-            if let Some((image, nans)) = state.step(frame, step)? {
-                frames.push(image);
-                nan_count += nans;
+            if let Some(image) = self.state.step(frame, step)? {
+                shaded = Some(image);
             }
-            seconds.push(watch.read());
+            steps.push(watch.read());
         }
-        state.rotation = state.rotation.next(&plan);
-        state.previous_gbuffer = state.gbuffer.take();
+        let (image, nan_count) =
+            shaded.ok_or_else(|| PipelineError::Config("a plan without a shade step".into()))?;
+        self.state.rotation = self.state.rotation.next(&self.plan);
+        self.state.previous_gbuffer = self.state.gbuffer.take();
+        self.next += 1;
+        Ok(Frame {
+            index: frame,
+            image,
+            nan_count,
+            steps,
+        })
     }
-    let timings = plan
-        .steps
-        .iter()
-        .zip(seconds)
-        .map(|(step, seconds)| PassTiming::timed(step.label.clone(), &seconds))
-        .collect();
-    let last = state.rotation.buffer(Slot::Previous);
-    let mut diagnostics = state.counters.as_ref().map(Counters::finish);
-    if let (Some(d), Some(recorder)) = (&mut diagnostics, state.recorder.take()) {
-        d.telemetry = Some(recorder.finish(&state.reservoirs[last]));
+
+    /// The last frame's final reservoirs and the diagnostics of the frames so far.
+    pub(crate) fn finish(mut self) -> Finished {
+        let last = self.state.rotation.buffer(Slot::Previous);
+        let mut diagnostics = self.state.counters.as_ref().map(Counters::finish);
+        if let (Some(d), Some(recorder)) = (&mut diagnostics, self.state.recorder.take()) {
+            d.telemetry = Some(recorder.finish(&self.state.reservoirs[last]));
+        }
+        Finished {
+            diagnostics,
+            reservoirs: std::mem::take(&mut self.state.reservoirs[last]),
+        }
     }
-    Ok(Run {
-        frames,
-        timings,
-        diagnostics,
-        nan_count,
-        reservoirs: std::mem::take(&mut state.reservoirs[last]),
-    })
 }
 
 /// The CPU backend's state across the frames of a run: the plan's frame resources (reservoirs,
 /// G-buffers, their rotation) and the diagnostics.
 struct RunState<'a> {
     scene: &'a Scene,
-    config: &'a RunConfig,
+    config: RunConfig,
     shade: Shade,
     target: Target,
     width: u32,

@@ -31,6 +31,7 @@ pub mod plan;
 pub mod purpose;
 pub mod reuse;
 pub mod scene_lighting;
+pub mod stream;
 pub mod vulkan;
 
 use std::fmt;
@@ -48,6 +49,7 @@ pub use image::Image;
 pub use restir::mis::MisKind;
 pub use shifts::preset::{PassSpec, Preset, PresetError, RadiusRule, Shade};
 pub use shifts::{PixelReservoir, ShiftKind, Target};
+pub use stream::{Finished, Frame, Keep, Stream};
 
 /// `f` on a rayon pool of `n` threads: the tests that output does not depend on the thread
 /// count run the same work with 1 and 2.
@@ -121,7 +123,8 @@ impl PassTiming {
 /// The result of a run.
 #[derive(Clone, Debug)]
 pub struct Run {
-    /// Per-frame shaded linear RGB, one image per frame of the trajectory.
+    /// Per-frame shaded linear RGB, one image per frame of the trajectory (only the last for a
+    /// stream's run that keeps [`Keep::Last`]).
     pub frames: Vec<Image>,
     /// Per-pass seconds, summed over frames, in execution order.
     pub timings: Vec<PassTiming>,

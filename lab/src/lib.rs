@@ -29,6 +29,7 @@ pub mod report;
 pub mod scenes;
 pub mod shard;
 pub mod telemetry;
+pub mod timing;
 pub mod uncertainty;
 
 pub use error::Error;

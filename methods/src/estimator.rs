@@ -166,6 +166,22 @@ pub struct Trajectory {
     pub passes: Vec<PassTiming>,
 }
 
+impl Trajectory {
+    /// Its last frame, with what the trajectory cost.
+    pub fn last_frame(mut self) -> Result<LastFrame, PipelineError> {
+        let image = self
+            .frames
+            .pop()
+            .ok_or_else(|| PipelineError::Config("the run returned no frame".into()))?;
+        Ok(LastFrame {
+            image,
+            frames_rendered: self.frames_rendered,
+            nonfinite: self.nonfinite,
+            passes: self.passes,
+        })
+    }
+}
+
 /// The final frame of one replica of a method, and what it cost.
 #[derive(Clone, Debug)]
 pub struct Rendered {

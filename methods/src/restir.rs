@@ -14,7 +14,8 @@
 //! import below is the one to change.
 
 use engine::{
-    Backend, PassSpec, PipelineError, Preset, RadiusRule, RunConfig, Shade, ShiftKind, Target,
+    Backend, Keep, PassSpec, PipelineError, Preset, RadiusRule, RunConfig, Shade, ShiftKind,
+    Stream, Target,
 };
 use shifts::preset::PRESET_NAMES;
 use sss::scene::Scene;
@@ -193,6 +194,8 @@ impl Estimator for Restir {
         None
     }
 
+    /// A stream of `frames` frames that keeps only the last image: memory does not grow with
+    /// the frame count.
     fn render(
         &self,
         backend: &Backend,
@@ -200,10 +203,10 @@ impl Estimator for Restir {
         frames: u32,
         seed: u64,
     ) -> Result<LastFrame, PipelineError> {
-        last_frame(trajectory(&self.0, backend, scene, frames, seed)?)
+        streamed(&self.0, backend, scene, frames, seed, Keep::Last)?.last_frame()
     }
 
-    /// One run of the trajectory: `engine::Run::frames` holds every frame.
+    /// A stream of `frames` frames, every one kept.
     fn render_trajectory(
         &self,
         backend: &Backend,
@@ -211,50 +214,31 @@ impl Estimator for Restir {
         frames: u32,
         seed: u64,
     ) -> Result<Trajectory, PipelineError> {
-        trajectory(&self.0, backend, scene, frames, seed)
+        streamed(&self.0, backend, scene, frames, seed, Keep::Every)
     }
 }
 
-/// The last frame of `run`, with what it cost.
-fn last_frame(mut run: Trajectory) -> Result<LastFrame, PipelineError> {
-    let image = run
-        .frames
-        .pop()
-        .ok_or_else(|| PipelineError::Config("the run returned no frame".into()))?;
-    Ok(LastFrame {
-        image,
-        frames_rendered: run.frames_rendered,
-        nonfinite: run.nonfinite,
-        passes: run.passes,
-    })
-}
-
-/// One run of `preset` for replica `seed`: every frame of the trajectory.
-fn trajectory(
+/// `frames` frames of `preset`'s stream for replica `seed`, keeping the images `keep` says.
+fn streamed(
     preset: &Preset,
     backend: &Backend,
     scene: &Scene,
     frames: u32,
     seed: u64,
+    keep: Keep,
 ) -> Result<Trajectory, PipelineError> {
     let config = RunConfig {
         seed,
         frames,
         collect_diagnostics: false,
     };
-    let result = backend.run(scene, preset, &config)?;
-    if result.frames.len() != frames as usize {
-        return Err(PipelineError::Config(format!(
-            "the run returned {} frames, not {frames}",
-            result.frames.len()
-        )));
-    }
+    let run = Stream::new(backend, scene, preset, &config)?.run(frames, keep)?;
     Ok(Trajectory {
-        frames: result.frames,
+        frames: run.frames,
         frames_rendered: frames,
-        nonfinite: result.nan_count,
+        nonfinite: run.nan_count,
         counts: None,
-        passes: result.timings,
+        passes: run.timings,
     })
 }
 

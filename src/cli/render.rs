@@ -3,19 +3,25 @@
 //! samples per pixel and the count map as a false-colour PNG with a labelled colour bar (0 … the
 //! most a pixel may take); for a method built from the engine's passes (`restir:…`), the time of
 //! each pass per rendered frame (process CPU time and wall time on the CPU backend, GPU
-//! timestamps on Vulkan), which says where a configuration's cost goes.
+//! timestamps on Vulkan), which says where a configuration's cost goes. With `--timing`, paper
+//! 001's timing protocol instead (`lab::timing`): warm-up frames, timed frames along the
+//! trajectory, repeats, and per pass the median and spread.
 
 use std::path::PathBuf;
 
 use clap::Args;
-use engine::PassTiming;
 use engine::clock::Clock;
+use engine::{Backend, PassTiming};
 use lab::draw::false_colour_map;
 use lab::output::{file_stem, output_dir};
+use lab::timing::{self as protocol, Protocol};
 use methods::Method;
 use serde_json::json;
+use sss::limits::{self, MAX_FRAMES};
 
-use super::common::{BackendArgs, CliResult, json_number, load_scene_at, scene_and_frames};
+use super::common::{
+    BackendArgs, CliError, CliResult, command_line, json_number, load_scene_at, scene_and_frames,
+};
 
 #[derive(Args, Clone, Debug)]
 pub struct RenderArgs {
@@ -45,11 +51,31 @@ pub struct RenderArgs {
     /// Print a JSON summary.
     #[arg(long)]
     pub json: bool,
+    /// Run paper 001's timing protocol instead of writing an image: a `restir:<preset>`
+    /// stream warms up at the trajectory's first pose, then its passes are timed over frames
+    /// along the trajectory, the whole repeated; prints each pass's median and spread.
+    #[arg(long)]
+    pub timing: bool,
+    /// Warm-up frames of --timing.
+    #[arg(long, requires = "timing", default_value_t = Protocol::default().warmup)]
+    pub warmup: u32,
+    /// Timed frames of --timing, along the trajectory.
+    #[arg(long, requires = "timing", default_value_t = Protocol::default().timed)]
+    pub timed: u32,
+    /// Repeats of --timing, each a fresh stream.
+    #[arg(long, requires = "timing", default_value_t = Protocol::default().repeats)]
+    pub repeats: u32,
     #[command(flatten)]
     pub backend: BackendArgs,
 }
 
+/// Most repeats of `--timing`.
+const MAX_REPEATS: u64 = 1024;
+
 pub fn command(args: &RenderArgs) -> CliResult<()> {
+    if args.timing {
+        return timing(args);
+    }
     let method = Method::parse(&args.method)?;
     let (loaded, frames) = scene_and_frames(
         load_scene_at(&args.scene, args.resolution.as_deref())?,
@@ -103,10 +129,7 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
                 "cpu_seconds_per_frame": pass.cpu_seconds.map(|s| json_number(s / per_frame)),
             })).collect::<Vec<_>>(),
         });
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&value).expect("JSON values")
-        );
+        print_json(&value);
     } else {
         println!(
             "{} on {} ({}×{}, frame {} of {}, {}): {:.1} ms/frame of {} ({:.1} ms wall) over {} rendered frame(s), {:.2} samples per pixel, {} non-finite\n{}\n{}{}",
@@ -145,4 +168,89 @@ fn pass_table(passes: &[PassTiming], frames: f64) -> String {
         table += &format!("| {} | {cpu} | {} |\n", pass.label, ms(pass.seconds));
     }
     table
+}
+
+/// `render --timing`: the protocol's table (or JSON) for a `restir:<preset>` method.
+fn timing(args: &RenderArgs) -> CliResult<()> {
+    let preset = args
+        .method
+        .strip_prefix("restir:")
+        .ok_or_else(|| {
+            CliError(format!(
+                "--timing: --method {}: the protocol times the engine's passes, which a \
+                 restir:<preset> method runs",
+                args.method
+            ))
+        })
+        .and_then(|arg| {
+            methods::restir::preset(Some(arg))
+                .map_err(|e| CliError(format!("--timing: --method {}: {e}", args.method)))
+        })?;
+    let protocol = Protocol {
+        warmup: args.warmup,
+        timed: args.timed,
+        repeats: args.repeats,
+    };
+    let file = command_line();
+    limits::count(
+        file,
+        "--warmup",
+        protocol.warmup as u64,
+        0,
+        MAX_FRAMES as u64,
+    )?;
+    limits::count(file, "--timed", protocol.timed as u64, 1, MAX_FRAMES as u64)?;
+    limits::count(file, "--repeats", protocol.repeats as u64, 1, MAX_REPEATS)?;
+    let loaded = load_scene_at(&args.scene, args.resolution.as_deref())?;
+    let (width, height) = (loaded.scene.camera.width(), loaded.scene.camera.height());
+    let name = loaded.scene.name.clone();
+    let backend = args.backend.open()?;
+    let timing = protocol::measure(&backend, loaded.scene, &preset, args.seed, &protocol)?;
+    if args.json {
+        let ms = |s: f64| json_number(1e3 * s);
+        let value = json!({
+            "schema": "reshift-timing/1",
+            "scene": name,
+            "method": args.method,
+            "backend": backend.to_string(),
+            "width": width,
+            "height": height,
+            "seed": args.seed,
+            "warmup": protocol.warmup,
+            "timed": protocol.timed,
+            "repeats": protocol.repeats,
+            "clock": timing.clock.name(),
+            "rows": timing.rows.iter().map(|r| json!({
+                "label": r.label,
+                "median_ms": ms(r.median),
+                "quartiles_ms": [ms(r.quartiles.0), ms(r.quartiles.1)],
+                "range_ms": [ms(r.range.0), ms(r.range.1)],
+                "frames": r.samples,
+            })).collect::<Vec<_>>(),
+        });
+        print_json(&value);
+    } else {
+        println!(
+            "{} on {name} ({width}×{height}, {backend}): {} warm-up frames at the first pose, {} timed frames along the trajectory, {} repeats; passes on {}, frame on {}\n{}",
+            args.method,
+            protocol.warmup,
+            protocol.timed,
+            protocol.repeats,
+            match &backend {
+                Backend::Cpu => timing.clock.name(),
+                Backend::Vulkan(_) => "the device's timestamps",
+            },
+            timing.clock.name(),
+            timing.table()
+        );
+    }
+    Ok(())
+}
+
+/// `value`, pretty-printed.
+fn print_json(value: &serde_json::Value) {
+    println!(
+        "{}",
+        serde_json::to_string_pretty(value).expect("JSON values")
+    );
 }

@@ -1,5 +1,8 @@
 //! The environment knobs the CPU (`pipeline`) and Vulkan (`vulkan`) benches share: which presets
-//! run, with which shading and neighbour count, over how many frames.
+//! run, with which shading and neighbour count, over how many frames; and the image size the
+//! `stream` bench takes too.
+
+#![allow(dead_code)] // each bench uses a different part of this module
 
 use engine::{Preset, Shade};
 

@@ -1,6 +1,6 @@
 use super::*;
 use crate::with_threads;
-use crate::{run, run_pt};
+use crate::{Run, run, run_pt};
 
 fn scene(name: &str, size: u32) -> Scene {
     let mut scene = Scene::builtin(name).unwrap();

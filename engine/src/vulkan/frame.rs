@@ -1,32 +1,36 @@
-//! One run of a preset's [`Plan`] on the device: the twin of `cpu::run`.
+//! A preset's [`Plan`] frame after frame on the device: the twin of `cpu::CpuStream`.
 //!
-//! A run allocates its buffers once and records each distinct frame — the plan's steps, each
+//! A [`FrameRun`] allocates its buffers once and records each distinct frame — the plan's steps, each
 //! bound to the frame's buffers in its kernel's binding order with a barrier where
 //! [`Plan::waits`] says, then read-back copies — into a command buffer once; frames are
-//! re-submitted. Frames differ only in which buffers play "current" and "previous" (the
+//! re-submitted; the buffers (G-buffers, reservoirs) stay on the device between frames. Frames
+//! differ only in which buffers play "current" and "previous" (the
 //! G-buffer alternates, the reservoir buffers rotate as [`Rotation`] says), so a run records at
 //! most six command buffers. `FrameParams` is copied from a staging buffer at the start of
 //! every frame, and a timestamp pair around each step gives [`Run::timings`] in GPU seconds.
 
 use std::collections::HashMap;
+use std::sync::Arc;
 
 use ash::vk;
 use sss::scene::Scene;
 
 use super::compute::bind_buffers;
 use super::decode::{add_diag, check_diag};
-use super::device::Context;
+use super::device::{Context, Shared};
 use super::error::{VulkanError, api};
 use super::memory::{Allocation, Buffer, Placement, barrier};
 use super::scene::GpuScene;
 use super::shaders::Shader;
 use super::timing::Timestamps;
 use super::{Kernel, groups_for};
+use crate::clock::{Clock, Timing};
 use crate::contract::{FrameParams, GpuPixel, PassParams};
 use crate::diagnostics::Counters;
 use crate::image::Image;
 use crate::plan::{PassKernel, Plan, Resource, Rotation};
-use crate::{PassTiming, PipelineError, Run, RunConfig};
+use crate::stream::frame::{Finished, Frame};
+use crate::{PipelineError, RunConfig};
 use shifts::PixelReservoir;
 
 /// `pass_candidates.glsl` ([`PassKernel::Candidates`]).
@@ -39,15 +43,20 @@ pub const SPATIAL: Shader = Shader::of(PassKernel::Spatial);
 /// Bytes per pixel of a diag buffer (`uvec4`) and of the shaded image (`vec4`).
 const TEXEL: usize = 16;
 
-/// One run's buffers, recorded frames and read-back staging.
-pub(super) struct FrameRun<'a> {
-    context: &'a Context,
-    scene: &'a GpuScene,
-    kernels: &'a HashMap<&'static str, Kernel>,
-    plan: &'a Plan,
+/// What a frame borrows from its renderer: the device, the uploaded scene and the kernels.
+pub(super) struct Parts<'r> {
+    pub(super) context: &'r Context,
+    pub(super) scene: &'r GpuScene,
+    pub(super) kernels: &'r HashMap<&'static str, Kernel>,
+}
+
+/// A stream's buffers, recorded frames, read-back staging and the state between its frames.
+pub(super) struct FrameRun {
+    shared: Arc<Shared>,
+    pub(super) plan: Plan,
     /// [`Plan::waits`]: where a step waits for the steps before it (a barrier).
     pub(super) waits: Vec<bool>,
-    config: &'a RunConfig,
+    config: RunConfig,
     width: u32,
     height: u32,
     params: Buffer,
@@ -65,6 +74,11 @@ pub(super) struct FrameRun<'a> {
     descriptor_pool: vk::DescriptorPool,
     /// Recorded frames by (current G-buffer, reservoir rotation).
     recorded: HashMap<(usize, Rotation), Recorded>,
+    /// The rotation of the next frame's reservoir buffers.
+    rotation: Rotation,
+    /// The frame [`FrameRun::frame`] renders next.
+    next: u32,
+    counters: Option<Counters>,
 }
 
 /// A recorded frame.
@@ -73,15 +87,13 @@ struct Recorded {
     timestamps: Option<Timestamps>,
 }
 
-impl<'a> FrameRun<'a> {
+impl FrameRun {
     pub(super) fn new(
-        context: &'a Context,
-        scene_gpu: &'a GpuScene,
-        kernels: &'a HashMap<&'static str, Kernel>,
+        context: &Context,
         scene: &Scene,
-        plan: &'a Plan,
-        config: &'a RunConfig,
-    ) -> Result<FrameRun<'a>, VulkanError> {
+        plan: Plan,
+        config: &RunConfig,
+    ) -> Result<FrameRun, VulkanError> {
         let (width, height) = (scene.camera.width(), scene.camera.height());
         let n = width as usize * height as usize;
         let zeroed = |bytes| Buffer::zeroed(context, bytes);
@@ -102,13 +114,22 @@ impl<'a> FrameRun<'a> {
             )
         }
         .map_err(api("vkCreateDescriptorPool"))?;
+        let reuse_labels = plan
+            .passes()
+            .filter(|(_, step)| step.spec.is_some_and(|s| s.shift().is_some()))
+            .map(|(_, step)| step.label.clone());
+        let counters = config
+            .collect_diagnostics
+            .then(|| Counters::new(width, height, reuse_labels.collect()));
+        let rao_blackwellised_bytes = match plan.clears(Resource::RaoBlackwellised) {
+            true => n * TEXEL,
+            false => TEXEL,
+        };
         let mut run = FrameRun {
-            context,
-            scene: scene_gpu,
-            kernels,
-            plan,
+            shared: context.shared.clone(),
             waits: plan.waits(),
-            config,
+            plan,
+            config: *config,
             width,
             height,
             params: zeroed(size_of::<FrameParams>())?,
@@ -129,11 +150,7 @@ impl<'a> FrameRun<'a> {
             ],
             diags: Vec::new(),
             image: zeroed(n * TEXEL)?,
-            rao_blackwellised: zeroed(if plan.clears(Resource::RaoBlackwellised) {
-                n * TEXEL
-            } else {
-                TEXEL
-            })?,
+            rao_blackwellised: zeroed(rao_blackwellised_bytes)?,
             readback: Allocation::new(
                 &context.shared,
                 ((passes + 1) * n * TEXEL + reservoir_bytes) as u64,
@@ -142,6 +159,9 @@ impl<'a> FrameRun<'a> {
             )?,
             descriptor_pool,
             recorded: HashMap::new(),
+            rotation: Rotation::FIRST,
+            next: 0,
+            counters,
         };
         run.diags = (0..passes)
             .map(|_| zeroed(n * TEXEL))
@@ -153,92 +173,83 @@ impl<'a> FrameRun<'a> {
         self.width as usize * self.height as usize
     }
 
-    /// Runs every frame and assembles the [`Run`].
-    pub(super) fn run(&mut self, scene: &Scene) -> Result<Run, PipelineError> {
+    /// The labels of the plan's steps, in execution order.
+    pub(super) fn labels(&self) -> Vec<String> {
+        self.plan.steps.iter().map(|s| s.label.clone()).collect()
+    }
+
+    /// Renders the next frame on `parts` (the renderer this run was created on) and reads it
+    /// back.
+    pub(super) fn frame(&mut self, parts: &Parts, scene: &Scene) -> Result<Frame, PipelineError> {
         let n = self.pixels();
-        let config = *self.config;
-        let plan = self.plan;
-        let passes = plan.passes().count();
-        let reuse_labels = plan
-            .passes()
-            .filter(|(_, step)| step.spec.is_some_and(|s| s.shift().is_some()))
-            .map(|(_, step)| step.label.clone());
-        let mut counters = config
-            .collect_diagnostics
-            .then(|| Counters::new(self.width, self.height, reuse_labels.collect()));
-        let mut seconds = vec![Vec::with_capacity(config.frames as usize); plan.steps.len()];
-        let mut timed = true;
-        let mut frames = Vec::with_capacity(config.frames as usize);
-        let mut nan_count = 0;
-        let mut rotation = Rotation::FIRST;
-        for frame in 0..config.frames {
-            let params = FrameParams::new(scene, frame, frame.checked_sub(1), config.seed);
-            self.params_staging
-                .mapped_mut()
-                .ok_or(VulkanError::NoMemoryType)?[..size_of::<FrameParams>()]
-                .copy_from_slice(bytemuck::bytes_of(&params));
-            let key = ((frame % 2) as usize, rotation);
-            if !self.recorded.contains_key(&key) {
-                let recorded = self.record(key)?;
-                self.recorded.insert(key, recorded);
-            }
-            let recorded = &self.recorded[&key];
-            {
-                let submit = self.context.shared.lock();
-                // SAFETY: the command buffer was recorded by `record`; the lock is held.
-                unsafe {
-                    self.context
-                        .shared
-                        .submit_and_wait(submit.queue, recorded.cb)
-                }?;
-            }
-            match &recorded.timestamps {
-                Some(t) => {
-                    for (s, t) in seconds.iter_mut().zip(t.seconds()?) {
-                        s.push(t);
-                    }
-                }
-                None => timed = false,
-            }
-            rotation = rotation.next(plan);
-            let bytes = self.readback.mapped().ok_or(VulkanError::NoMemoryType)?;
-            let texels: &[[f32; 4]] = bytemuck::cast_slice(&bytes[..n * TEXEL]);
-            nan_count += texels.iter().filter(|t| t[3] != 0.0).count() as u64;
-            frames.push(Image {
-                width: self.width,
-                height: self.height,
-                pixels: texels
-                    .iter()
-                    .map(|t| glam::Vec3::new(t[0], t[1], t[2]))
-                    .collect(),
-            });
-            for (index, step) in plan.passes() {
-                let start = (index + 1) * n * TEXEL;
-                let diag: &[[u32; 4]] = bytemuck::cast_slice(&bytes[start..start + n * TEXEL]);
-                check_diag(frame, index, step, diag)?;
-                if let Some(counters) = &mut counters {
-                    add_diag(counters, index, step, diag);
-                }
+        let frame = self.next;
+        let params = FrameParams::new(scene, frame, frame.checked_sub(1), self.config.seed);
+        self.params_staging
+            .mapped_mut()
+            .ok_or(VulkanError::NoMemoryType)?[..size_of::<FrameParams>()]
+            .copy_from_slice(bytemuck::bytes_of(&params));
+        let key = ((frame % 2) as usize, self.rotation);
+        if !self.recorded.contains_key(&key) {
+            let recorded = self.record(parts, key)?;
+            self.recorded.insert(key, recorded);
+        }
+        let recorded = &self.recorded[&key];
+        {
+            let submit = self.shared.lock();
+            // SAFETY: the command buffer was recorded by `record`; the lock is held.
+            unsafe { self.shared.submit_and_wait(submit.queue, recorded.cb) }?;
+        }
+        let steps = match &recorded.timestamps {
+            Some(t) => t
+                .seconds()?
+                .into_iter()
+                .map(|seconds| Timing {
+                    clock: Clock::Wall,
+                    seconds,
+                    wall_seconds: seconds,
+                })
+                .collect(),
+            None => Vec::new(),
+        };
+        self.rotation = self.rotation.next(&self.plan);
+        self.next += 1;
+        let bytes = self.readback.mapped().ok_or(VulkanError::NoMemoryType)?;
+        let texels: &[[f32; 4]] = bytemuck::cast_slice(&bytes[..n * TEXEL]);
+        let nan_count = texels.iter().filter(|t| t[3] != 0.0).count() as u64;
+        let image = Image {
+            width: self.width,
+            height: self.height,
+            pixels: texels
+                .iter()
+                .map(|t| glam::Vec3::new(t[0], t[1], t[2]))
+                .collect(),
+        };
+        for (index, step) in self.plan.passes() {
+            let start = (index + 1) * n * TEXEL;
+            let diag: &[[u32; 4]] = bytemuck::cast_slice(&bytes[start..start + n * TEXEL]);
+            check_diag(frame, index, step, diag)?;
+            if let Some(counters) = &mut self.counters {
+                add_diag(counters, index, step, diag);
             }
         }
+        Ok(Frame {
+            index: frame,
+            image,
+            nan_count,
+            steps,
+        })
+    }
+
+    /// The last frame's final reservoirs (read back with it) and the diagnostics.
+    pub(super) fn finish(&mut self) -> Result<Finished, VulkanError> {
+        let n = self.pixels();
+        let passes = self.plan.passes().count();
         let bytes = self.readback.mapped().ok_or(VulkanError::NoMemoryType)?;
         let start = (passes + 1) * n * TEXEL;
         let reservoirs: &[PixelReservoir] =
             bytemuck::cast_slice(&bytes[start..start + n * PixelReservoir::BYTES]);
-        let timings = if timed {
-            plan.steps
-                .iter()
-                .zip(seconds)
-                .map(|(step, seconds)| PassTiming::new(step.label.clone(), seconds))
-                .collect()
-        } else {
-            Vec::new()
-        };
-        Ok(Run {
-            frames,
-            timings,
-            diagnostics: counters.map(|c| c.finish()),
-            nan_count,
+        Ok(Finished {
+            diagnostics: self.counters.take().map(|c| c.finish()),
             reservoirs: reservoirs.to_vec(),
         })
     }
@@ -259,13 +270,17 @@ impl<'a> FrameRun<'a> {
     /// Records the frame whose current G-buffer is `gpixels[current]` and whose reservoir
     /// buffers rotate as `rotation`: the plan's steps, each bound to the frame's buffers in its
     /// kernel's binding order, a barrier where [`Plan::waits`] says, then the read-back copies.
-    fn record(&self, (current, rotation): (usize, Rotation)) -> Result<Recorded, VulkanError> {
-        let device = &self.context.shared.device;
+    fn record(
+        &self,
+        parts: &Parts,
+        (current, rotation): (usize, Rotation),
+    ) -> Result<Recorded, VulkanError> {
+        let device = &self.shared.device;
         let n = self.pixels();
         let passes = self.plan.passes().count();
-        let timestamps = Timestamps::new(self.context, self.plan.steps.len() as u32)?;
+        let timestamps = Timestamps::new(parts.context, self.plan.steps.len() as u32)?;
         let cb = {
-            let submit = self.context.shared.lock();
+            let submit = self.shared.lock();
             // SAFETY: allocation from the pool while its lock is held.
             unsafe {
                 device.allocate_command_buffers(
@@ -339,7 +354,7 @@ impl<'a> FrameRun<'a> {
                         ),
                     );
                 }
-                let mut buffers: Vec<&Buffer> = self.scene.buffers().to_vec();
+                let mut buffers: Vec<&Buffer> = parts.scene.buffers().to_vec();
                 buffers.push(&self.params);
                 buffers.extend(
                     step.buffers
@@ -349,6 +364,7 @@ impl<'a> FrameRun<'a> {
                 let push = step.params(self.config.collect_diagnostics);
                 let shader = Shader::of(step.kernel);
                 self.dispatch(
+                    parts,
                     cb,
                     &recorded,
                     section as u32,
@@ -412,7 +428,7 @@ impl<'a> FrameRun<'a> {
         current: usize,
         rotation: Rotation,
     ) {
-        let device = &self.context.shared.device;
+        let device = &self.shared.device;
         let compute = (
             vk::PipelineStageFlags::COMPUTE_SHADER,
             vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE,
@@ -436,6 +452,7 @@ impl<'a> FrameRun<'a> {
     #[allow(clippy::too_many_arguments)]
     fn dispatch(
         &self,
+        parts: &Parts,
         cb: vk::CommandBuffer,
         recorded: &Recorded,
         section: u32,
@@ -444,7 +461,7 @@ impl<'a> FrameRun<'a> {
         push: &PassParams,
         groups: u32,
     ) -> Result<(), VulkanError> {
-        let kernel = self
+        let kernel = parts
             .kernels
             .get(shader.name)
             .ok_or_else(|| VulkanError::UnknownShader(shader.name.to_string()))?;
@@ -460,7 +477,7 @@ impl<'a> FrameRun<'a> {
                 size_of::<PassParams>()
             )));
         }
-        let device = &self.context.shared.device;
+        let device = &self.shared.device;
         // SAFETY: the set is allocated from this run's pool with the kernel's layout and
         // written with live buffers; `cb` is recording.
         unsafe {
@@ -493,10 +510,10 @@ impl<'a> FrameRun<'a> {
     }
 }
 
-impl Drop for FrameRun<'_> {
+impl Drop for FrameRun {
     fn drop(&mut self) {
-        let device = &self.context.shared.device;
-        let submit = self.context.shared.lock();
+        let device = &self.shared.device;
+        let submit = self.shared.lock();
         let cbs: Vec<_> = self.recorded.values().map(|r| r.cb).collect();
         // SAFETY: every submission was waited on; the pool lock is held while freeing.
         unsafe {

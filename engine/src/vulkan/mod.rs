@@ -24,6 +24,7 @@ mod renderer;
 mod scene;
 mod shade;
 mod shaders;
+mod stream;
 mod svgf;
 pub mod testing;
 mod timing;
@@ -48,6 +49,7 @@ pub use crate::contract::{
     FrameParams, GpuCamera, GpuLight, GpuMaterial, GpuPixel, GpuTriangle, MethodParams, PassParams,
 };
 pub use shaders::{Code, Shader};
+pub use stream::VulkanStream;
 pub use validation::{Checks, Message, Severity, VALIDATION_ENV};
 
 /// The environment variable that turns "Vulkan unavailable, skipped" into a failure in tests.

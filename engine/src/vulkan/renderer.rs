@@ -1,7 +1,7 @@
 //! The front of the Vulkan backend (DESIGN §6): a [`Renderer`] holds the [`Context`], the
 //! compiled kernels and the uploaded [`GpuScene`] across runs (creating a pipeline on lavapipe
 //! compiles LLVM code, so it is done once per shader) and runs on them a preset's frames
-//! ([`FrameRun`]) and the spatiotemporal denoiser. A method with a kernel of its own (the
+//! (`VulkanStream`) and the spatiotemporal denoiser. A method with a kernel of its own (the
 //! `methods` crate: the path tracer, random walk, ...) drives it through [`Renderer::gbuffer`]
 //! and [`Renderer::parts`].
 
@@ -12,7 +12,7 @@ use sss::scene::Scene;
 
 use super::device::Context;
 use super::error::VulkanError;
-use super::frame::FrameRun;
+use super::frame::Parts;
 use super::memory::Buffer;
 use super::scene::{GBUFFER, GpuScene};
 use super::shaders::Shader;
@@ -23,9 +23,9 @@ use crate::denoise::Guide;
 use crate::denoise::svgf::Params as SvgfSettings;
 use crate::hash::Fnv1a;
 use crate::image::Image;
-use crate::plan::Plan;
+use crate::stream::{Keep, Stream};
 use crate::{PipelineError, Run, RunConfig};
-use shifts::preset::{PassSpec, Preset, RadiusRule};
+use shifts::preset::Preset;
 
 /// A Vulkan device with its kernels and the last uploaded scene, reused across runs.
 pub struct Renderer {
@@ -138,41 +138,26 @@ impl Renderer {
         )
     }
 
-    /// Renders `config.frames` frames of `scene` with `preset` (validated by the caller) on
-    /// the device: the GPU twin of [`crate::run`]. `Run::timings` are GPU seconds from the
-    /// timestamps; they are empty on a queue that writes no timestamps. Both shades run
-    /// (`Shade::AllInputs` through the plan's Rao-Blackwellised buffer); the target reaches
-    /// the kernels through `PassParams::target` and must have a kernel
-    /// ([`shifts::Target::has_kernel`]), and the spatial kernel clamps its radius
-    /// ([`RadiusRule::Clamped`]): any other choice is a one-line configuration error.
+    /// What a frame of a stream borrows: the device, the uploaded scene and the kernels.
+    pub(super) fn frame_parts(&self) -> Result<Parts<'_>, VulkanError> {
+        Ok(Parts {
+            context: &self.context,
+            scene: self.gpu_scene()?,
+            kernels: &self.kernels,
+        })
+    }
+
+    /// Renders `config.frames` frames of `scene` with `preset` on the device: the GPU twin of
+    /// [`crate::run`], a loop over a stream on this renderer (`VulkanStream::new` says which
+    /// presets have kernels). `Run::timings` are GPU seconds from the timestamps; they are
+    /// empty on a queue that writes no timestamps.
     pub fn run(
         &mut self,
         scene: &Scene,
         preset: &Preset,
         config: &RunConfig,
     ) -> Result<Run, PipelineError> {
-        if !preset.target.has_kernel() {
-            return Err(PipelineError::Config(format!(
-                "preset `{}`: target {} has no Vulkan kernel (luminance, red, green and blue have); use the CPU backend",
-                preset.name,
-                preset.target.name()
-            )));
-        }
-        if let Some(pass) = preset.passes.iter().find(
-            |p| matches!(p, PassSpec::Spatial { radius, .. } if *radius != RadiusRule::Clamped),
-        ) {
-            return Err(PipelineError::Config(format!(
-                "preset `{}`: {} with a non-clamped radius has no Vulkan kernel; use the CPU backend",
-                preset.name,
-                pass.label()
-            )));
-        }
-        let plan = Plan::lower(preset);
-        let shaders: Vec<Shader> = plan.steps.iter().map(|s| Shader::of(s.kernel)).collect();
-        self.prepare(&shaders)?;
-        self.upload(scene)?;
-        let gpu = self.gpu_scene()?;
-        FrameRun::new(&self.context, gpu, &self.kernels, scene, &plan, config)?.run(scene)
+        Stream::on_renderer(self, scene, preset, config)?.run(config.frames, Keep::Every)
     }
 }
 
@@ -203,6 +188,7 @@ fn fingerprint(scene: &Scene) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::vulkan::VulkanStream;
     use crate::vulkan::testing::validated_or_skip;
     use crate::vulkan::validation::Checks;
 
@@ -219,32 +205,21 @@ mod tests {
         let mut scene = Scene::builtin("bumpy").expect("built-in scene");
         scene.camera = scene.camera.with_resolution(8, 8);
         let preset = Preset::named("reconnection").expect("registered preset");
-        let plan = Plan::lower(&preset);
         let config = RunConfig {
             seed: 1,
             frames: 1,
             collect_diagnostics: false,
         };
-        let shaders: Vec<Shader> = plan.steps.iter().map(|s| Shader::of(s.kernel)).collect();
-        renderer.prepare(&shaders).unwrap();
-        renderer.upload(&scene).unwrap();
-        let gpu = renderer.gpu_scene().unwrap();
-        let run = |omit: bool| {
-            let mut frame = FrameRun::new(
-                &renderer.context,
-                gpu,
-                &renderer.kernels,
-                &scene,
-                &plan,
-                &config,
-            )?;
+        let mut run = |omit: bool| {
+            let mut stream = VulkanStream::new(&mut renderer, &scene, &preset, &config)?;
             if omit {
-                let step = (0..plan.steps.len())
-                    .position(|i| frame.waits[i] && plan.steps[i].clears.is_empty())
+                let run = stream.run_mut();
+                let step = (0..run.plan.steps.len())
+                    .position(|i| run.waits[i] && run.plan.steps[i].clears.is_empty())
                     .expect("a plan step behind a barrier of its own");
-                frame.waits[step] = false;
+                run.waits[step] = false;
             }
-            frame.run(&scene)
+            stream.frame()
         };
         run(false).expect("every barrier: no validation error");
         match run(true) {

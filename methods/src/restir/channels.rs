@@ -11,10 +11,10 @@
 //! their sum. With `/shade=all` each run shades its own channel by its Rao-Blackwellised value.
 
 use engine::image::Image;
-use engine::{Backend, PassTiming, PipelineError, Preset, Target};
+use engine::{Backend, Keep, PassTiming, PipelineError, Preset, Target};
 use sss::scene::Scene;
 
-use super::{last_frame, trajectory};
+use super::streamed;
 use crate::estimator::{Estimator, LastFrame, Method, Trajectory};
 
 /// The per-channel targets, in output channel order.
@@ -67,6 +67,7 @@ impl Estimator for Channels {
         None
     }
 
+    /// The three runs' last frames, merged; each run keeps only its last image.
     fn render(
         &self,
         backend: &Backend,
@@ -74,7 +75,8 @@ impl Estimator for Channels {
         frames: u32,
         seed: u64,
     ) -> Result<LastFrame, PipelineError> {
-        last_frame(self.render_trajectory(backend, scene, frames, seed)?)
+        self.merged(backend, scene, frames, seed, Keep::Last)?
+            .last_frame()
     }
 
     /// The three runs of replica `seed`, merged channel by channel, frame by frame; the
@@ -86,15 +88,30 @@ impl Estimator for Channels {
         frames: u32,
         seed: u64,
     ) -> Result<Trajectory, PipelineError> {
+        self.merged(backend, scene, frames, seed, Keep::Every)
+    }
+}
+
+impl Channels {
+    /// The three channel runs of replica `seed` one after another (each a stream of `frames`
+    /// frames keeping the images `keep` says), their kept frames merged.
+    fn merged(
+        &self,
+        backend: &Backend,
+        scene: &Scene,
+        frames: u32,
+        seed: u64,
+        keep: Keep,
+    ) -> Result<Trajectory, PipelineError> {
         let mut runs = Vec::with_capacity(CHANNELS.len());
         for target in CHANNELS {
             let preset = Preset {
                 target,
                 ..self.0.clone()
             };
-            runs.push(trajectory(&preset, backend, scene, frames, seed)?);
+            runs.push(streamed(&preset, backend, scene, frames, seed, keep)?);
         }
-        let frames_out = (0..frames as usize)
+        let frames_out = (0..runs[0].frames.len())
             .map(|f| merge([&runs[0].frames[f], &runs[1].frames[f], &runs[2].frames[f]]))
             .collect();
         Ok(Trajectory {

@@ -1,0 +1,272 @@
+//! A preset's stream (DESIGN §6): created once for `(scene, preset, seed, backend)`, then asked
+//! for one frame after another. It owns what the frames share — the previous frame's G-buffer
+//! and reservoirs, the plan's rotation of its buffers, the diagnostics — on the backend that
+//! runs it (on Vulkan the buffers stay on the device between frames), and keeps no frame: a
+//! caller that keeps only what it needs renders any number of frames in flat memory.
+//! [`Backend::run`] is a loop over a stream.
+
+pub(crate) mod frame;
+
+use crate::cpu::CpuStream;
+use crate::vulkan::{Renderer, VulkanStream};
+use crate::{Backend, PassTiming, PipelineError, Preset, Run, RunConfig};
+use sss::scene::Scene;
+
+pub use frame::{Finished, Frame};
+
+/// Which frames' images [`Stream::run`] keeps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Keep {
+    Every,
+    Last,
+}
+
+/// The frames of `preset` on `scene` with one seed, one after another on one backend. A Vulkan
+/// stream holds its backend's renderer (locked) until it is dropped.
+pub struct Stream<'a> {
+    inner: Inner<'a>,
+    labels: Vec<String>,
+}
+
+enum Inner<'a> {
+    Cpu(CpuStream<'a>),
+    Vulkan(Box<VulkanStream<'a>>),
+}
+
+impl<'a> Stream<'a> {
+    /// The stream of `preset` on `scene` with `config.seed` on `backend`. `config.frames` is
+    /// not a limit: the stream renders as many frames as it is asked for (past the end of the
+    /// camera's trajectory the camera stays at its last pose); with diagnostics, the reuse
+    /// telemetry is recorded at frame `config.frames − 1`.
+    pub fn new(
+        backend: &'a Backend,
+        scene: &'a Scene,
+        preset: &Preset,
+        config: &RunConfig,
+    ) -> Result<Stream<'a>, PipelineError> {
+        preset.validate()?;
+        match backend.renderer() {
+            None => Ok(Stream::of(Inner::Cpu(CpuStream::new(
+                scene, preset, config,
+            )))),
+            Some(renderer) => Ok(Stream::of(Inner::Vulkan(Box::new(VulkanStream::new(
+                renderer, scene, preset, config,
+            )?)))),
+        }
+    }
+
+    /// [`Stream::new`] on `renderer`, borrowed for the stream's life.
+    pub fn on_renderer(
+        renderer: &'a mut Renderer,
+        scene: &'a Scene,
+        preset: &Preset,
+        config: &RunConfig,
+    ) -> Result<Stream<'a>, PipelineError> {
+        preset.validate()?;
+        let stream = VulkanStream::new(renderer, scene, preset, config)?;
+        Ok(Stream::of(Inner::Vulkan(Box::new(stream))))
+    }
+
+    fn of(inner: Inner<'a>) -> Stream<'a> {
+        let labels = match &inner {
+            Inner::Cpu(s) => s.labels(),
+            Inner::Vulkan(s) => s.labels(),
+        };
+        Stream { inner, labels }
+    }
+
+    /// The labels of the plan's steps (`gbuffer`, `candidates`, `temporal:…`, `spatial<n>:…`,
+    /// `shade`), the order of [`Frame::steps`].
+    pub fn labels(&self) -> &[String] {
+        &self.labels
+    }
+
+    /// Renders the next frame.
+    pub fn frame(&mut self) -> Result<Frame, PipelineError> {
+        match &mut self.inner {
+            Inner::Cpu(s) => s.frame(),
+            Inner::Vulkan(s) => s.frame(),
+        }
+    }
+
+    /// Ends the stream: the last frame's reservoirs and the diagnostics.
+    pub fn finish(self) -> Result<Finished, PipelineError> {
+        match self.inner {
+            Inner::Cpu(s) => Ok(s.finish()),
+            Inner::Vulkan(s) => s.finish(),
+        }
+    }
+
+    /// The next `frames` frames as a [`Run`], keeping the images `keep` says (a run that keeps
+    /// only the last holds one image whatever `frames` is), with the per-step timings summed
+    /// into [`PassTiming`]s (none where a frame came without them). [`Backend::run`] keeps
+    /// every one.
+    pub fn run(mut self, frames: u32, keep: Keep) -> Result<Run, PipelineError> {
+        let mut images = Vec::with_capacity(match keep {
+            Keep::Every => frames as usize,
+            Keep::Last => 1,
+        });
+        let mut steps = vec![Vec::with_capacity(frames as usize); self.labels.len()];
+        let mut timed = true;
+        let mut nan_count = 0;
+        for i in 0..frames {
+            let frame = self.frame()?;
+            nan_count += frame.nan_count;
+            timed &= frame.steps.len() == steps.len();
+            for (seconds, timing) in steps.iter_mut().zip(frame.steps) {
+                seconds.push(timing);
+            }
+            if keep == Keep::Every || i + 1 == frames {
+                images.push(frame.image);
+            }
+        }
+        let timings = match timed {
+            true => (self.labels.iter().zip(steps))
+                .map(|(label, seconds)| PassTiming::timed(label.clone(), &seconds))
+                .collect(),
+            false => Vec::new(),
+        };
+        let Finished {
+            diagnostics,
+            reservoirs,
+        } = self.finish()?;
+        Ok(Run {
+            frames: images,
+            timings,
+            diagnostics,
+            nan_count,
+            reservoirs,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Image;
+    use crate::vulkan::testing::backend_or_skip;
+
+    /// `bumpy` at 24 × 18 and the hybrid preset, whose frames depend on the previous frame's
+    /// reservoirs (temporal reuse) and G-buffer.
+    fn setting() -> (Scene, Preset) {
+        let mut scene = Scene::builtin("bumpy").unwrap();
+        scene.camera = scene.camera.with_resolution(24, 18);
+        (scene, Preset::named("hybrid").unwrap())
+    }
+
+    fn config(seed: u64, frames: u32) -> RunConfig {
+        RunConfig {
+            seed,
+            frames,
+            collect_diagnostics: false,
+        }
+    }
+
+    fn bits(image: &Image) -> Vec<[u32; 3]> {
+        image
+            .pixels
+            .iter()
+            .map(|p| p.to_array().map(f32::to_bits))
+            .collect()
+    }
+
+    /// Two CPU streams asked for frames in turn keep their own state: each one's frames are
+    /// bit for bit the frames of a run of its seed, and a frame's index and step timings are
+    /// its own.
+    #[test]
+    fn interleaved_streams_keep_their_own_state() {
+        const FRAMES: u32 = 4;
+        let (scene, preset) = setting();
+        let (one, two) = (config(1, FRAMES), config(2, FRAMES));
+        let mut streams = [
+            Stream::new(&Backend::Cpu, &scene, &preset, &one).unwrap(),
+            Stream::new(&Backend::Cpu, &scene, &preset, &two).unwrap(),
+        ];
+        let runs = [
+            Backend::Cpu.run(&scene, &preset, &one).unwrap(),
+            Backend::Cpu.run(&scene, &preset, &two).unwrap(),
+        ];
+        assert_ne!(bits(&runs[0].frames[1]), bits(&runs[1].frames[1]));
+        for f in 0..FRAMES {
+            for (stream, run) in streams.iter_mut().zip(&runs) {
+                let frame = stream.frame().unwrap();
+                assert_eq!(frame.index, f);
+                assert_eq!(frame.steps.len(), stream.labels().len());
+                assert_eq!(
+                    bits(&frame.image),
+                    bits(&run.frames[f as usize]),
+                    "frame {f}"
+                );
+            }
+        }
+        for (stream, run) in streams.into_iter().zip(&runs) {
+            assert_eq!(stream.finish().unwrap().reservoirs, run.reservoirs);
+        }
+    }
+
+    /// `RunConfig::frames` does not bound a stream: asked for more frames, it renders them
+    /// (the camera at its last pose) as a longer run does.
+    #[test]
+    fn a_stream_renders_past_its_configured_frames() {
+        let (scene, preset) = setting();
+        let run = Backend::Cpu.run(&scene, &preset, &config(3, 20)).unwrap();
+        let short = config(3, 2);
+        let mut stream = Stream::new(&Backend::Cpu, &scene, &preset, &short).unwrap();
+        for (f, want) in run.frames.iter().enumerate() {
+            assert_eq!(
+                bits(&stream.frame().unwrap().image),
+                bits(want),
+                "frame {f}"
+            );
+        }
+    }
+
+    /// A run that keeps the last frame holds that one image, the last of a run that keeps
+    /// every frame, with the same timings' labels and non-finite count.
+    #[test]
+    fn keeping_the_last_frame_holds_one_image() {
+        let (scene, preset) = setting();
+        let config = config(4, 5);
+        let every = Stream::new(&Backend::Cpu, &scene, &preset, &config)
+            .and_then(|s| s.run(5, Keep::Every))
+            .unwrap();
+        let last = Stream::new(&Backend::Cpu, &scene, &preset, &config)
+            .and_then(|s| s.run(5, Keep::Last))
+            .unwrap();
+        assert_eq!((every.frames.len(), last.frames.len()), (5, 1));
+        assert_eq!(bits(&last.frames[0]), bits(&every.frames[4]));
+        let labels = |run: &Run| {
+            run.timings
+                .iter()
+                .map(|t| t.label.clone())
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(labels(&last), labels(&every));
+        assert_eq!(last.nan_count, every.nan_count);
+        assert_eq!(last.reservoirs, every.reservoirs);
+    }
+
+    /// On a Vulkan device a stream driven frame by frame gives the frames of `Backend::run`
+    /// with the same seed, bit for bit, and holds the device's buffers between frames (a
+    /// stream dropped early leaves the renderer usable).
+    #[test]
+    fn a_vulkan_stream_gives_the_frames_of_a_run() {
+        let Some(backend) = backend_or_skip("a_vulkan_stream_gives_the_frames_of_a_run") else {
+            return;
+        };
+        let (scene, preset) = setting();
+        let config = config(5, 3);
+        let run = backend.run(&scene, &preset, &config).unwrap();
+        {
+            let mut early = Stream::new(&backend, &scene, &preset, &config).unwrap();
+            early.frame().unwrap();
+        }
+        let mut stream = Stream::new(&backend, &scene, &preset, &config).unwrap();
+        for (f, want) in run.frames.iter().enumerate() {
+            let frame = stream.frame().unwrap();
+            assert_eq!(frame.index, f as u32);
+            assert_eq!(bits(&frame.image), bits(want), "frame {f}");
+        }
+        assert_eq!(stream.finish().unwrap().reservoirs, run.reservoirs);
+    }
+}

@@ -100,14 +100,7 @@ fn main() -> Result<(), String> {
         let (frames, preset) = parsed.ok_or(format!("{CHILD} = {text:?}"))?;
         return child(frames, preset, size);
     }
-    let rounds = match std::env::var("RESHIFT_BENCH_ROUNDS") {
-        Ok(v) => v
-            .parse::<usize>()
-            .ok()
-            .filter(|&n| n >= 2)
-            .ok_or(format!("RESHIFT_BENCH_ROUNDS = {v:?}: need an integer ≥ 2"))?,
-        Err(_) => 3,
-    };
+    let rounds = common::rounds(3)?;
     println!(
         "# streams on bumpy at {}x{}, {rounds} rounds, CPU time",
         size.0, size.1

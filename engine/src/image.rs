@@ -55,6 +55,14 @@ impl Image {
         sum.map(|s| s / n)
     }
 
+    /// Every pixel's channels as bits: what a bit-for-bit comparison of two images compares.
+    pub fn bits(&self) -> Vec<[u32; 3]> {
+        self.pixels
+            .iter()
+            .map(|p| p.to_array().map(f32::to_bits))
+            .collect()
+    }
+
     /// Pixels whose channels are not all finite.
     pub fn non_finite_count(&self) -> u64 {
         self.pixels.iter().filter(|p| !p.is_finite()).count() as u64

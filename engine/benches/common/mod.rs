@@ -70,3 +70,16 @@ pub fn presets() -> Result<Vec<Preset>, String> {
         })
         .collect())
 }
+
+/// Rounds of a bench that alternates its measurements: `RESHIFT_BENCH_ROUNDS` (≥ 2, so that each
+/// figure has an interval), else `default`.
+pub fn rounds(default: usize) -> Result<usize, String> {
+    match std::env::var("RESHIFT_BENCH_ROUNDS") {
+        Ok(v) => v
+            .parse::<usize>()
+            .ok()
+            .filter(|&n| n >= 2)
+            .ok_or(format!("RESHIFT_BENCH_ROUNDS = {v:?}: need an integer ≥ 2")),
+        Err(_) => Ok(default),
+    }
+}

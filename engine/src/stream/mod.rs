@@ -143,7 +143,6 @@ impl<'a> Stream<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Image;
     use crate::vulkan::testing::backend_or_skip;
 
     /// `bumpy` at 24 × 18 and the hybrid preset, whose frames depend on the previous frame's
@@ -162,14 +161,6 @@ mod tests {
         }
     }
 
-    fn bits(image: &Image) -> Vec<[u32; 3]> {
-        image
-            .pixels
-            .iter()
-            .map(|p| p.to_array().map(f32::to_bits))
-            .collect()
-    }
-
     /// Two CPU streams asked for frames in turn keep their own state: each one's frames are
     /// bit for bit the frames of a run of its seed, and a frame's index and step timings are
     /// its own.
@@ -186,15 +177,15 @@ mod tests {
             Backend::Cpu.run(&scene, &preset, &one).unwrap(),
             Backend::Cpu.run(&scene, &preset, &two).unwrap(),
         ];
-        assert_ne!(bits(&runs[0].frames[1]), bits(&runs[1].frames[1]));
+        assert_ne!(runs[0].frames[1].bits(), runs[1].frames[1].bits());
         for f in 0..FRAMES {
             for (stream, run) in streams.iter_mut().zip(&runs) {
                 let frame = stream.frame().unwrap();
                 assert_eq!(frame.index, f);
                 assert_eq!(frame.steps.len(), stream.labels().len());
                 assert_eq!(
-                    bits(&frame.image),
-                    bits(&run.frames[f as usize]),
+                    frame.image.bits(),
+                    run.frames[f as usize].bits(),
                     "frame {f}"
                 );
             }
@@ -214,8 +205,8 @@ mod tests {
         let mut stream = Stream::new(&Backend::Cpu, &scene, &preset, &short).unwrap();
         for (f, want) in run.frames.iter().enumerate() {
             assert_eq!(
-                bits(&stream.frame().unwrap().image),
-                bits(want),
+                stream.frame().unwrap().image.bits(),
+                want.bits(),
                 "frame {f}"
             );
         }
@@ -234,7 +225,7 @@ mod tests {
             .and_then(|s| s.run(5, Keep::Last))
             .unwrap();
         assert_eq!((every.frames.len(), last.frames.len()), (5, 1));
-        assert_eq!(bits(&last.frames[0]), bits(&every.frames[4]));
+        assert_eq!(last.frames[0].bits(), every.frames[4].bits());
         let labels = |run: &Run| {
             run.timings
                 .iter()
@@ -265,7 +256,7 @@ mod tests {
         for (f, want) in run.frames.iter().enumerate() {
             let frame = stream.frame().unwrap();
             assert_eq!(frame.index, f as u32);
-            assert_eq!(bits(&frame.image), bits(want), "frame {f}");
+            assert_eq!(frame.image.bits(), want.bits(), "frame {f}");
         }
         assert_eq!(stream.finish().unwrap().reservoirs, run.reservoirs);
     }

@@ -9,11 +9,11 @@
 //! Only the entry points the denoiser calls are declared, with the signatures and enum values of
 //! OIDN 2.x's `include/OpenImageDenoise/oidn.h`.
 
-use std::ffi::{CStr, c_char, c_int, c_void};
+use std::ffi::{CStr, CString, c_char, c_int, c_void};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::ptr;
-use std::sync::OnceLock;
+use std::sync::{Mutex, OnceLock};
 
 use glam::Vec3;
 
@@ -136,8 +136,32 @@ pub struct Oidn {
     pub version: i32,
     api: Api,
     device: Device,
+    /// The filters kept for the next calls, the most recently used last (at most
+    /// [`FILTERS_KEPT`]): creating and first committing one loads and lays out the network's
+    /// weights for its image size, which OIDN's documentation asks callers not to repeat for
+    /// every image.
+    filters: Mutex<Vec<KeptFilter>>,
     /// Keeps the library mapped while `api`'s pointers are in use.
     _library: libloading::Library,
+}
+
+/// How many filters [`Oidn`] keeps (a stream denoises at one size with one set of inputs; a
+/// comparison may alternate two).
+pub(super) const FILTERS_KEPT: usize = 2;
+
+/// A filter kept by [`Oidn`], and what it was set up for: its kind, image size, input names and
+/// options. Its images are set again before every commit.
+struct KeptFilter {
+    setup: FilterSetup,
+    filter: Filter,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+struct FilterSetup {
+    kind: CString,
+    size: (u32, u32),
+    inputs: Vec<CString>,
+    options: Vec<(CString, bool)>,
 }
 
 // SAFETY: oidn.h's API is thread-safe ("All API calls are thread-safe, but operations that use
@@ -233,6 +257,7 @@ impl Oidn {
             version: 0,
             api,
             device,
+            filters: Mutex::new(Vec::new()),
             _library: library,
         };
         let unusable_device = |e: DenoiseError| unusable(format!("{}: {e}", oidn.place));
@@ -307,22 +332,35 @@ impl Oidn {
                 output.len()
             )));
         }
-        /// Releases the filter however `run` returns.
-        struct Release<'a>(&'a Oidn, Filter);
+        let setup = FilterSetup {
+            kind: kind.to_owned(),
+            size: (width, height),
+            inputs: inputs.iter().map(|(name, _)| (*name).to_owned()).collect(),
+            options: options.iter().map(|&(n, v)| (n.to_owned(), v)).collect(),
+        };
+        // The lock is held through the execution: OIDN serialises a device's work anyway.
+        let mut kept = self.filters.lock().unwrap_or_else(|e| e.into_inner());
+        let filter = match kept.iter().position(|k| k.setup == setup) {
+            Some(i) => kept.remove(i).filter,
+            None => self.new_filter(&setup)?,
+        };
+        /// Releases the filter unless it is kept.
+        struct Release<'a>(&'a Oidn, Option<Filter>);
         impl Drop for Release<'_> {
             fn drop(&mut self) {
-                // SAFETY: a filter created by `oidnNewFilter`, released once.
-                unsafe { (self.0.api.release_filter)(self.1) }
+                if let Some(filter) = self.1 {
+                    // SAFETY: a filter created by `oidnNewFilter`, released once.
+                    unsafe { (self.0.api.release_filter)(filter) }
+                }
             }
         }
+        let mut release = Release(self, Some(filter));
         // SAFETY: calls as oidn.h declares them on this library's device. Every image holds
         // `width·height` packed float3 pixels (checked above; strides 0 mean packed) and outlives
-        // the filter, which is executed synchronously and released before `run` returns. The
+        // the execution, which is synchronous; the filter keeps the pointers after `run`
+        // returns but reads them only after they are set again, before its next commit. The
         // library only reads the inputs (the `*mut` of its signature is for the output).
         unsafe {
-            let filter = (self.api.new_filter)(self.device, kind.as_ptr());
-            self.check("creating the filter")?;
-            let _release = Release(self, filter);
             let images = inputs
                 .iter()
                 .map(|&(name, image)| (name, image.as_ptr() as *mut c_void))
@@ -340,20 +378,54 @@ impl Oidn {
                     0,
                 );
             }
-            for &(name, value) in options {
-                (self.api.set_filter_bool)(filter, name.as_ptr(), value);
-            }
             (self.api.commit_filter)(filter);
             self.check("committing the filter")?;
             (self.api.execute_filter)(filter);
             self.check("executing the filter")?;
         }
+        release.1 = None;
+        kept.push(KeptFilter { setup, filter });
+        if kept.len() > FILTERS_KEPT {
+            let oldest = kept.remove(0);
+            // SAFETY: a filter created by `oidnNewFilter`, no longer kept, released once.
+            unsafe { (self.api.release_filter)(oldest.filter) }
+        }
         Ok(())
+    }
+
+    /// How many filters are kept now.
+    #[cfg(test)]
+    pub(super) fn kept_filters(&self) -> usize {
+        self.filters.lock().map_or(0, |kept| kept.len())
+    }
+
+    /// A new filter of `setup`'s kind with its options set.
+    fn new_filter(&self, setup: &FilterSetup) -> Result<Filter, DenoiseError> {
+        // SAFETY: calls as oidn.h declares them on this library's device; the strings outlive
+        // the calls.
+        unsafe {
+            let filter = (self.api.new_filter)(self.device, setup.kind.as_ptr());
+            if let Err(e) = self.check("creating the filter") {
+                if !filter.is_null() {
+                    (self.api.release_filter)(filter);
+                }
+                return Err(e);
+            }
+            for (name, value) in &setup.options {
+                (self.api.set_filter_bool)(filter, name.as_ptr(), *value);
+            }
+            Ok(filter)
+        }
     }
 }
 
 impl Drop for Oidn {
     fn drop(&mut self) {
+        let kept = std::mem::take(self.filters.get_mut().unwrap_or_else(|e| e.into_inner()));
+        for k in kept {
+            // SAFETY: filters this library created and kept, released once, before the device.
+            unsafe { (self.api.release_filter)(k.filter) }
+        }
         if !self.device.is_null() {
             // SAFETY: the device this library created, released once, before the library.
             unsafe { (self.api.release_device)(self.device) }

@@ -6,9 +6,10 @@
 //! method runs its preset's plan through [`Backend::run`] (whose per-pass GPU timings the panel
 //! shows), any other method [`Method::render_on`], the call `render` and `compare` make; with
 //! the denoiser, [`Method::render_trajectory_on`] and [`engine::denoise::denoise`] as in
-//! `compare --denoise`. The engine renders whole trajectories from frame 0, so the method's
-//! state does not persist between displayed frames: each pose is rendered as a camera at rest
-//! there for `window` frames (temporal reuse over those frames) and the last one is shown.
+//! `compare --denoise`. A run starts its stream at frame 0 on a path of poses fixed in advance,
+//! so the method's state does not persist between displayed frames: each pose is rendered as a
+//! camera at rest there for `window` frames (temporal reuse over those frames) and the last one
+//! is shown.
 
 use engine::denoise::{Denoiser, Guide};
 use engine::{Backend, Image, PipelineError, RunConfig};

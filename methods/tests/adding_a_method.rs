@@ -56,7 +56,7 @@ fn every_quote_is_the_code_it_quotes() {
 /// Negative control: a quote edited in the page (one identifier) is caught.
 #[test]
 fn an_edited_quote_is_caught() {
-    let edited = DOC.replacen("renderer.parts(IMAGE_SPACE)", "renderer.parts(PT)", 1);
+    let edited = DOC.replacen("seed, IMAGE_SPACE, |context", "seed, PT, |context", 1);
     assert_ne!(edited, DOC);
     assert_eq!(drifted(&edited), ["methods/src/image_space/vulkan.rs"]);
 }

@@ -10,7 +10,8 @@
 
 use bytemuck::{Pod, Zeroable};
 use engine::vulkan::{
-    Buffer, Context, DeviceImage, FrameInput, Kernel, Renderer, Shader, VulkanError, groups_for,
+    Buffer, Context, DeviceImage, FrameInput, Kernel, LoopsCut, Renderer, Shader, VulkanError,
+    groups_for,
 };
 use sss::scene::Scene;
 
@@ -57,6 +58,18 @@ pub struct AdaptiveImage {
     pub image: DeviceImage,
     pub counts: Vec<u32>,
     pub cut: u64,
+}
+
+/// A frame of the method and the history it leaves for the next ([`render_adaptive_frame`]).
+struct Step {
+    out: AdaptiveImage,
+    history: Buffer,
+}
+
+impl LoopsCut for Step {
+    fn loops_cut(&self) -> u64 {
+        self.out.cut
+    }
 }
 
 /// One frame of the adaptive method with controller `params` (validated) on `frame`, whose
@@ -126,17 +139,12 @@ pub fn run(
     let mut previous: Option<(Buffer, Buffer)> = None;
     let mut last = None;
     for frame in 0..frames {
-        let (gbuffer, frame_params) = renderer.gbuffer(scene, frame, seed)?;
-        let (context, kernel, gpu) = renderer.parts(ADAPTIVE)?;
-        let input = FrameInput::new(scene, gpu, &frame_params, &gbuffer);
         let carried = previous.as_ref().map(|(g, h)| (g, h));
-        let (out, history) = render_adaptive_frame(context, kernel, &input, carried, params)?;
-        if out.cut > 0 {
-            return Err(VulkanError::LoopsCut {
-                shader: ADAPTIVE.name,
-                count: out.cut,
-            });
-        }
+        let (Step { out, history }, gbuffer) =
+            renderer.method_frame(scene, frame, seed, ADAPTIVE, |context, kernel, input| {
+                render_adaptive_frame(context, kernel, input, carried, params)
+                    .map(|(out, history)| Step { out, history })
+            })?;
         each(&out);
         previous = Some((gbuffer, history));
         last = Some(out);

@@ -12,7 +12,8 @@
 use bytemuck::{Pod, Zeroable};
 use engine::image::Image;
 use engine::vulkan::{
-    Buffer, Context, DeviceImage, FrameInput, Kernel, Renderer, Shader, VulkanError, groups_for,
+    Buffer, Context, DeviceImage, FrameInput, Kernel, LoopsCut, Renderer, Shader, VulkanError,
+    groups_for,
 };
 use sss::material::FresnelTransmission;
 use sss::profile::{Dipole, Pole};
@@ -43,16 +44,10 @@ pub fn render(
 ) -> Result<(Image, u64), VulkanError> {
     let settings = ImageSpaceSettings::default();
     let profiles = scene_gather_profiles(scene, &settings);
-    let (gbuffer, params) = renderer.gbuffer(scene, frame, seed)?;
-    let (context, kernel, gpu) = renderer.parts(IMAGE_SPACE)?;
-    let input = FrameInput::new(scene, gpu, &params, &gbuffer);
-    let out = render_image_space(context, kernel, &input, &profiles, &settings, spp)?;
-    if out.cut > 0 {
-        return Err(VulkanError::LoopsCut {
-            shader: IMAGE_SPACE.name,
-            count: out.cut,
-        });
-    }
+    let (out, _) =
+        renderer.method_frame(scene, frame, seed, IMAGE_SPACE, |context, kernel, input| {
+            render_image_space(context, kernel, input, &profiles, &settings, spp)
+        })?;
     Ok((out.image.image, out.image.left_out))
 }
 
@@ -134,6 +129,12 @@ pub struct ImageSpaceImage {
     pub image: DeviceImage,
     pub entries: EntryCounts,
     pub cut: u64,
+}
+
+impl LoopsCut for ImageSpaceImage {
+    fn loops_cut(&self) -> u64 {
+        self.cut
+    }
 }
 
 /// The `image-space:spp` method on one frame (the kernel of [`IMAGE_SPACE`]) with the sample

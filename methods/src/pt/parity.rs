@@ -164,7 +164,9 @@ fn pt_method_matches_the_cpu() {
                 "{name} {hits:?}: replicas of two seeds are identical"
             );
             let mut gpu_image = |uploaded: &UploadedFrame| {
-                render_pt(&mut context, &kernel, &uploaded.input(), SPP, hits).unwrap()
+                let out = render_pt(&mut context, &kernel, &uploaded.input(), SPP, hits).unwrap();
+                assert_eq!(out.cut, 0, "{name} {hits:?}: loops cut short");
+                out.image
             };
             let gpu = gpu_image(&uploads[0]);
             assert_eq!(gpu.left_out, 0, "{name} {hits:?}: samples left out");

@@ -1,6 +1,6 @@
 //! The path tracer on the device (`method_pt.glsl`, twin of `sss::integrator::pt::render`): the
 //! mean of `spp` samples per pixel over one frame's G-buffer, one dispatch per sample, driven
-//! through the engine's [`Renderer`] ([`render`]).
+//! through the engine's [`Renderer::method_frame`] ([`render`]).
 
 use sss::integrator::pt::HitPolicy;
 use sss::scene::Scene;
@@ -8,7 +8,8 @@ use sss::scene::Scene;
 use engine::contract::PtHits;
 use engine::image::Image;
 use engine::vulkan::{
-    Buffer, Context, DeviceImage, FrameInput, Kernel, Renderer, Shader, VulkanError, groups_for,
+    Buffer, Context, DeviceImage, FrameInput, Kernel, LoopsCut, Renderer, Shader, VulkanError,
+    groups_for,
 };
 
 use super::contract::{PtParams, PtState};
@@ -25,7 +26,7 @@ pub const PT: Shader = Shader::compiled(
 
 /// The path tracer at `frame` with the probe hits chosen by `hits` (`pt:spp` keeps all of
 /// them): the G-buffer kernel, then [`render_pt`]; the image and the samples left out of the
-/// means.
+/// means. A frame whose loops the device cut short is an error.
 pub fn render(
     renderer: &mut Renderer,
     scene: &Scene,
@@ -34,23 +35,35 @@ pub fn render(
     spp: u32,
     hits: HitPolicy,
 ) -> Result<(Image, u64), VulkanError> {
-    let (gbuffer, params) = renderer.gbuffer(scene, frame, seed)?;
-    let (context, kernel, gpu) = renderer.parts(PT)?;
-    let input = FrameInput::new(scene, gpu, &params, &gbuffer);
-    let out = render_pt(context, kernel, &input, spp, hits)?;
-    Ok((out.image, out.left_out))
+    let (out, _) = renderer.method_frame(scene, frame, seed, PT, |context, kernel, input| {
+        render_pt(context, kernel, input, spp, hits)
+    })?;
+    Ok((out.image.image, out.image.left_out))
+}
+
+/// The path tracer's frame: its image and the samples whose loops the device cut short.
+#[derive(Clone, Debug)]
+pub struct PtImage {
+    pub image: DeviceImage,
+    pub cut: u64,
+}
+
+impl LoopsCut for PtImage {
+    fn loops_cut(&self) -> u64 {
+        self.cut
+    }
 }
 
 /// The path tracer on one frame (the kernel of [`PT`]): per pixel the mean of samples `0..spp`
-/// with the probe hits chosen by `hits`; a dispatch whose loops the device cut short is an
-/// error.
+/// with the probe hits chosen by `hits`, and the count of samples whose loops the device cut
+/// short.
 pub fn render_pt(
     context: &mut Context,
     kernel: &Kernel,
     frame: &FrameInput,
     spp: u32,
     hits: HitPolicy,
-) -> Result<DeviceImage, VulkanError> {
+) -> Result<PtImage, VulkanError> {
     let hits = match hits {
         HitPolicy::UniformOne => PtHits::UniformOne,
         HitPolicy::All => PtHits::All,
@@ -74,18 +87,15 @@ pub fn render_pt(
             [groups_for(count, PT.local_size), 1, 1],
         )?;
     }
-    let cut: u64 = state
+    let cut = state
         .read::<PtState>()?
         .iter()
         .map(|s| u64::from(s.cut))
         .sum();
-    if cut > 0 {
-        return Err(VulkanError::LoopsCut {
-            shader: PT.name,
-            count: cut,
-        });
-    }
-    frame.read_image(&output)
+    Ok(PtImage {
+        image: frame.read_image(&output)?,
+        cut,
+    })
 }
 
 #[cfg(test)]

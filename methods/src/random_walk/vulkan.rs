@@ -23,8 +23,8 @@ use sss::scene::Scene;
 use engine::PipelineError;
 use engine::image::Image;
 use engine::vulkan::{
-    Buffer, Context, DeviceImage, FrameInput, Kernel, MethodParams, Renderer, Shader, VulkanError,
-    groups_for,
+    Buffer, Context, DeviceImage, FrameInput, Kernel, LoopsCut, MethodParams, Renderer, Shader,
+    VulkanError, groups_for,
 };
 
 /// `method_random_walk.glsl`: scene bindings 0–8, 9 G-buffer (`GpuPixel`), 10 `vec4` out (mean,
@@ -48,16 +48,10 @@ pub fn render(
     spp: u32,
 ) -> Result<(Image, u64), PipelineError> {
     let media = scene_media(scene)?;
-    let (gbuffer, params) = renderer.gbuffer(scene, frame, seed)?;
-    let (context, kernel, gpu) = renderer.parts(RANDOM_WALK)?;
-    let input = FrameInput::new(scene, gpu, &params, &gbuffer);
-    let out = render_random_walk(context, kernel, &input, &media, spp)?;
-    if out.cut > 0 {
-        return Err(PipelineError::Vulkan(VulkanError::LoopsCut {
-            shader: RANDOM_WALK.name,
-            count: out.cut,
-        }));
-    }
+    let (out, _) =
+        renderer.method_frame(scene, frame, seed, RANDOM_WALK, |context, kernel, input| {
+            render_random_walk(context, kernel, input, &media, spp)
+        })?;
     Ok((out.image.image, out.image.left_out))
 }
 
@@ -151,6 +145,12 @@ pub struct RandomWalkImage {
     pub image: DeviceImage,
     pub stats: Vec<WalkStats>,
     pub cut: u64,
+}
+
+impl LoopsCut for RandomWalkImage {
+    fn loops_cut(&self) -> u64 {
+        self.cut
+    }
 }
 
 /// The `random-walk:spp` method on one frame (the kernel of [`RANDOM_WALK`]): `spp` walks per

@@ -21,7 +21,8 @@ use engine::PipelineError;
 use engine::contract::PtHits;
 use engine::image::Image;
 use engine::vulkan::{
-    Buffer, Context, DeviceImage, FrameInput, Kernel, Renderer, Shader, VulkanError, groups_for,
+    Buffer, Context, DeviceImage, FrameInput, Kernel, LoopsCut, Renderer, Shader, VulkanError,
+    groups_for,
 };
 use sss::integrator::HitPolicy;
 use sss::integrator::pt::PtSettings;
@@ -61,16 +62,15 @@ pub fn render(
         ..SingleScatterSettings::default()
     };
     let media = scene_single_scatter_media(scene)?;
-    let (gbuffer, params) = renderer.gbuffer(scene, frame, seed)?;
-    let (context, kernel, gpu) = renderer.parts(SINGLE_SCATTER)?;
-    let input = FrameInput::new(scene, gpu, &params, &gbuffer);
-    let out = render_single_scatter(context, kernel, &input, &media, &settings, spp)?;
-    if out.cut > 0 {
-        return Err(PipelineError::Vulkan(VulkanError::LoopsCut {
-            shader: SINGLE_SCATTER.name,
-            count: out.cut,
-        }));
-    }
+    let (out, _) = renderer.method_frame(
+        scene,
+        frame,
+        seed,
+        SINGLE_SCATTER,
+        |context, kernel, input| {
+            render_single_scatter(context, kernel, input, &media, &settings, spp)
+        },
+    )?;
     Ok((out.image.image, out.image.left_out))
 }
 
@@ -142,6 +142,12 @@ pub struct SingleScatterImage {
     pub image: DeviceImage,
     pub truncated: u64,
     pub cut: u64,
+}
+
+impl LoopsCut for SingleScatterImage {
+    fn loops_cut(&self) -> u64 {
+        self.cut
+    }
 }
 
 /// The `single-scatter:spp` method on one frame (the kernel of [`SINGLE_SCATTER`]): samples

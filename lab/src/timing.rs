@@ -63,7 +63,6 @@ impl Row {
 /// The protocol's result.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Timing {
-    pub protocol: Protocol,
     /// The clock of the frame row, and of the passes on the CPU backend (process CPU time); on
     /// Vulkan the passes are the device's timestamps and the frame row is wall time.
     pub clock: Clock,
@@ -132,7 +131,6 @@ pub fn measure(
     };
     rows.push(Row::of("frame", frames));
     Ok(Timing {
-        protocol: *protocol,
         clock: Clock::of(backend),
         rows,
     })

@@ -364,6 +364,94 @@ fn a_scripted_session_switches_the_preset_moves_the_camera_and_records() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// The `frames.tsv` of a recording: per frame, its method, live stream frame and confidence.
+fn recorded_frames(record: &Path) -> Vec<(String, u32, f64)> {
+    let table = std::fs::read_to_string(record.join("frames.tsv")).unwrap();
+    let mut lines = table.lines();
+    let header: Vec<&str> = lines.next().unwrap().split('\t').collect();
+    let column = |name| header.iter().position(|h| *h == name).unwrap();
+    let (method, index, confidence) = (
+        column("method"),
+        column("stream_frame"),
+        column("confidence"),
+    );
+    lines
+        .map(|line| {
+            let cells: Vec<&str> = line.split('\t').collect();
+            let number = |i: usize| {
+                cells[i]
+                    .parse::<f64>()
+                    .unwrap_or_else(|e| panic!("{line}: {e}"))
+            };
+            (
+                cells[method].to_string(),
+                number(index) as u32,
+                number(confidence),
+            )
+        })
+        .collect()
+}
+
+/// Temporal reuse follows the flown camera: while a script orbits the camera frame after frame,
+/// the displayed ReSTIR frames are one live stream's (stream frames 0, 1, 2, …) and the mean
+/// confidence of their final reservoirs grows past the first frame's (by more than half: one
+/// frame of temporal reuse adds the previous frame's confidence). Control in the same run: a
+/// switch to another preset and back starts a new stream, whose first frame's confidence is
+/// back within 20% of the flight's first (the value a viewer that reset its state at every
+/// pose would show throughout).
+#[test]
+fn an_orbiting_camera_carries_temporal_history() {
+    if unavailable("an_orbiting_camera_carries_temporal_history").is_some() {
+        return;
+    }
+    const STEPS: usize = 6;
+    let dir = scratch("orbit");
+    let script = dir.join("script.txt");
+    let mut text = String::from("wait 1\n");
+    text += &"orbit 8 0\n".repeat(STEPS);
+    text += &"preset reconnection\npreset hybrid\norbit 8 0\n".repeat(2);
+    text += "close\n";
+    std::fs::write(&script, text).unwrap();
+    let record = dir.join("record");
+    let xvfb = Xvfb::start();
+    let o = finish(viewer(
+        &xvfb.display,
+        &[
+            "--script",
+            script.to_str().unwrap(),
+            "--record",
+            record.to_str().unwrap(),
+        ],
+    ));
+    assert!(o.status.success(), "exit {:?}\n{}", o.status, stderr(&o));
+    let frames = recorded_frames(&record);
+    eprintln!("{frames:?}");
+    let (flight, restarts) = frames.split_at(STEPS + 1);
+    for (f, (method, index, _)) in flight.iter().enumerate() {
+        assert_eq!((method.as_str(), *index), ("restir:hybrid", f as u32));
+    }
+    let first = flight[0].2;
+    assert!(first > 0.0);
+    assert!(
+        flight[STEPS].2 > 1.5 * first,
+        "the flight's confidence did not grow: {flight:?}"
+    );
+    // Control: each switch restarts the stream; back on the hybrid preset, its first frame
+    // has a first frame's confidence and the orbit's frame is the new stream's second.
+    assert_eq!(restarts.len(), 6, "{restarts:?}");
+    for step in restarts.chunks(3) {
+        let indices: Vec<(&str, u32)> = step.iter().map(|(m, i, _)| (m.as_str(), *i)).collect();
+        let expected = [
+            ("restir:reconnection", 0),
+            ("restir:hybrid", 0),
+            ("restir:hybrid", 1),
+        ];
+        assert_eq!(indices, expected, "{restarts:?}");
+        assert!((step[1].2 - first).abs() < 0.2 * first, "{restarts:?}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn ctrl_c_closes_the_window_cleanly() {
     if unavailable("ctrl_c_closes_the_window_cleanly").is_some() {

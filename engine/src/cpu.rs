@@ -4,6 +4,7 @@
 //! buffer for temporal reuse), run with rayon over rows. No shared mutable state, so the output
 //! is bit-identical for any thread count.
 
+use std::borrow::Cow;
 use std::convert::Infallible;
 
 use glam::Vec3;
@@ -11,7 +12,7 @@ use rayon::prelude::*;
 use restir::rng::StreamKey;
 use shifts::{Hybrid, SssDomain, Target};
 use sss::integrator::pt::{self, PtSettings, Shading};
-use sss::scene::{GBuffer, Scene};
+use sss::scene::{GBuffer, Pose, Scene};
 
 use restir::resample::ResampleError;
 use restir::reservoir::InvalidCandidate;
@@ -24,7 +25,7 @@ use crate::diagnostics::{Counters, HybridChoice, Recorder};
 use crate::image::Image;
 use crate::plan::{PassKernel, Plan, Resource, Role, Rotation, Slot, Step};
 use crate::reuse::{self, PassInput, Previous, Reused, ShiftCounts, StepTelemetry};
-use crate::stream::frame::{Finished, Frame};
+use crate::stream::frame::{Finished, Frame, mean_confidence};
 use crate::{Backend, PipelineError, RunConfig, purpose};
 
 /// Fills `out` (row-major, rows of `width`) with `kernel(pixel)` in parallel over rows; the
@@ -67,7 +68,9 @@ struct Cell {
 /// frames share (the previous frame's G-buffer and reservoirs, the diagnostics).
 pub(crate) struct CpuStream<'a> {
     plan: Plan,
-    state: RunState<'a>,
+    /// The scene, owned once a frame moves its camera ([`CpuStream::move_camera`]).
+    scene: Cow<'a, Scene>,
+    state: RunState,
     pass_labels: Vec<String>,
     /// The frame [`CpuStream::frame`] renders next.
     next: u32,
@@ -76,7 +79,7 @@ pub(crate) struct CpuStream<'a> {
 impl<'a> CpuStream<'a> {
     /// The stream of `preset` (already validated) on `scene`; `config.frames` is the frame
     /// whose reuse telemetry is recorded (the last of a run) when diagnostics are collected.
-    pub(crate) fn new(scene: &'a Scene, preset: &Preset, config: &RunConfig) -> CpuStream<'a> {
+    pub(crate) fn new(scene: Cow<'a, Scene>, preset: &Preset, config: &RunConfig) -> CpuStream<'a> {
         let plan = Plan::lower(preset);
         let camera = &scene.camera;
         let (width, height) = (camera.width(), camera.height());
@@ -86,7 +89,6 @@ impl<'a> CpuStream<'a> {
             .filter(|(_, step)| step.spec.is_some_and(|s| s.shift().is_some()))
             .map(|(_, step)| step.label.clone());
         let state = RunState {
-            scene,
             config: *config,
             shade: preset.shade,
             target: preset.target,
@@ -104,6 +106,7 @@ impl<'a> CpuStream<'a> {
         };
         CpuStream {
             plan,
+            scene,
             state,
             pass_labels: preset.passes.iter().map(PassSpec::label).collect(),
             next: 0,
@@ -118,7 +121,7 @@ impl<'a> CpuStream<'a> {
     /// Renders the next frame: each step of the plan, timed.
     pub(crate) fn frame(&mut self) -> Result<Frame, PipelineError> {
         let frame = self.next;
-        let (width, height) = (self.state.width, self.state.scene.camera.height());
+        let (width, height) = (self.state.width, self.scene.camera.height());
         let config = self.state.config;
         if config.collect_diagnostics && frame + 1 == config.frames {
             let labels = self.pass_labels.clone();
@@ -128,7 +131,7 @@ impl<'a> CpuStream<'a> {
         let mut shaded = None;
         for step in &self.plan.steps {
             let watch = Stopwatch::start(&Backend::Cpu);
-            if let Some(image) = self.state.step(frame, step)? {
+            if let Some(image) = self.state.step(&self.scene, frame, step)? {
                 shaded = Some(image);
             }
             steps.push(watch.read());
@@ -138,12 +141,20 @@ impl<'a> CpuStream<'a> {
         self.state.rotation = self.state.rotation.next(&self.plan);
         self.state.previous_gbuffer = self.state.gbuffer.take();
         self.next += 1;
+        let last = self.state.rotation.buffer(Slot::Previous);
         Ok(Frame {
             index: frame,
             image,
             nan_count,
             steps,
+            confidence: mean_confidence(&self.state.reservoirs[last]),
         })
+    }
+
+    /// Moves the camera to `pose` from the next frame on ([`sss::scene::Camera::moved_to`]).
+    pub(crate) fn move_camera(&mut self, pose: Pose) {
+        let camera = &mut self.scene.to_mut().camera;
+        *camera = camera.moved_to(self.next, pose);
     }
 
     /// The last frame's final reservoirs and the diagnostics of the frames so far.
@@ -162,8 +173,7 @@ impl<'a> CpuStream<'a> {
 
 /// The CPU backend's state across the frames of a run: the plan's frame resources (reservoirs,
 /// G-buffers, their rotation) and the diagnostics.
-struct RunState<'a> {
-    scene: &'a Scene,
+struct RunState {
     config: RunConfig,
     shade: Shade,
     target: Target,
@@ -182,10 +192,15 @@ struct RunState<'a> {
     recorder: Option<Recorder>,
 }
 
-impl RunState<'_> {
-    /// Runs `step` of frame `frame`; shade returns the frame's image and its non-finite count.
-    fn step(&mut self, frame: u32, step: &Step) -> Result<Option<(Image, u64)>, PipelineError> {
-        let scene = self.scene;
+impl RunState {
+    /// Runs `step` of frame `frame` of `scene`; shade returns the frame's image and its
+    /// non-finite count.
+    fn step(
+        &mut self,
+        scene: &Scene,
+        frame: u32,
+        step: &Step,
+    ) -> Result<Option<(Image, u64)>, PipelineError> {
         if step.kernel == PassKernel::GBuffer {
             self.gbuffer = Some(GBuffer::render(scene, frame));
             if step.clears.contains(&Resource::RaoBlackwellised) {

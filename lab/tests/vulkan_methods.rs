@@ -362,7 +362,8 @@ fn layered_scene(layers: u32) -> Scene {
     // reinsertion pass and wider PLOC search take minutes on 70 000 of them; the traversal
     // visits every leaf either way, which is what the tests need.
     Scene {
-        geometry: Geometry::with_build_params(&[layered, floor], BvhBuildParams::fastest_build()),
+        geometry: Geometry::with_build_params(&[layered, floor], BvhBuildParams::fastest_build())
+            .into(),
         ..slab
     }
 }

@@ -188,6 +188,12 @@ impl Panel {
                 1e3 * frame.wall_seconds,
                 frame.window
             ));
+            if let Some(live) = frame.live {
+                ui.monospace(format!(
+                    "live frame {}, mean confidence {:.2}",
+                    live.index, live.confidence
+                ));
+            }
             if frame.nonfinite > 0 {
                 ui.label(format!("{} non-finite values", frame.nonfinite));
             }

@@ -2,17 +2,19 @@
 //! and the progressive path-traced reference at the current pose that the error view and the
 //! running MSE compare it with.
 //!
-//! A displayed frame is the engine's own rendering of the method, never a copy of it: a ReSTIR
-//! method runs its preset's plan through [`Backend::run`] (whose per-pass GPU timings the panel
-//! shows), any other method [`Method::render_on`], the call `render` and `compare` make; with
-//! the denoiser, [`Method::render_trajectory_on`] and [`engine::denoise::denoise`] as in
-//! `compare --denoise`. A run starts its stream at frame 0 on a path of poses fixed in advance,
-//! so the method's state does not persist between displayed frames: each pose is rendered as a
-//! camera at rest there for `window` frames (temporal reuse over those frames) and the last one
-//! is shown.
+//! A displayed frame is the engine's own rendering of the method, never a copy of it. A ReSTIR
+//! method runs live: the session keeps its preset's [`Stream`] and renders each new pose as the
+//! stream's next frame ([`Stream::frame_at`]), so temporal reuse follows the path the user
+//! flies (the previous frame's reservoirs and G-buffer, reprojected), and the panel shows that
+//! frame's per-pass times; the frames of a flight are those `compare --trajectory` renders on
+//! the recorded poses with the same seed. A new method, seed or field of view starts a new
+//! stream. Any other method, and a ReSTIR method with the denoiser, renders each pose as a
+//! camera at rest there for `window` frames and shows the last one ([`Method::render_on`], the
+//! call `render` and `compare` make; with the denoiser, [`Method::render_trajectory_on`] and
+//! [`engine::denoise::denoise`] as in `compare --denoise`).
 
 use engine::denoise::{Denoiser, Guide};
-use engine::{Backend, Image, PipelineError, RunConfig};
+use engine::{Backend, Image, PipelineError, RunConfig, Stream};
 use glam::DVec3;
 use lab::metrics::{error_maps, tonemapped_mse};
 use methods::Method;
@@ -40,10 +42,30 @@ pub struct Frame {
     pub timings: Vec<(String, f64)>,
     /// Wall-clock seconds of the whole window (and the denoiser).
     pub wall_seconds: f64,
-    /// Frames rendered for it (the window).
+    /// Frames rendered for it: 1 for a live stream's frame, else the window.
     pub window: u32,
     /// Shaded values that were NaN or infinite.
     pub nonfinite: u64,
+    /// A live stream's frame: its index in the stream and the mean confidence of its final
+    /// reservoirs ([`engine::Frame::confidence`]), which grows while temporal reuse carries
+    /// history along the flight.
+    pub live: Option<Live>,
+}
+
+/// What a live stream's frame adds to a [`Frame`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Live {
+    pub index: u32,
+    pub confidence: f64,
+}
+
+/// What a live stream was started for: a change of any of these starts a new one.
+#[derive(Clone, Debug, PartialEq)]
+struct StreamKey {
+    method: String,
+    seed: u64,
+    size: (u32, u32),
+    tan_half_fov: f32,
 }
 
 /// What selects the displayed frame: it is rendered again when any of these changes.
@@ -76,6 +98,8 @@ pub struct Session {
     pub reference_cap: u32,
     frame: Option<(Key, Frame)>,
     reference: Option<Reference>,
+    /// The ReSTIR method's live stream.
+    stream: Option<(StreamKey, Stream<'static>)>,
 }
 
 impl Session {
@@ -90,6 +114,7 @@ impl Session {
             reference_cap: 1024,
             frame: None,
             reference: None,
+            stream: None,
         }
     }
 
@@ -155,6 +180,77 @@ impl Session {
     fn render_at(&mut self, pose: Pose, camera: sss::scene::Camera) -> Result<(), PipelineError> {
         self.scene.camera = camera;
         let started = std::time::Instant::now();
+        let (image, timings, nonfinite, live) = match self.live_preset()? {
+            Some(preset) => self.render_live(&preset)?,
+            None => self.render_at_rest()?,
+        };
+        let frame = Frame {
+            image,
+            pose,
+            timings,
+            wall_seconds: started.elapsed().as_secs_f64(),
+            window: if live.is_some() { 1 } else { self.window },
+            nonfinite,
+            live,
+        };
+        self.frame = Some((self.key(pose), frame));
+        Ok(())
+    }
+
+    /// The preset of a ReSTIR method without the denoiser: the methods that run live.
+    fn live_preset(&mut self) -> Result<Option<engine::Preset>, PipelineError> {
+        let name = self.method.name();
+        let Some(spec) = name.strip_prefix("restir:").filter(|_| !self.denoise) else {
+            self.stream = None;
+            return Ok(None);
+        };
+        let preset = methods::restir::preset(Some(spec)).map_err(PipelineError::Config)?;
+        Ok(Some(preset))
+    }
+
+    /// The next frame of the live stream of `preset` at the scene camera's pose, starting the
+    /// stream when there is none for the method, seed and camera.
+    #[allow(clippy::type_complexity)]
+    fn render_live(
+        &mut self,
+        preset: &engine::Preset,
+    ) -> Result<(Image, Vec<(String, f64)>, u64, Option<Live>), PipelineError> {
+        let camera = &self.scene.camera;
+        let key = StreamKey {
+            method: self.method.name(),
+            seed: self.seed,
+            size: (camera.width(), camera.height()),
+            tan_half_fov: camera.tan_half_fov(),
+        };
+        let pose = camera.pose(0);
+        if self.stream.as_ref().is_none_or(|(k, _)| *k != key) {
+            self.stream = None;
+            let config = RunConfig {
+                seed: self.seed,
+                frames: 1,
+                collect_diagnostics: false,
+            };
+            let stream = Stream::live(&self.backend, self.scene.clone(), preset, &config)?;
+            self.stream = Some((key, stream));
+        }
+        let (_, stream) = self.stream.as_mut().expect("just started");
+        let frame = stream.frame_at(pose)?;
+        let timings = (stream.labels().iter().zip(&frame.steps))
+            .map(|(label, t)| (label.clone(), t.seconds))
+            .collect();
+        let live = Live {
+            index: frame.index,
+            confidence: frame.confidence,
+        };
+        Ok((frame.image, timings, frame.nan_count, Some(live)))
+    }
+
+    /// The last frame of `window` frames at rest at the scene camera's pose (denoised when
+    /// the denoiser is on).
+    #[allow(clippy::type_complexity)]
+    fn render_at_rest(
+        &self,
+    ) -> Result<(Image, Vec<(String, f64)>, u64, Option<Live>), PipelineError> {
         let (frames, timings, nonfinite) = self.render_window()?;
         let image = if self.denoise {
             let guides = Guide::trajectory(&self.scene, self.window);
@@ -167,16 +263,7 @@ impl Session {
                 .last()
                 .ok_or_else(|| PipelineError::Config("the method returned no frame".into()))?
         };
-        let frame = Frame {
-            image,
-            pose,
-            timings,
-            wall_seconds: started.elapsed().as_secs_f64(),
-            window: self.window,
-            nonfinite,
-        };
-        self.frame = Some((self.key(pose), frame));
-        Ok(())
+        Ok((image, timings, nonfinite, None))
     }
 
     /// The window's frames (only the last unless the denoiser needs them all), the timings of
@@ -324,6 +411,58 @@ mod tests {
         s.set_method("pt:2").unwrap();
         assert!(s.render(c.pose, c.camera()).is_err());
         assert_eq!(s.method().name(), "restir:hybrid");
+    }
+
+    /// A ReSTIR method runs live: the frames of a flight are one stream's, its history carried
+    /// (the live frames' mean confidence grows past the first frame's), and the recording's
+    /// trajectory replayed as `compare --trajectory` replays it, with the same method and seed,
+    /// renders the same frames bit for bit.
+    #[test]
+    fn a_recorded_flight_replays_bit_for_bit() {
+        let (mut s, mut c) = session("restir:hybrid");
+        s.seed = 3;
+        let dir = std::env::temp_dir().join(format!("reshift-flight-{}", std::process::id()));
+        let (width, height) = (8, 6);
+        let mut recorder =
+            crate::record::Recorder::new(&dir, (width, height), c.vfov_degrees(), c.up()).unwrap();
+        let mut shown = Vec::new();
+        for step in 0..5 {
+            if step > 0 {
+                c.turn(12.0, 3.0);
+            }
+            let frame = s.render(c.pose, c.camera()).unwrap().clone();
+            let rgb = vec![0; 3 * (width * height) as usize];
+            recorder.push(rgb, &frame, &s.method().name());
+            shown.push(frame);
+        }
+        let live: Vec<Live> = shown.iter().map(|f| f.live.unwrap()).collect();
+        assert_eq!(
+            live.iter().map(|l| l.index).collect::<Vec<_>>(),
+            [0, 1, 2, 3, 4]
+        );
+        assert!(live[4].confidence > live[0].confidence, "{live:?}");
+        let written = recorder.finish().unwrap();
+        let loaded = lab::scenes::LoadedScene {
+            scene: s.scene.clone(),
+            key: "bumpy".into(),
+        };
+        let (replay, frames) = loaded.on_trajectory(&written[1]).unwrap();
+        let (trajectory, _) = Method::parse("restir:hybrid")
+            .unwrap()
+            .render_trajectory_on(&Backend::Cpu, &replay.scene, frames, 3)
+            .unwrap();
+        assert_eq!(trajectory.frames.len(), shown.len());
+        for (f, (replayed, frame)) in trajectory.frames.iter().zip(&shown).enumerate() {
+            assert_eq!(replayed.bits(), frame.image.bits(), "frame {f}");
+        }
+        // Control: the last pose rendered at rest for as many frames (the same frame index,
+        // jitter and seed; only the history differs) is not the flight's last frame.
+        let at_rest = Method::parse("restir:hybrid")
+            .unwrap()
+            .render_on(&Backend::Cpu, &s.scene, 5, 3)
+            .unwrap();
+        assert_ne!(at_rest.image.bits(), shown[4].image.bits(), "control");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

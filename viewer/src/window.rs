@@ -286,7 +286,7 @@ impl Live {
         let (rgb, size) = self.displayed();
         if self.unrecorded {
             if let (Some(recorder), Some(frame)) = (recorder.as_mut(), self.session.frame()) {
-                recorder.push(rgb.clone(), frame.pose);
+                recorder.push(rgb.clone(), frame, &self.session.method().name());
             }
             self.unrecorded = false;
         }

@@ -19,6 +19,10 @@ pub struct Frame {
     /// wall time on the CPU backend; the device's timestamps on Vulkan (as wall time, in both
     /// fields), empty where its queue writes none.
     pub steps: Vec<Timing>,
+    /// The mean confidence weight of the frame's final reservoirs (those temporal reuse takes
+    /// into the next frame) over the pixels that hold one (confidence > 0); 0 where none does.
+    /// It grows while temporal reuse carries history and falls back where it is rejected.
+    pub confidence: f64,
 }
 
 /// What a stream leaves when it ends: the last frame's final reservoirs (its plan's
@@ -27,4 +31,15 @@ pub struct Frame {
 pub struct Finished {
     pub diagnostics: Option<Diagnostics>,
     pub reservoirs: Vec<PixelReservoir>,
+}
+
+/// [`Frame::confidence`] of a frame whose final reservoirs are `reservoirs`.
+pub(crate) fn mean_confidence(reservoirs: &[PixelReservoir]) -> f64 {
+    let (sum, count) = reservoirs
+        .iter()
+        .filter(|r| r.confidence > 0.0)
+        .fold((0.0, 0u64), |(sum, count), r| {
+            (sum + f64::from(r.confidence), count + 1)
+        });
+    if count == 0 { 0.0 } else { sum / count as f64 }
 }

@@ -7,10 +7,12 @@
 
 pub(crate) mod frame;
 
+use std::borrow::Cow;
+
 use crate::cpu::CpuStream;
 use crate::vulkan::{Renderer, VulkanStream};
 use crate::{Backend, PassTiming, PipelineError, Preset, Run, RunConfig};
-use sss::scene::Scene;
+use sss::scene::{Pose, Scene};
 
 pub use frame::{Finished, Frame};
 
@@ -29,7 +31,7 @@ pub struct Stream<'a> {
 }
 
 enum Inner<'a> {
-    Cpu(CpuStream<'a>),
+    Cpu(Box<CpuStream<'a>>),
     Vulkan(Box<VulkanStream<'a>>),
 }
 
@@ -46,13 +48,38 @@ impl<'a> Stream<'a> {
     ) -> Result<Stream<'a>, PipelineError> {
         preset.validate()?;
         match backend.renderer() {
-            None => Ok(Stream::of(Inner::Cpu(CpuStream::new(
-                scene, preset, config,
-            )))),
+            None => Ok(Stream::of(Inner::Cpu(Box::new(CpuStream::new(
+                Cow::Borrowed(scene),
+                preset,
+                config,
+            ))))),
             Some(renderer) => Ok(Stream::of(Inner::Vulkan(Box::new(VulkanStream::new(
                 renderer, scene, preset, config,
             )?)))),
         }
+    }
+
+    /// [`Stream::new`] with a scene of its own and, on Vulkan, the backend's renderer shared:
+    /// locked only while a frame renders, so other users of the backend (a viewer's reference,
+    /// its presentation) run between frames. The stream a viewer keeps while the user flies
+    /// the camera ([`Stream::frame_at`]).
+    pub fn live(
+        backend: &Backend,
+        scene: Scene,
+        preset: &Preset,
+        config: &RunConfig,
+    ) -> Result<Stream<'static>, PipelineError> {
+        preset.validate()?;
+        let inner = match backend {
+            Backend::Cpu => Inner::Cpu(Box::new(CpuStream::new(Cow::Owned(scene), preset, config))),
+            Backend::Vulkan(renderer) => Inner::Vulkan(Box::new(VulkanStream::shared(
+                renderer.clone(),
+                scene,
+                preset,
+                config,
+            )?)),
+        };
+        Ok(Stream::of(inner))
     }
 
     /// [`Stream::new`] on `renderer`, borrowed for the stream's life.
@@ -89,10 +116,22 @@ impl<'a> Stream<'a> {
         }
     }
 
+    /// Renders the next frame with the camera moved to `pose` (its previous frame keeps the
+    /// pose it had: [`sss::scene::Camera::moved_to`]), the call of a viewer that flies the
+    /// camera. The frames of poses given one by one are those of a trajectory of the same poses
+    /// rendered by [`Stream::frame`], bit for bit.
+    pub fn frame_at(&mut self, pose: Pose) -> Result<Frame, PipelineError> {
+        match &mut self.inner {
+            Inner::Cpu(s) => s.move_camera(pose),
+            Inner::Vulkan(s) => s.move_camera(pose),
+        }
+        self.frame()
+    }
+
     /// Ends the stream: the last frame's reservoirs and the diagnostics.
     pub fn finish(self) -> Result<Finished, PipelineError> {
         match self.inner {
-            Inner::Cpu(s) => Ok(s.finish()),
+            Inner::Cpu(s) => Ok((*s).finish()),
             Inner::Vulkan(s) => s.finish(),
         }
     }
@@ -235,6 +274,87 @@ mod tests {
         assert_eq!(labels(&last), labels(&every));
         assert_eq!(last.nan_count, every.nan_count);
         assert_eq!(last.reservoirs, every.reservoirs);
+    }
+
+    /// The poses of a trajectory, four frames of the bumpy camera's path apart.
+    fn poses(scene: &Scene, count: u32) -> Vec<Pose> {
+        (0..count).map(|f| scene.camera.pose(4 * f % 16)).collect()
+    }
+
+    /// `scene` on the trajectory of `poses`.
+    fn on_trajectory(scene: &Scene, poses: &[Pose]) -> Scene {
+        let mut replay = scene.clone();
+        replay.camera = scene.camera.with_trajectory(&sss::scene::Trajectory {
+            vfov: None,
+            poses: poses.to_vec(),
+        });
+        replay
+    }
+
+    /// A live stream flown pose by pose renders, bit for bit, the frames of a run on the
+    /// trajectory of the same poses (the replay of a viewer's recording), and its temporal
+    /// history is carried while the camera moves: the frames' mean confidence grows past the
+    /// first frame's. Control: a stream started again at every pose stays at the first frame's
+    /// confidence.
+    #[test]
+    fn a_live_stream_flown_pose_by_pose_is_the_run_of_its_trajectory() {
+        let (scene, preset) = setting();
+        let poses = poses(&scene, 4);
+        let replay = on_trajectory(&scene, &poses);
+        let run = Backend::Cpu
+            .run(&replay, &preset, &config(6, poses.len() as u32))
+            .unwrap();
+        let mut live = Stream::live(&Backend::Cpu, scene.clone(), &preset, &config(6, 1)).unwrap();
+        let mut confidence = Vec::new();
+        for (f, pose) in poses.iter().enumerate() {
+            let frame = live.frame_at(*pose).unwrap();
+            assert_eq!(frame.image.bits(), run.frames[f].bits(), "frame {f}");
+            confidence.push(frame.confidence);
+        }
+        let restarted = Stream::live(&Backend::Cpu, replay, &preset, &config(6, 1))
+            .and_then(|mut s| s.frame_at(poses[3]))
+            .unwrap();
+        eprintln!(
+            "confidence: {confidence:?}; restarted at the last pose {}",
+            restarted.confidence
+        );
+        assert!(confidence[3] > 1.5 * confidence[0], "{confidence:?}");
+        assert!(restarted.confidence < 1.1 * confidence[0], "control");
+    }
+
+    /// On a Vulkan device a live stream flown pose by pose gives the frames of a run on their
+    /// trajectory, bit for bit, while other work uses the renderer between its frames; after
+    /// the renderer uploads another scene its next frame is a one-line error.
+    #[test]
+    fn a_live_vulkan_stream_shares_its_renderer_between_frames() {
+        let test = "a_live_vulkan_stream_shares_its_renderer_between_frames";
+        let Some(backend) = backend_or_skip(test) else {
+            return;
+        };
+        let (scene, preset) = setting();
+        let poses = poses(&scene, 3);
+        let replay = on_trajectory(&scene, &poses);
+        let run = backend.run(&replay, &preset, &config(7, 3)).unwrap();
+        let mut live = Stream::live(&backend, scene.clone(), &preset, &config(7, 1)).unwrap();
+        for (f, pose) in poses.iter().enumerate() {
+            assert_eq!(
+                live.frame_at(*pose).unwrap().image.bits(),
+                run.frames[f].bits()
+            );
+            // Between frames the backend renders another preset on the same scene.
+            backend
+                .run(
+                    &scene,
+                    &Preset::named("reconnection").unwrap(),
+                    &config(1, 1),
+                )
+                .unwrap();
+        }
+        let mut other = Scene::builtin("slab").unwrap();
+        other.camera = other.camera.with_resolution(24, 18);
+        backend.run(&other, &preset, &config(1, 1)).unwrap();
+        let error = live.frame_at(poses[0]).unwrap_err().to_string();
+        assert!(error.contains("another scene"), "{error}");
     }
 
     /// On a Vulkan device a stream driven frame by frame gives the frames of `Backend::run`

@@ -29,7 +29,7 @@ use crate::contract::{FrameParams, GpuPixel, PassParams};
 use crate::diagnostics::Counters;
 use crate::image::Image;
 use crate::plan::{PassKernel, Plan, Resource, Rotation};
-use crate::stream::frame::{Finished, Frame};
+use crate::stream::frame::{Finished, Frame, mean_confidence};
 use crate::{PipelineError, RunConfig};
 use shifts::PixelReservoir;
 
@@ -178,6 +178,11 @@ impl FrameRun {
         self.plan.steps.iter().map(|s| s.label.clone()).collect()
     }
 
+    /// The index of the frame [`FrameRun::frame`] renders next.
+    pub(super) fn next(&self) -> u32 {
+        self.next
+    }
+
     /// Renders the next frame on `parts` (the renderer this run was created on) and reads it
     /// back.
     pub(super) fn frame(&mut self, parts: &Parts, scene: &Scene) -> Result<Frame, PipelineError> {
@@ -213,6 +218,7 @@ impl FrameRun {
         };
         self.rotation = self.rotation.next(&self.plan);
         self.next += 1;
+        let passes = self.plan.passes().count();
         let bytes = self.readback.mapped().ok_or(VulkanError::NoMemoryType)?;
         let texels: &[[f32; 4]] = bytemuck::cast_slice(&bytes[..n * TEXEL]);
         let nan_count = texels.iter().filter(|t| t[3] != 0.0).count() as u64;
@@ -232,11 +238,15 @@ impl FrameRun {
                 add_diag(counters, index, step, diag);
             }
         }
+        let start = (passes + 1) * n * TEXEL;
+        let reservoirs: &[PixelReservoir] =
+            bytemuck::cast_slice(&bytes[start..start + n * PixelReservoir::BYTES]);
         Ok(Frame {
             index: frame,
             image,
             nan_count,
             steps,
+            confidence: mean_confidence(reservoirs),
         })
     }
 

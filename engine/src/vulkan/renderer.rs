@@ -33,6 +33,8 @@ pub struct Renderer {
     kernels: HashMap<&'static str, Kernel>,
     /// The uploaded scene and the fingerprint of the [`Scene`] it came from.
     scene: Option<(u64, GpuScene)>,
+    /// How many scenes it has uploaded.
+    uploads: u64,
 }
 
 impl Renderer {
@@ -42,6 +44,7 @@ impl Renderer {
             context,
             kernels: HashMap::new(),
             scene: None,
+            uploads: 0,
         }
     }
 
@@ -67,8 +70,14 @@ impl Renderer {
         if self.scene.as_ref().is_none_or(|(k, _)| *k != key) {
             self.scene = None;
             self.scene = Some((key, GpuScene::upload(&self.context, scene)?));
+            self.uploads += 1;
         }
         Ok(())
+    }
+
+    /// How many scenes it has uploaded: a count that changes when the uploaded scene does.
+    pub fn uploads(&self) -> u64 {
+        self.uploads
     }
 
     /// The uploaded scene (after [`Renderer::upload`]).

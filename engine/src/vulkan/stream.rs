@@ -1,9 +1,11 @@
 //! A preset's stream on a Vulkan device: a [`FrameRun`] on its renderer, which the stream holds
 //! (locked, on a shared backend) for as long as it lives.
 
+use std::borrow::Cow;
 use std::ops::DerefMut;
+use std::sync::{Arc, Mutex};
 
-use sss::scene::Scene;
+use sss::scene::{Pose, Scene};
 
 use super::frame::FrameRun;
 use super::renderer::Renderer;
@@ -14,9 +16,25 @@ use crate::{PassSpec, PipelineError, Preset, RadiusRule, RunConfig};
 
 /// The device side of an `engine::Stream`.
 pub struct VulkanStream<'a> {
-    renderer: Box<dyn DerefMut<Target = Renderer> + 'a>,
-    scene: &'a Scene,
+    renderer: Held<'a>,
+    /// The scene, owned once a frame moves its camera ([`VulkanStream::move_camera`]).
+    scene: Cow<'a, Scene>,
+    /// The renderer's upload ([`Renderer::uploads`]) the frames' commands bind.
+    upload: u64,
     run: FrameRun,
+}
+
+/// How a stream holds its renderer.
+enum Held<'a> {
+    /// Locked (or borrowed) for the stream's life.
+    Locked(Box<dyn DerefMut<Target = Renderer> + 'a>),
+    /// Shared with other users of the backend (a viewer presents and renders its reference
+    /// through it between frames), locked frame by frame.
+    Shared(Arc<Mutex<Renderer>>),
+}
+
+fn lock(renderer: &Mutex<Renderer>) -> std::sync::MutexGuard<'_, Renderer> {
+    renderer.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 impl<'a> VulkanStream<'a> {
@@ -30,6 +48,39 @@ impl<'a> VulkanStream<'a> {
         preset: &Preset,
         config: &RunConfig,
     ) -> Result<VulkanStream<'a>, PipelineError> {
+        let (upload, run) = Self::prepare(&mut renderer, scene, preset, config)?;
+        Ok(VulkanStream {
+            renderer: Held::Locked(Box::new(renderer)),
+            scene: Cow::Borrowed(scene),
+            upload,
+            run,
+        })
+    }
+
+    /// [`VulkanStream::new`] on a shared renderer, locked only while a frame renders, with a
+    /// scene of its own. Its frames fail (one line) if the renderer uploads another scene in
+    /// between, since their recorded commands bind the uploaded one.
+    pub fn shared(
+        renderer: Arc<Mutex<Renderer>>,
+        scene: Scene,
+        preset: &Preset,
+        config: &RunConfig,
+    ) -> Result<VulkanStream<'static>, PipelineError> {
+        let (upload, run) = Self::prepare(&mut lock(&renderer), &scene, preset, config)?;
+        Ok(VulkanStream {
+            renderer: Held::Shared(renderer),
+            scene: Cow::Owned(scene),
+            upload,
+            run,
+        })
+    }
+
+    fn prepare(
+        renderer: &mut Renderer,
+        scene: &Scene,
+        preset: &Preset,
+        config: &RunConfig,
+    ) -> Result<(u64, FrameRun), PipelineError> {
         if !preset.target.has_kernel() {
             return Err(PipelineError::Config(format!(
                 "preset `{}`: target {} has no Vulkan kernel (luminance, red, green and blue have); use the CPU backend",
@@ -51,11 +102,7 @@ impl<'a> VulkanStream<'a> {
         renderer.prepare(&shaders)?;
         renderer.upload(scene)?;
         let run = FrameRun::new(renderer.context(), scene, plan, config)?;
-        Ok(VulkanStream {
-            renderer: Box::new(renderer),
-            scene,
-            run,
-        })
+        Ok((renderer.uploads(), run))
     }
 
     /// The labels of the plan's steps, in execution order.
@@ -65,8 +112,27 @@ impl<'a> VulkanStream<'a> {
 
     /// Renders and reads back the next frame.
     pub fn frame(&mut self) -> Result<Frame, PipelineError> {
-        let parts = self.renderer.frame_parts()?;
-        self.run.frame(&parts, self.scene)
+        let shared;
+        let renderer: &Renderer = match &self.renderer {
+            Held::Locked(renderer) => renderer,
+            Held::Shared(renderer) => {
+                shared = lock(renderer);
+                &shared
+            }
+        };
+        if renderer.uploads() != self.upload {
+            return Err(PipelineError::Config(
+                "the renderer uploaded another scene during the stream; start a new stream".into(),
+            ));
+        }
+        let parts = renderer.frame_parts()?;
+        self.run.frame(&parts, &self.scene)
+    }
+
+    /// Moves the camera to `pose` from the next frame on ([`sss::scene::Camera::moved_to`]).
+    pub fn move_camera(&mut self, pose: Pose) {
+        let camera = &mut self.scene.to_mut().camera;
+        *camera = camera.moved_to(self.run.next(), pose);
     }
 
     /// The last frame's final reservoirs and the diagnostics.

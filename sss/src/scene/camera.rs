@@ -40,6 +40,13 @@ enum Path {
     },
     /// Pose `f` at frame `f`; the last pose after the end.
     Poses(Arc<[Pose]>),
+    /// A camera moved live ([`Camera::moved_to`]): `previous` before frame `at`, `current` from
+    /// it on.
+    Moved {
+        previous: Pose,
+        current: Pose,
+        at: u32,
+    },
 }
 
 /// The camera's orthonormal basis at one frame.
@@ -111,6 +118,36 @@ impl Camera {
                 let last = poses.len().saturating_sub(1);
                 poses[(frame as usize).min(last)]
             }
+            Path::Moved {
+                previous,
+                current,
+                at,
+            } => match frame < *at {
+                true => *previous,
+                false => *current,
+            },
+        }
+    }
+
+    /// The same camera moved to `pose` at `frame`, as a viewer moves it: from `frame` on it is
+    /// at `pose`, before it at this camera's pose of frame `frame − 1` (the frame that temporal
+    /// reuse reprojects into; `pose` too when `frame` is 0). Moving a camera frame after frame
+    /// this way renders the bits of a trajectory of the same poses ([`Camera::with_trajectory`]),
+    /// whose frame `f` is at pose `f` and frame `f − 1` at pose `f − 1`; the field of view,
+    /// resolution and jitter are kept.
+    pub fn moved_to(&self, frame: u32, pose: Pose) -> Camera {
+        let current = Pose {
+            up: pose.up.normalize(),
+            ..pose
+        };
+        let previous = frame.checked_sub(1).map_or(current, |f| self.pose(f));
+        Camera {
+            path: Path::Moved {
+                previous,
+                current,
+                at: frame,
+            },
+            ..self.clone()
         }
     }
 
@@ -314,6 +351,38 @@ mod tests {
         assert!(!still.jittered() && cam.with_jitter(true).jittered());
         assert_eq!(still.jitter(3), Vec2::ZERO);
         assert_ne!(still.ray(3, 5, 9), cam.ray(3, 5, 9));
+    }
+
+    /// A camera moved pose by pose gives, at each frame and the frame before it, the rays of
+    /// a trajectory of the same poses; before the first move every frame is at the first pose.
+    /// Control: moved to another pose, its rays differ.
+    #[test]
+    fn a_camera_moved_frame_by_frame_is_the_trajectory_of_its_poses() {
+        let cam = moving_camera();
+        let poses: Vec<Pose> = (0..5).map(|f| cam.pose(3 * f)).collect();
+        let trajectory = Trajectory {
+            vfov: None,
+            poses: poses.clone(),
+        };
+        let replay = cam.with_trajectory(&trajectory);
+        let mut live = cam.at_rest();
+        for (f, pose) in poses.iter().enumerate() {
+            let f = f as u32;
+            live = live.moved_to(f, *pose);
+            for frame in f.saturating_sub(1)..=f {
+                assert_eq!(
+                    live.ray(frame, 7, 3),
+                    replay.ray(frame, 7, 3),
+                    "{f}, {frame}"
+                );
+                assert_eq!(live.pose(frame), replay.pose(frame));
+            }
+        }
+        let first = cam.at_rest().moved_to(0, poses[2]);
+        assert_eq!(first.pose(0), poses[2]);
+        let other = live.moved_to(5, poses[0]);
+        assert_ne!(other.ray(5, 7, 3), live.ray(5, 7, 3), "control");
+        assert_eq!(other.pose(4), poses[4]);
     }
 
     #[test]

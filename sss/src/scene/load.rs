@@ -94,7 +94,7 @@ pub fn scene_from_toml(text: &str, origin: &Path) -> Result<Scene, InputError> {
         camera,
         materials,
         objects,
-        geometry: Geometry::new(&meshes),
+        geometry: Geometry::new(&meshes).into(),
         lights,
         dropped_degenerate,
     })

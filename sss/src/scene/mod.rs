@@ -15,6 +15,7 @@ mod parse;
 pub mod trajectory;
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 pub use camera::{Camera, FRAMES};
 pub use gbuffer::{GBuffer, GPixel, REPROJECTION_DEPTH_TOLERANCE, REPROJECTION_NORMAL_COSINE};
@@ -39,7 +40,9 @@ pub struct Object {
 
 /// A loaded scene. The file's area lights are not in `geometry` (they neither occlude nor appear
 /// in camera rays) unless the scene file adds objects with matching geometry; emissive objects
-/// are in both: geometry, and one light per triangle.
+/// are in both: geometry, and one light per triangle. A clone shares the geometry (a stream
+/// that moves the camera owns its scene: `engine::Stream`).
+#[derive(Clone)]
 pub struct Scene {
     /// The file stem of the scene file.
     pub name: String,
@@ -49,7 +52,7 @@ pub struct Scene {
     pub camera: Camera,
     pub materials: Vec<Material>,
     pub objects: Vec<Object>,
-    pub geometry: Geometry,
+    pub geometry: Arc<Geometry>,
     pub lights: Lights,
     /// Degenerate triangles (zero area, non-finite) removed from the objects' meshes.
     pub dropped_degenerate: usize,

@@ -45,16 +45,64 @@ bool svgf_offset(uint p, int dx, int dy, out uint q) {
     return x >= 0 && x < int(params.width) && y >= 0 && y < int(params.height);
 }
 
+// stages::reprojected: the previous frame's history through the 2×2 bilinear footprint of
+// Schied et al. 2017 [SVGF §4.1], the kept taps' weights renormalised; false where none is kept.
+bool svgf_reprojected(SvgfPixel pixel, out SvgfHistory r) {
+    r.colour = float[3](0.0, 0.0, 0.0);
+    r.moments = float[2](0.0, 0.0);
+    r.frames = 0u;
+    if (pixel.taps == 0u) {
+        return false;
+    }
+    vec2 position = vec2(pixel.previous[0], pixel.previous[1]);
+    vec2 corner = floor(position);
+    precise float fx = position.x - corner.x;
+    precise float fy = position.y - corner.y;
+    precise float gx = 1.0 - fx;
+    precise float gy = 1.0 - fy;
+    precise float weights[4] = float[4](gx * gy, fx * gy, gx * fy, fx * fy);
+    precise vec3 colour = vec3(0.0);
+    precise float m1 = 0.0;
+    precise float m2 = 0.0;
+    precise float frames = 0.0;
+    precise float sum = 0.0;
+    for (uint t = 0u; t < 4u; t++) {
+        int x = int(corner.x) + int(t & 1u);
+        int y = int(corner.y) + int(t >> 1u);
+        bool inside = x >= 0 && x < int(params.width) && y >= 0 && y < int(params.height);
+        if (((pixel.taps >> t) & 1u) == 0u || !inside) {
+            continue;
+        }
+        SvgfHistory h = history_in[uint(y) * params.width + uint(x)];
+        if (h.frames == 0u) {
+            continue;
+        }
+        precise float w = weights[t];
+        colour = colour + vec3(h.colour[0], h.colour[1], h.colour[2]) * w;
+        m1 = m1 + h.moments[0] * w;
+        m2 = m2 + h.moments[1] * w;
+        frames = frames + float(h.frames) * w;
+        sum = sum + w;
+    }
+    if (!(sum > 0.0)) {
+        return false;
+    }
+    precise vec3 c = colour / vec3(sum);
+    precise float a = m1 / sum;
+    precise float b = m2 / sum;
+    precise float n = floor(frames / sum + 0.5);
+    r.colour = float[3](c.x, c.y, c.z);
+    r.moments = float[2](a, b);
+    r.frames = uint(n);
+    return true;
+}
+
 // stages::temporal.
 SvgfHistory svgf_temporal(uint p, vec3 c) {
     precise float l = svgf_luminance(c);
     SvgfPixel pixel = pixels[p];
-    bool has = pixel.object != NO_PIXEL && pixel.previous < params.width * params.height;
     SvgfHistory h;
-    if (has) {
-        h = history_in[pixel.previous];
-        has = h.frames > 0u;
-    }
+    bool has = pixel.object != NO_PIXEL && svgf_reprojected(pixel, h);
     SvgfHistory out_h;
     if (!has) {
         out_h.colour = float[3](c.x, c.y, c.z);

@@ -181,7 +181,7 @@ twin::contract! {
         pub pad: [u32; 7],
     }
 
-    /// "No pixel" in a denoiser guide's object and previous pixel (`engine::denoise::guide::NONE`).
+    /// "No pixel" in a denoiser guide's object (`engine::denoise::guide::NONE`).
     pub const NO_PIXEL: u32 = u32::MAX;
 
     /// `denoise_svgf`'s stages, one dispatch each (`engine::denoise::svgf`): temporal
@@ -220,15 +220,18 @@ twin::contract! {
     }
 
     /// A pixel's guide on the device (`engine::denoise::svgf`): the shading normal, view
-    /// depth and its screen-space gradient (computed on the host), object and previous pixel
-    /// (`NO_PIXEL`: none).
+    /// depth and its screen-space gradient (computed on the host), object (`NO_PIXEL`: none)
+    /// and the reprojection into the previous frame (`engine::denoise::guide::Reprojection`:
+    /// position in that frame's grid of samples, and the taps of its 2×2 bilinear footprint
+    /// that show the same surface, bits 0–3; 0: no history).
     #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
     pub struct SvgfPixel {
         pub normal: [f32; 3],
         pub depth: f32,
         pub gradient: [f32; 2],
         pub object: u32,
-        pub previous: u32,
+        pub previous: [f32; 2],
+        pub taps: u32,
     }
 
     /// A pixel's temporal history (`engine::denoise::svgf`): the demodulated colour, the first

@@ -5,8 +5,9 @@
 //!
 //! 1. albedo demodulation: each channel divided by the guide's first-hit albedo where it is
 //!    positive ([`demodulate`]), remodulated at the end ([`remodulate`]) [SVGF §4];
-//! 2. temporal accumulation of the colour and the first two luminance moments through
-//!    [`Guide::previous`], the history reset where it is [`NONE`](super::guide::NONE) [SVGF §4.1];
+//! 2. temporal accumulation of the colour and the first two luminance moments, the history read
+//!    through the 2×2 bilinear footprint of [`Guide::previous`] (its taps that show the same
+//!    surface, the weights renormalised over them) and reset where no tap is kept [SVGF §4.1];
 //! 3. the variance `m₂ − m₁²`, estimated spatially over 7×7 while the history is short
 //!    [SVGF §4.2];
 //! 4. five edge-avoiding à-trous iterations (steps 1, 2, 4, 8, 16) whose first output is the
@@ -128,7 +129,7 @@ fn filter_frames(guides: &[Guide], frames: &[Image], params: &Params, every: boo
         let colour = demodulate(guide, frame);
         let mut current: Vec<SvgfHistory> = (0..pixels.len())
             .into_par_iter()
-            .map(|p| stages::temporal(&pixels[p], colour[p], &history, params))
+            .map(|p| stages::temporal(size, &pixels[p], colour[p], &history, params))
             .collect();
         let mut filtered: Vec<Filtered> = (0..pixels.len())
             .into_par_iter()
@@ -184,7 +185,7 @@ pub fn remodulate(guide: &Guide, colour: &[Vec3]) -> Image {
 }
 
 /// The guide's pixels as the stages read them: normal, depth and its screen-space gradient,
-/// object and previous pixel.
+/// object and reprojection footprint.
 pub fn device_pixels(guide: &Guide) -> Vec<SvgfPixel> {
     let size = Size {
         width: guide.width,
@@ -199,7 +200,8 @@ pub fn device_pixels(guide: &Guide) -> Vec<SvgfPixel> {
                 depth_derivative(guide, size, p, 0, 1),
             ],
             object: guide.object[p],
-            previous: guide.previous[p],
+            previous: guide.previous[p].position.to_array(),
+            taps: guide.previous[p].taps,
         })
         .collect()
 }
@@ -220,8 +222,10 @@ fn depth_derivative(guide: &Guide, size: Size, p: usize, dx: i32, dy: i32) -> f3
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::denoise::guide::NONE;
+    use crate::contract::{SvgfHistory, SvgfPixel};
+    use crate::denoise::guide::{NONE, Reprojection};
     use crate::with_threads;
+    use glam::Vec2;
     use sss::integrator::pt::{self, PtSettings};
     use sss::scene::{GBuffer, Scene};
 
@@ -269,6 +273,16 @@ mod tests {
         sum / n as f64
     }
 
+    /// The reprojection of pixel `p` of an image `width` pixels wide onto itself in the previous
+    /// frame: one tap of weight 1.
+    fn onto_itself(width: u32, p: usize) -> Reprojection {
+        let (x, y) = (p % width as usize, p / width as usize);
+        Reprojection {
+            position: Vec2::new(x as f32, y as f32),
+            taps: 1,
+        }
+    }
+
     /// A flat, fully reprojected guide of one object.
     fn flat_guide(frame: u32) -> Guide {
         let n = 16 * 12;
@@ -281,9 +295,9 @@ mod tests {
             depth: vec![2.0; n],
             object: vec![0; n],
             previous: if frame == 0 {
-                vec![NONE; n]
+                vec![Reprojection::NONE; n]
             } else {
-                (0..n as u32).collect()
+                (0..n).map(|p| onto_itself(16, p)).collect()
             },
         }
     }
@@ -312,7 +326,7 @@ mod tests {
         }
     }
 
-    /// Where `previous` is NONE the history starts over: filtering two frames whose second has
+    /// Where `previous` is [`Reprojection::NONE`] the history starts over: filtering two frames whose second has
     /// no reprojection gives the bits of filtering that frame alone. Control: with the
     /// reprojection kept, the first frame changes the result.
     #[test]
@@ -320,7 +334,7 @@ mod tests {
         let scene = bumpy();
         let (guides, frames) = noisy(&scene, 3);
         let mut cut = guides[1].clone();
-        cut.previous.fill(NONE);
+        cut.previous.fill(Reprojection::NONE);
         let params = Params::default();
         let alone = filter(std::slice::from_ref(&cut), &frames[1..2], &params);
         let reset = filter(&[guides[0].clone(), cut], &frames[..2], &params);
@@ -350,9 +364,10 @@ mod tests {
     const CONVERGED_SPP: u32 = 512;
 
     /// On 1-spp path-traced frames of `bumpy` (8 frames) the filtered last frame's MSE against the
-    /// converged one (object pixels) is at most half the noisy frame's (measured: 2.8×). The
-    /// noise is heavy-tailed (2% of the pixels carry 57% of the squared error); the luminance
-    /// weights keep such outliers, as the paper's filter does, which bounds the factor.
+    /// converged one (object pixels) is at most half the noisy frame's (measured: 14.3×; 2.8×
+    /// when the history was read through the nearest pixel). The noise is heavy-tailed (2% of
+    /// the pixels carry 57% of the squared error); the luminance weights keep such outliers, as
+    /// the paper's filter does, which bounds the factor.
     #[test]
     fn the_filter_lowers_the_mse_of_noisy_frames() {
         let scene = bumpy();
@@ -369,37 +384,64 @@ mod tests {
         assert!(after * 2.0 < before, "MSE {before} → {after}");
     }
 
+    /// The mean over the channels of Σ|a − reference| / Σ reference over the object pixels of
+    /// `guide`: the relative deviation of `a` from `reference`.
+    fn relative_deviation(a: &Image, reference: &Image, guide: &Guide) -> f64 {
+        let mut mean = 0.0;
+        for c in 0..3 {
+            let (mut difference, mut total) = (0.0, 0.0);
+            for p in hits(guide) {
+                let (x, y) = (f64::from(a.pixels[p][c]), f64::from(reference.pixels[p][c]));
+                difference += (x - y).abs();
+                total += y;
+            }
+            mean += difference / total / 3.0;
+        }
+        mean
+    }
+
+    /// The guides of frames `0..frames` of `scene` with the nearest-pixel reprojection of temporal
+    /// reuse ([`GBuffer::reproject`]) as a footprint of one tap of weight 1: the history as the
+    /// filter read it before the 2×2 footprint, for comparison.
+    fn nearest_pixel_trajectory(scene: &Scene, frames: u32) -> Vec<Guide> {
+        let mut guides = Guide::trajectory(scene, frames);
+        let mut earlier = GBuffer::render(scene, 0);
+        for guide in guides.iter_mut().skip(1) {
+            let now = GBuffer::render(scene, guide.frame);
+            for (p, hit) in now.pixels.iter().enumerate() {
+                guide.previous[p] = hit
+                    .and_then(|hit| earlier.reproject(&scene.camera, &hit))
+                    .map_or(Reprojection::NONE, |q| onto_itself(guide.width, q as usize));
+            }
+            earlier = now;
+        }
+        guides
+    }
+
     /// A converged image passed through the filter with a history stays near itself: held for 4
-    /// frames of a static camera (`previous` = the same pixel), the mean over the channels of
-    /// Σ|filtered − converged| / Σ converged over the object pixels is below the converged
-    /// image's own noise (the same figure between two independent converged renders, / √2: the
-    /// expected deviation of one render from its mean, which a perfect filter would remove) plus
-    /// 1% (the equivalence margin of the project's unbiasedness tests is ±0.5–2%).
+    /// frames of a static camera (`previous` = the same pixel), the relative deviation
+    /// ([`relative_deviation`]) from the converged image over the object pixels is below the
+    /// converged image's own noise (the same figure between two independent converged renders,
+    /// / √2: the expected deviation of one render from its mean, which a perfect filter would
+    /// remove) plus 1% (the equivalence margin of the project's unbiasedness tests is ±0.5–2%).
     ///
     /// Printed, not asserted: the same figure for the frame alone (no history, so the variance is
     /// the spatial 7×7 estimate, which counts the bump-mapped shading as noise and loosens the
     /// luminance weights: the paper's short-history fallback blurs) and for the moving
-    /// trajectory's own converged frames (nearest-pixel reprojection at 48×36 mixes neighbouring
-    /// surface points).
+    /// trajectory's own converged frames, through the 2×2 footprint and, for comparison, through
+    /// the nearest pixel. Neither reaches the bound at 48×36: at frame 3 the nearest pixel gives
+    /// 3.79% and the footprint 5.70% against 2.15% + 1%. The footprint reads one step of a
+    /// converged frame closer than the nearest pixel
+    /// ([`the_footprint_reads_a_converged_frame_closer_than_the_nearest_pixel`]), but every frame
+    /// resamples the history again and the first à-trous iteration's output is fed back, so its
+    /// blur accumulates along the trajectory (docs/denoising.md, "SVGF").
     #[test]
     fn a_converged_image_is_not_biased() {
         let scene = bumpy();
         let guides = Guide::trajectory(&scene, 4);
         let converged = pt_frame(&scene, 3, CONVERGED_SPP, 11);
         let other = pt_frame(&scene, 3, CONVERGED_SPP, 12);
-        let relative = |a: &Image| {
-            let mut mean = 0.0;
-            for c in 0..3 {
-                let (mut difference, mut total) = (0.0, 0.0);
-                for p in hits(&guides[3]) {
-                    let (x, y) = (f64::from(a.pixels[p][c]), f64::from(converged.pixels[p][c]));
-                    difference += (x - y).abs();
-                    total += y;
-                }
-                mean += difference / total / 3.0;
-            }
-            mean
-        };
+        let relative = |a: &Image| relative_deviation(a, &converged, &guides[3]);
         let noise = relative(&other) / 2f64.sqrt();
         let params = Params::default();
         let alone = relative(&filter(
@@ -408,15 +450,15 @@ mod tests {
             &params,
         ));
         let mut held = guides[3].clone();
-        for (p, previous) in held.previous.iter_mut().enumerate() {
-            *previous = if held.object[p] == NONE {
-                NONE
+        for p in 0..held.len() {
+            held.previous[p] = if held.object[p] == NONE {
+                Reprojection::NONE
             } else {
-                p as u32
+                onto_itself(WIDTH, p)
             };
         }
         let mut first = held.clone();
-        first.previous.fill(NONE);
+        first.previous.fill(Reprojection::NONE);
         let static_guides = [first, held.clone(), held.clone(), held];
         let held_deviation = relative(&filter(
             &static_guides,
@@ -427,9 +469,15 @@ mod tests {
             .map(|f| pt_frame(&scene, f, CONVERGED_SPP, 11))
             .collect();
         let moving = relative(&filter(&guides, &frames, &params));
+        let nearest = relative(&filter(
+            &nearest_pixel_trajectory(&scene, 4),
+            &frames,
+            &params,
+        ));
         eprintln!(
             "converged noise {noise:.4e}; filtered deviation: alone {alone:.4e}, \
-             static camera {held_deviation:.4e}, moving camera {moving:.4e}"
+             static camera {held_deviation:.4e}, moving camera {moving:.4e} \
+             (nearest pixel {nearest:.4e})"
         );
         assert!(
             held_deviation < noise + 0.01,
@@ -446,6 +494,220 @@ mod tests {
             blurred > noise + 0.01,
             "control: {blurred} vs noise {noise}"
         );
+    }
+
+    /// Frame steps of [`the_footprint_reads_a_converged_frame_closer_than_the_nearest_pixel`].
+    const STEPS: u32 = 8;
+
+    /// Over [`STEPS`] steps `f − 1 → f` of `bumpy`'s moving trajectory, the relative error
+    /// Σ|read − converged f| / Σ converged f (channels, object pixels and steps pooled) of frame
+    /// `f − 1`'s converged render read at each pixel's reprojection: first through the nearest
+    /// pixel ([`GBuffer::reproject`]), then through the footprint of [`Guide::previous`] moved by
+    /// each of `offsets` pixels ([`stages::reprojected`]; the taps checked again where it lands),
+    /// over the pixels where every one of them keeps a history.
+    fn read_errors(scene: &Scene, offsets: &[Vec2]) -> (f64, Vec<f64>) {
+        let size = stages::Size {
+            width: WIDTH,
+            height: HEIGHT,
+        };
+        let (mut nearest, mut read, mut total) = (0.0f64, vec![0.0f64; offsets.len()], 0.0f64);
+        for f in 1..=STEPS {
+            let (earlier, now) = (GBuffer::render(scene, f - 1), GBuffer::render(scene, f));
+            let before = pt_frame(scene, f - 1, CONVERGED_SPP, 11);
+            let after = pt_frame(scene, f, CONVERGED_SPP, 11);
+            let history: Vec<SvgfHistory> = before
+                .pixels
+                .iter()
+                .map(|c| SvgfHistory {
+                    colour: c.to_array(),
+                    moments: [0.0; 2],
+                    frames: 1,
+                })
+                .collect();
+            let guide = Guide::new(scene, &now, Some(&earlier));
+            let moved: Vec<Vec<SvgfPixel>> = offsets
+                .iter()
+                .map(|&offset| {
+                    let mut moved = guide.clone();
+                    for (p, hit) in now.pixels.iter().enumerate() {
+                        let (Some(hit), r) = (hit, guide.previous[p]) else {
+                            continue;
+                        };
+                        if r.taps != 0 {
+                            let position = r.position + offset;
+                            moved.previous[p] =
+                                Reprojection::at(&scene.camera, &earlier, hit, position);
+                        }
+                    }
+                    device_pixels(&moved)
+                })
+                .collect();
+            for (p, hit) in now.pixels.iter().enumerate() {
+                let Some(q) = hit.and_then(|hit| earlier.reproject(&scene.camera, &hit)) else {
+                    continue;
+                };
+                let reads: Option<Vec<Vec3>> = moved
+                    .iter()
+                    .map(|pixels| stages::reprojected(size, &pixels[p], &history))
+                    .map(|h| h.map(|h| Vec3::from_array(h.colour)))
+                    .collect();
+                let Some(reads) = reads else { continue };
+                let truth = after.pixels[p];
+                let error = |c: Vec3| f64::from((c - truth).abs().element_sum());
+                nearest += error(before.pixels[q as usize]);
+                for (sum, &c) in read.iter_mut().zip(&reads) {
+                    *sum += error(c);
+                }
+                total += f64::from(truth.element_sum());
+            }
+        }
+        (nearest / total, read.iter().map(|r| r / total).collect())
+    }
+
+    /// The 2×2 bilinear footprint reads the previous frame at a pixel's reprojection closer than
+    /// the nearest pixel does, and closer than itself moved by a quarter pixel along either
+    /// diagonal: its position (the projection, the pixel centre's half and the previous frame's
+    /// jitter) is where the previous frame's samples agree best [SVGF §4.1]. Over [`STEPS`] steps
+    /// of `bumpy`'s moving trajectory (48×36, converged 512-spp renders, seed 11, about 1 000
+    /// object pixels a step) the pooled relative error ([`read_errors`]) through the footprint
+    /// is 0.44 of the nearest pixel's (7.4%), and 0.64–0.68 of it with the quarter-pixel moves.
+    /// A deterministic comparison of fixed renders (their noise, 2% of a pixel, enters every
+    /// error alike), not a test of a hypothesis. Control: the footprint misplaced by half a pixel
+    /// on both axes (1.00 of the nearest pixel's) is not closer than its own quarter-pixel moves
+    /// (the move back toward the reprojection reads 0.64), so the comparison finds a misplaced
+    /// footprint.
+    #[test]
+    fn the_footprint_reads_a_converged_frame_closer_than_the_nearest_pixel() {
+        let scene = bumpy();
+        let quarter = [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)]
+            .map(|(x, y)| Vec2::new(x, y) * 0.25);
+        let misplaced = Vec2::splat(0.5);
+        let mut offsets = vec![Vec2::ZERO, misplaced];
+        offsets.extend(quarter);
+        offsets.extend(quarter.map(|q| misplaced + q));
+        let (nearest, read) = read_errors(&scene, &offsets);
+        let ratios: Vec<f64> = read.iter().map(|r| r / nearest).collect();
+        eprintln!(
+            "relative error through the nearest pixel {nearest:.4e}; over it, through the \
+             footprint {:.3}, moved by a quarter pixel {:.3?}; misplaced by half a pixel {:.3}, \
+             moved from there {:.3?}",
+            ratios[0],
+            &ratios[2..6],
+            ratios[1],
+            &ratios[6..10]
+        );
+        assert!(
+            read[0] < nearest,
+            "footprint {} vs nearest pixel {nearest}",
+            read[0]
+        );
+        for (r, offset) in read[2..6].iter().zip(quarter) {
+            assert!(
+                read[0] < *r,
+                "footprint {} vs moved by {offset}: {r}",
+                read[0]
+            );
+        }
+        assert!(
+            read[6..10].iter().any(|r| *r < read[1]),
+            "control: the misplaced footprint {} vs its moves {:?}",
+            read[1],
+            &read[6..10]
+        );
+    }
+
+    /// `xs`' mean and its two-sided 95% Student-t interval.
+    fn mean_interval(xs: &[f64]) -> (f64, f64, f64) {
+        let s = restir::stats::Summary::from_samples(xs);
+        let half = restir::stats::student_t_quantile(0.975, (s.n - 1) as f64) * s.std_err;
+        (s.mean, s.mean - half, s.mean + half)
+    }
+
+    /// The figures of docs/denoising.md ("SVGF"), measured, not asserted: the 2×2 footprint
+    /// against the nearest pixel (1) on `bumpy`'s moving trajectory of converged 512-spp frames
+    /// (seed 11), the filtered deviation ([`relative_deviation`]) of each of frames 1–15 from its
+    /// own render, with the bound of [`a_converged_image_is_not_biased`] (that frame's noise
+    /// from a second render, seed 12, plus 1%) — mean over the frames with a 95% t interval,
+    /// which treats neighbouring frames as independent though they share their history; (2) on
+    /// 1-spp frames, the MSE ratio noisy / filtered of [`the_filter_lowers_the_mse_of_noisy_frames`]
+    /// over 10 independent seeds (1–10), mean with its 95% t interval.
+    #[test]
+    #[ignore = "a measurement, run by hand"]
+    fn the_reprojection_measured() {
+        let scene = bumpy();
+        let n = 16;
+        let (footprint, nearest) = (
+            Guide::trajectory(&scene, n),
+            nearest_pixel_trajectory(&scene, n),
+        );
+        let converged: Vec<Image> = (0..n)
+            .map(|f| pt_frame(&scene, f, CONVERGED_SPP, 11))
+            .collect();
+        let params = Params::default();
+        let (a, b) = (
+            filter_every(&footprint, &converged, &params),
+            filter_every(&nearest, &converged, &params),
+        );
+        let accumulated = Params {
+            iterations: 0,
+            ..params.clone()
+        };
+        let (c, d) = (
+            filter_every(&footprint, &converged, &accumulated),
+            filter_every(&nearest, &converged, &accumulated),
+        );
+        let (mut through, mut near, mut difference, mut bound) = (vec![], vec![], vec![], vec![]);
+        let (mut through_alone, mut near_alone) = (vec![], vec![]);
+        let (mut rejected, mut rejected_nearest, mut pixels) = (0, 0, 0);
+        for f in 1..n as usize {
+            for p in hits(&footprint[f]) {
+                rejected += usize::from(footprint[f].previous[p].taps == 0);
+                rejected_nearest += usize::from(nearest[f].previous[p].taps == 0);
+                pixels += 1;
+            }
+            through_alone.push(relative_deviation(&c[f], &converged[f], &footprint[f]));
+            near_alone.push(relative_deviation(&d[f], &converged[f], &footprint[f]));
+            let guide = &footprint[f];
+            let other = pt_frame(&scene, f as u32, CONVERGED_SPP, 12);
+            through.push(relative_deviation(&a[f], &converged[f], guide));
+            near.push(relative_deviation(&b[f], &converged[f], guide));
+            difference.push(through[f - 1] - near[f - 1]);
+            bound.push(relative_deviation(&other, &converged[f], guide) / 2f64.sqrt() + 0.01);
+        }
+        let show = |name: &str, xs: &[f64]| {
+            let (m, lo, hi) = mean_interval(xs);
+            eprintln!("{name}: {m:.4} [{lo:.4}, {hi:.4}]");
+        };
+        show("moving camera, footprint", &through);
+        show("moving camera, nearest pixel", &near);
+        show("moving camera, footprint − nearest pixel", &difference);
+        show("bound (noise + 1%)", &bound);
+        eprintln!("per frame, footprint {through:.4?}\nper frame, nearest pixel {near:.4?}");
+        show("temporal accumulation alone, footprint", &through_alone);
+        show("temporal accumulation alone, nearest pixel", &near_alone);
+        eprintln!(
+            "object pixels without history, frames 1–15: footprint {rejected}, nearest pixel \
+             {rejected_nearest} of {pixels}"
+        );
+        let frames_under = |xs: &[f64]| xs.iter().zip(&bound).filter(|(x, b)| x < b).count();
+        eprintln!(
+            "frames under the bound: footprint {}, nearest pixel {} of {}",
+            frames_under(&through),
+            frames_under(&near),
+            bound.len()
+        );
+        let reference = pt_frame(&scene, FRAMES - 1, CONVERGED_SPP, 1000);
+        let nearest = nearest_pixel_trajectory(&scene, FRAMES);
+        let (mut through, mut near) = (vec![], vec![]);
+        for seed in 1..=10 {
+            let (guides, frames) = noisy(&scene, seed);
+            let last = guides.last().unwrap();
+            let before = mse(frames.last().unwrap(), &reference, hits(last));
+            through.push(before / mse(&filter(&guides, &frames, &params), &reference, hits(last)));
+            near.push(before / mse(&filter(&nearest, &frames, &params), &reference, hits(last)));
+        }
+        show("MSE noisy / filtered, footprint", &through);
+        show("MSE noisy / filtered, nearest pixel", &near);
     }
 
     /// Demodulation divides by the albedo where it is positive and remodulation undoes it.

@@ -104,9 +104,10 @@ mod tests {
 
     #[test]
     fn buffer_structs_match_std430() {
-        assert_eq!((size_of::<SvgfPixel>(), align_of::<SvgfPixel>()), (32, 4));
+        assert_eq!((size_of::<SvgfPixel>(), align_of::<SvgfPixel>()), (40, 4));
         assert_eq!(offset_of!(SvgfPixel, gradient), 16);
         assert_eq!(offset_of!(SvgfPixel, previous), 28);
+        assert_eq!(offset_of!(SvgfPixel, taps), 36);
         assert_eq!(size_of::<SvgfHistory>(), 24);
         assert_eq!(offset_of!(SvgfHistory, frames), 20);
         assert_eq!(size_of::<SvgfParams>() as u32, SVGF.push_bytes);

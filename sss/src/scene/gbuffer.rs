@@ -66,12 +66,23 @@ impl GBuffer {
     pub fn reproject(&self, camera: &Camera, x: &GPixel) -> Option<u32> {
         let c = camera.project(self.frame, x.position)?;
         let (qx, qy) = (c.x as u32, c.y as u32);
-        let earlier = self.get(qx, qy)?;
+        self.shows_same_surface(camera, qx, qy, x)
+            .then_some(qy * self.width + qx)
+    }
+
+    /// Whether pixel `(qx, qy)` of this (earlier) frame shows the surface of the primary hit `x`
+    /// of a later frame: the same object at a view distance within
+    /// [`REPROJECTION_DEPTH_TOLERANCE`] of `x`'s distance from this frame's eye, with geometric
+    /// normals at least [`REPROJECTION_NORMAL_COSINE`] aligned; `false` outside the image or on a
+    /// miss. The checks of [`Self::reproject`].
+    pub fn shows_same_surface(&self, camera: &Camera, qx: u32, qy: u32, x: &GPixel) -> bool {
+        let Some(earlier) = self.get(qx, qy) else {
+            return false;
+        };
         let depth = (x.position - camera.eye(self.frame)).length();
-        let same_surface = earlier.object == x.object
+        earlier.object == x.object
             && (earlier.depth - depth).abs() <= REPROJECTION_DEPTH_TOLERANCE * depth
-            && earlier.geometric_normal.dot(x.geometric_normal) >= REPROJECTION_NORMAL_COSINE;
-        same_surface.then_some(qy * self.width + qx)
+            && earlier.geometric_normal.dot(x.geometric_normal) >= REPROJECTION_NORMAL_COSINE
     }
 
     /// The pixel at column `px`, row `py` (`None` outside the image or on a miss).

@@ -4,7 +4,7 @@
 //! per function here, with the same operation order (no fused multiply-add); only `exp` (the
 //! edge-stopping weight) is not bit-identical on a device.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use sss::color::luminance;
 
 use super::Params;
@@ -30,6 +30,11 @@ impl Size {
     pub fn offset(self, p: usize, dx: i32, dy: i32) -> Option<usize> {
         let x = (p % self.width as usize) as i64 + i64::from(dx);
         let y = (p / self.width as usize) as i64 + i64::from(dy);
+        self.at(x, y)
+    }
+
+    /// The pixel `(x, y)`, if inside the image.
+    pub fn at(self, x: i64, y: i64) -> Option<usize> {
         let inside =
             (0..i64::from(self.width)).contains(&x) && (0..i64::from(self.height)).contains(&y);
         inside.then(|| (y * i64::from(self.width) + x) as usize)
@@ -37,21 +42,22 @@ impl Size {
 }
 
 /// Temporal accumulation of pixel `p` with demodulated colour `c` [SVGF §4.1]: an exponential
-/// moving average through the reprojected pixel of `history` (the previous frame's), colour with
-/// `α = max(1/(n + 1), α_c)` for a history of `n` frames, the luminance moments with `α_m`
-/// [SVGF §4.1]; a pixel without history (no previous pixel, [`NONE`] included, or one that had
-/// none) starts over.
+/// moving average with the previous frame's history read at the pixel's reprojection
+/// ([`reprojected`]), colour with `α = max(1/(n + 1), α_c)` for a history of `n` frames, the
+/// luminance moments with `α_m` [SVGF §4.1]; a pixel without history (no hit, or no tap of its
+/// footprint kept) starts over.
 pub fn temporal(
+    size: Size,
     pixel: &SvgfPixel,
     c: Vec3,
     history: &[SvgfHistory],
     params: &Params,
 ) -> SvgfHistory {
     let l = luminance(c);
-    let previous = if pixel.object == NONE || pixel.previous as usize >= history.len() {
+    let previous = if pixel.object == NONE {
         None
     } else {
-        Some(history[pixel.previous as usize]).filter(|h| h.frames > 0)
+        reprojected(size, pixel, history)
     };
     let Some(h) = previous else {
         return SvgfHistory {
@@ -71,6 +77,53 @@ pub fn temporal(
         moments: [m1, m2],
         frames,
     }
+}
+
+/// The previous frame's `history` at `pixel`'s reprojection, read through the 2×2 bilinear
+/// footprint of Schied et al. 2017 [SVGF §4.1]: tap `t`, pixel
+/// `floor(previous) + (t & 1, t >> 1)`, has the bilinear weight of `previous`'s fraction and is
+/// kept where the guide found that it shows the same surface (bit `t` of `taps`) and it has a
+/// history; the colour, the moments and the frames accumulated are the kept taps' means with the
+/// weights renormalised over them (the frames rounded to the nearest integer). `None` where no
+/// tap is kept (their weights sum to 0).
+pub fn reprojected(size: Size, pixel: &SvgfPixel, history: &[SvgfHistory]) -> Option<SvgfHistory> {
+    if pixel.taps == 0 {
+        return None;
+    }
+    let position = Vec2::from_array(pixel.previous);
+    let corner = position.floor();
+    let (fx, fy) = (position.x - corner.x, position.y - corner.y);
+    let weights = [
+        (1.0 - fx) * (1.0 - fy),
+        fx * (1.0 - fy),
+        (1.0 - fx) * fy,
+        fx * fy,
+    ];
+    let (mut colour, mut m1, mut m2, mut frames, mut sum) =
+        (Vec3::ZERO, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
+    for (t, w) in weights.into_iter().enumerate() {
+        let x = corner.x as i64 + (t & 1) as i64;
+        let y = corner.y as i64 + (t >> 1) as i64;
+        let kept = (pixel.taps >> t) & 1 == 1;
+        let Some(h) = size
+            .at(x, y)
+            .filter(|_| kept)
+            .and_then(|q| history.get(q))
+            .filter(|h| h.frames > 0)
+        else {
+            continue;
+        };
+        colour += Vec3::from_array(h.colour) * w;
+        m1 += h.moments[0] * w;
+        m2 += h.moments[1] * w;
+        frames += h.frames as f32 * w;
+        sum += w;
+    }
+    (sum > 0.0).then(|| SvgfHistory {
+        colour: (colour / sum).to_array(),
+        moments: [m1 / sum, m2 / sum],
+        frames: (frames / sum + 0.5).floor() as u32,
+    })
 }
 
 /// `x^n` by binary exponentiation: exact multiplies in a fixed order, so the device gets the
@@ -212,5 +265,74 @@ pub fn atrous(
     Filtered {
         colour: colour / sum,
         variance: variance / (sum * sum),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SIZE: Size = Size {
+        width: 2,
+        height: 2,
+    };
+
+    /// Histories of a 2×2 image: pixel `p` has colour `(p, 2p, 4p)`, moments `(p, p²)` and
+    /// `p + 1` frames (values whose weighted sums below are exact in `f32`).
+    fn history() -> Vec<SvgfHistory> {
+        (0..4)
+            .map(|p| {
+                let v = p as f32;
+                SvgfHistory {
+                    colour: [v, 2.0 * v, 4.0 * v],
+                    moments: [v, v * v],
+                    frames: p + 1,
+                }
+            })
+            .collect()
+    }
+
+    fn pixel(x: f32, y: f32, taps: u32) -> SvgfPixel {
+        SvgfPixel {
+            previous: [x, y],
+            taps,
+            ..SvgfPixel::default()
+        }
+    }
+
+    /// At `(0.25, 0.5)` the taps' bilinear weights are `(3, 1, 3, 1)/8`: with every tap kept the
+    /// read is the weighted mean (frames 2.25, rounded to 2); with taps 0 and 2 kept their
+    /// weights are renormalised to ½ each [SVGF §4.1].
+    #[test]
+    fn the_footprint_blends_its_kept_taps_renormalised() {
+        let h = history();
+        let all = reprojected(SIZE, &pixel(0.25, 0.5, 0b1111), &h).unwrap();
+        let mean = (0.0 * 3.0 + 1.0 + 2.0 * 3.0 + 3.0) / 8.0;
+        assert_eq!(all.colour, [mean, 2.0 * mean, 4.0 * mean]);
+        assert_eq!(all.moments, [mean, (0.0 + 1.0 + 4.0 * 3.0 + 9.0) / 8.0]);
+        assert_eq!(all.frames, 2);
+        let left = reprojected(SIZE, &pixel(0.25, 0.5, 0b0101), &h).unwrap();
+        assert_eq!(left.colour, [1.0, 2.0, 4.0]);
+        assert_eq!(left.moments, [1.0, 2.0]);
+        assert_eq!(left.frames, 2);
+    }
+
+    /// The history is rejected only when no tap with a weight is kept: no tap, only taps of
+    /// weight 0, or only taps without a history. Taps outside the image are never read.
+    #[test]
+    fn the_footprint_rejects_only_when_no_tap_is_kept() {
+        let mut h = history();
+        assert_eq!(reprojected(SIZE, &pixel(0.25, 0.5, 0), &h), None);
+        assert_eq!(reprojected(SIZE, &pixel(0.0, 0.5, 0b1010), &h), None);
+        let edge = reprojected(SIZE, &pixel(1.0, 0.0, 0b1111), &h).unwrap();
+        assert_eq!(edge.colour, [1.0, 2.0, 4.0]);
+        h[1].frames = 0;
+        assert_eq!(reprojected(SIZE, &pixel(1.0, 0.0, 0b1111), &h), None);
+        assert_eq!(
+            reprojected(SIZE, &pixel(-0.5, -0.5, 0b1111), &h)
+                .unwrap()
+                .colour,
+            [0.0; 3]
+        );
     }
 }

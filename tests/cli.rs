@@ -1262,6 +1262,7 @@ fn ablation_runs_small() {
         "| static camera, no jitter | restir:reconnection | static-unjittered | 8×6 |",
         "| 24×18 | restir:reconnection | moving | 24×18 |",
         "| radius unclamped | restir:reconnection/radius=unclamped | moving | 8×6 |",
+        "| reciprocal pairs | restir:reconnection/pairs=reciprocal | moving | 8×6 |",
         "| target mean | restir:reconnection/target=mean | moving | 8×6 |",
         "| target l2 | restir:reconnection/target=l2 | moving | 8×6 |",
     ] {
@@ -1274,7 +1275,7 @@ fn ablation_runs_small() {
     let json: Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
     assert_eq!(json["schema"], "reshift-ablation/2");
-    assert_eq!(json["rows"].as_array().unwrap().len(), 17);
+    assert_eq!(json["rows"].as_array().unwrap().len(), 18);
     for file in [
         "table.md",
         "telemetry.md",
@@ -1295,8 +1296,8 @@ fn ablation_runs_small() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// `experiment ablation --backend vulkan` (8×6, 2 replicas) leaves out the `radius=unclamped`
-/// and `target=<mean|l2>` rows (no Vulkan kernel) and says so, runs the `shade=all` row, and
+/// `experiment ablation --backend vulkan` (8×6, 2 replicas) leaves out the `radius=unclamped`,
+/// `pairs=reciprocal` and `target=<mean|l2>` rows (no Vulkan kernel) and says so, runs the `shade=all` row, and
 /// writes no telemetry (CPU only); without Vulkan it is a one-line error.
 #[test]
 fn ablation_on_the_vulkan_backend_leaves_out_what_it_cannot_run() {
@@ -1313,6 +1314,7 @@ fn ablation_on_the_vulkan_backend_leaves_out_what_it_cannot_run() {
             assert!(!text.contains("shade=all: left out"), "{text}");
             assert!(!text.contains("| radius unclamped |"), "{text}");
             assert!(text.contains("radius=unclamped: left out"), "{text}");
+            assert!(text.contains("pairs=reciprocal: left out"), "{text}");
             assert!(!text.contains("| target mean |"), "{text}");
             assert!(text.contains("target=l2: left out"), "{text}");
             let telemetry = std::fs::read_to_string(out.join("telemetry.md")).unwrap();

@@ -16,6 +16,11 @@
 //! back-shift a neighbour adds. Printed as means over rounds with 95% t intervals (geometric, on
 //! the per-round log ratios, where every round's ratio is positive).
 //!
+//! **Reciprocal pairs.** Every preset also runs with `/pairs=reciprocal` (`engine::reciprocal`:
+//! a pair's two shifts serve both pixels) in the same rounds, and a third table prints both
+//! marginal costs and their ratio, reciprocal / independent, per round (the path-traced sample
+//! cancels), with its geometric 95% t interval.
+//!
 //! Environment: `RESHIFT_BENCH_FRAMES` (1..=16, default 4; frame 0 has no temporal history and
 //! the table averages all frames), `RESHIFT_BENCH_SIZE` (`N` for N×N, or `WxH`; default 512),
 //! `RESHIFT_BENCH_PRESETS` (comma-separated preset names, default all), `RESHIFT_BENCH_SHADE=all`
@@ -28,6 +33,7 @@ mod common;
 use engine::{PassSpec, PixelReservoir, Preset, Run, RunConfig, run, run_pt};
 use restir::stats::student_t_quantile;
 use shifts::SssSample;
+use shifts::preset::Pairs;
 use sss::scene::Scene;
 
 fn env_u32(name: &str, default: u32) -> Result<u32, String> {
@@ -140,14 +146,28 @@ fn main() -> Result<(), String> {
          last round (CPU: the process's CPU time, all threads; wall beside it)",
         rayon::current_num_threads()
     );
-    // Per preset, per round: (pass, marginal) neighbour cost over a path-traced sample.
-    let mut ratios = vec![(Vec::new(), Vec::new()); presets.len()];
+    // Per preset and pairing (independent, reciprocal), per round: (pass, marginal) neighbour
+    // cost over a path-traced sample.
+    let pairings = [Pairs::Independent, Pairs::Reciprocal];
+    let variants: Vec<Preset> = presets
+        .iter()
+        .flat_map(|preset| {
+            pairings.map(|pairs| match pairs {
+                Pairs::Independent => preset.clone(),
+                _ => Preset {
+                    name: format!("{}/pairs={}", preset.name, pairs.name()),
+                    ..preset.clone().with_pairs(pairs)
+                },
+            })
+        })
+        .collect();
+    let mut ratios = vec![(Vec::new(), Vec::new()); variants.len()];
     let mut last = Vec::new();
     for _ in 0..rounds {
         last.clear();
         let pt = run_pt(&scene, 1, &config);
         let pt_sample = cpu_seconds(&pt, |l| l == "pt");
-        for (preset, (pass, marginal)) in presets.iter().zip(&mut ratios) {
+        for (preset, (pass, marginal)) in variants.iter().zip(&mut ratios) {
             let run_preset = |p: &Preset| run(&scene, p, &config).map_err(|e| e.to_string());
             let result = run_preset(preset)?;
             let more = doubled(preset);
@@ -163,7 +183,7 @@ fn main() -> Result<(), String> {
     }
     println!("| method | pass | CPU ms/frame | wall ms/frame |\n|---|---|---:|---:|");
     print_run("pt 1 spp", &last[0]);
-    for (preset, result) in presets.iter().zip(&last[1..]) {
+    for (preset, result) in variants.iter().zip(&last[1..]) {
         print_run(&format!("restir:{}", preset.name), result);
     }
     println!(
@@ -176,13 +196,34 @@ fn main() -> Result<(), String> {
         let ci = ci.map_or("—".into(), |(lo, hi)| format!("[{lo:.3}, {hi:.3}]"));
         format!("{mean:.3} | {ci}")
     };
-    for (preset, (pass, marginal)) in presets.iter().zip(&ratios) {
+    for (preset, (pass, marginal)) in variants.iter().zip(&ratios) {
         println!(
             "| restir:{} | {} | {} | {} |",
             preset.name,
             spatial_neighbours(preset),
             show(pass),
             show(marginal)
+        );
+    }
+    println!(
+        "\nmarginal cost of one spatial neighbour, independent and reciprocal pairs (over one \
+         path-traced sample), and reciprocal / independent per round (geometric mean, 95% t CI)\n\
+         | preset | independent | 95% CI | reciprocal | 95% CI | reciprocal / independent | 95% CI |\n\
+         |---|---:|---|---:|---|---:|---|"
+    );
+    for (preset, pair) in presets.iter().zip(ratios.chunks(pairings.len())) {
+        let (independent, reciprocal) = (&pair[0].1, &pair[1].1);
+        let per_round: Vec<f64> = reciprocal
+            .iter()
+            .zip(independent)
+            .map(|(r, i)| r / i)
+            .collect();
+        println!(
+            "| restir:{} | {} | {} | {} |",
+            preset.name,
+            show(independent),
+            show(reciprocal),
+            show(&per_round)
         );
     }
     println!(

@@ -17,13 +17,14 @@ use sss::scene::{GBuffer, Pose, Scene};
 use restir::resample::ResampleError;
 use restir::reservoir::InvalidCandidate;
 use shifts::PixelReservoir;
-use shifts::preset::{PassSpec, Preset, Shade};
+use shifts::preset::{Pairs, PassSpec, Preset, Shade};
 
 use crate::candidates::{self, ProbeCounts};
 use crate::clock::Stopwatch;
 use crate::diagnostics::{Counters, HybridChoice, Recorder};
 use crate::image::Image;
 use crate::plan::{PassKernel, Plan, Resource, Role, Rotation, Slot, Step};
+use crate::reciprocal::{self, Combine, Exchanged};
 use crate::reuse::{self, PassInput, Previous, Reused, ShiftCounts, StepTelemetry};
 use crate::stream::frame::{Finished, Frame, mean_confidence};
 use crate::{Backend, PipelineError, RunConfig, purpose};
@@ -63,6 +64,24 @@ struct Cell {
     rao_blackwellised: Option<Vec3>,
 }
 
+impl From<Reused> for Cell {
+    fn from(reused: Reused) -> Cell {
+        let Reused {
+            reservoir,
+            shifts,
+            telemetry,
+            rao_blackwellised,
+        } = reused;
+        Cell {
+            reservoir,
+            shifts,
+            telemetry,
+            rao_blackwellised,
+            ..Cell::default()
+        }
+    }
+}
+
 /// A preset's stream on the CPU: its [`Plan`], run step by step frame after frame on three
 /// reservoir vectors that the plan's [`Rotation`] assigns to its slots, and the state the
 /// frames share (the previous frame's G-buffer and reservoirs, the diagnostics).
@@ -94,6 +113,7 @@ impl<'a> CpuStream<'a> {
             target: preset.target,
             width,
             cells: vec![Cell::default(); n],
+            exchanged: Vec::new(),
             rao_blackwellised: vec![None; n],
             reservoirs: std::array::from_fn(|_| vec![PixelReservoir::empty(); n]),
             rotation: Rotation::FIRST,
@@ -180,6 +200,9 @@ struct RunState {
     width: u32,
     /// The output of the running pass per pixel (its reservoir and diagnostics).
     cells: Vec<Cell>,
+    /// What each pixel sent its partners in a reciprocal spatial pass (`engine::reciprocal`),
+    /// one entry per neighbour slot; kept between passes so it is allocated once.
+    exchanged: Vec<Exchanged>,
     /// Per pixel, the Rao-Blackwellised value of this frame's last reuse pass that resampled it
     /// ([`Shade::AllInputs`]; `None` everywhere for [`Shade::Selected`]).
     rao_blackwellised: Vec<Option<Vec3>>,
@@ -252,6 +275,7 @@ impl RunState {
             self.shade,
             self.width,
             cells,
+            &mut self.exchanged,
         )
         .map_err(|e| e.at(frame, step.pass as usize))?;
         if let Some(Resource::Reservoirs(slot)) = step.resource(Role::ReservoirsOut) {
@@ -313,7 +337,8 @@ impl PixelError {
     }
 }
 
-/// One preset pass over every pixel into `cells`.
+/// One preset pass over every pixel into `cells` (`exchanged`: the buffer of a reciprocal
+/// spatial pass's first phase).
 fn run_pass(
     input: &PassInput,
     previous: Option<&Previous>,
@@ -321,10 +346,53 @@ fn run_pass(
     shade: Shade,
     width: u32,
     cells: &mut [Cell],
+    exchanged: &mut Vec<Exchanged>,
 ) -> Result<(), PixelError> {
     let seed = input.seed;
     let collect = input.collect_diagnostics;
     match *spec {
+        PassSpec::Spatial {
+            shift,
+            mis,
+            neighbours,
+            confidence_cap,
+            radius,
+            pairs: Pairs::Reciprocal,
+        } => {
+            let domains = reciprocal::domains(input);
+            let radius = reciprocal::frame_radius(input, &domains, radius);
+            let pairings = reciprocal::pairings(input, radius, neighbours);
+            let slots = pairings.len().max(1);
+            exchanged.resize(cells.len() * slots, Exchanged::Untaken);
+            // Phase 1: every pixel's sample shifted into its partners, rows in parallel.
+            exchanged
+                .par_chunks_mut(width.max(1) as usize * slots)
+                .enumerate()
+                .for_each(|(row, out)| {
+                    for (x, out) in out.chunks_mut(slots).enumerate() {
+                        let pixel = (row * width as usize + x) as u32;
+                        reciprocal::shift_to_partners(
+                            input, &domains, &pairings, shift, pixel, out,
+                        );
+                    }
+                });
+            let pass = Combine {
+                domains: &domains,
+                pairings: &pairings,
+                exchanged: &exchanged[..],
+                shift,
+                mis: mis.scheme(),
+                cap: confidence_cap,
+                shade,
+            };
+            // Phase 2: every pixel resampled from what it sent and received.
+            per_pixel(cells, width, |pixel, cell| {
+                let reused = reciprocal::combine(input, &pass, pixel)
+                    .map_err(|e| PixelError::Resample(pixel, e))?;
+                *cell = Cell::from(reused);
+                Ok(())
+            })
+        }
         PassSpec::Candidates {
             bssrdf_samples,
             shared_light,
@@ -348,19 +416,8 @@ fn run_pass(
         PassSpec::Temporal { .. } | PassSpec::Spatial { .. } => {
             per_pixel(cells, width, |pixel, cell| {
                 if let Some(result) = reuse::pass(input, previous, pixel, spec, shade) {
-                    let Reused {
-                        reservoir,
-                        shifts,
-                        telemetry,
-                        rao_blackwellised,
-                    } = result.map_err(|e| PixelError::Resample(pixel, e))?;
-                    *cell = Cell {
-                        reservoir,
-                        shifts,
-                        telemetry,
-                        rao_blackwellised,
-                        ..Cell::default()
-                    };
+                    let reused = result.map_err(|e| PixelError::Resample(pixel, e))?;
+                    *cell = Cell::from(reused);
                 }
                 Ok(())
             })

@@ -29,6 +29,7 @@ pub mod plan;
 /// streams (probabilistic inversion's γ, the deferred uniform pick) with the top two bits set,
 /// and the path tracer uses `sss::integrator::pt::PURPOSE_PT`.
 pub mod purpose;
+pub mod reciprocal;
 pub mod reuse;
 pub mod scene_lighting;
 pub mod stream;

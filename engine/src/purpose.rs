@@ -13,6 +13,9 @@ twin::contract! {
     pub const NEIGHBOURS: u32 = 0x103;
     /// The path-tracing estimate that shades pixels whose x1 is not translucent.
     pub const OPAQUE: u32 = 0x104;
+    /// A reciprocal spatial pass's pairings (`engine::reciprocal`): per neighbour slot (the
+    /// key's `pixel` is the slot), 3 numbers (offset radius, angle, stripe phase).
+    pub const PAIRS: u32 = 0x105;
     /// The volumetric random walks of a pixel (`methods::random_walk`).
     pub const WALK: u32 = 0x5257_0001;
     /// The light selection at the random walks' exits.

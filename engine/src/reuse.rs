@@ -9,7 +9,7 @@ use glam::{Vec2, Vec3};
 use restir::mis::{MAX_DOMAINS, MisScheme};
 use restir::resample::{Observed, ResampleError, Source, resample_observed};
 use restir::reservoir::{Reservoir, cap_confidence};
-use restir::rng::StreamKey;
+use restir::rng::{Stream, StreamKey};
 use restir::shift::{Domain, Fail, Shift};
 use shifts::{SssDomain, SssSample, Target, resolve_deferred_index};
 use sss::sampling::sample_uniform_disk;
@@ -18,7 +18,7 @@ use sss::scene::{GBuffer, GPixel, Scene};
 use crate::purpose;
 use shifts::PixelReservoir;
 use shifts::ShiftKind;
-use shifts::preset::{PassSpec, RadiusRule, Shade};
+use shifts::preset::{Pairs, PassSpec, RadiusRule, Shade};
 
 /// Reprojection checks of temporal reuse ([`GBuffer::reproject`]).
 pub use sss::scene::{
@@ -116,19 +116,50 @@ pub struct Previous<'a> {
 
 /// A reuse step's shared tail: resample, resolve a deferred index, collect diagnostics, sum the
 /// Rao-Blackwellised value for [`Shade::AllInputs`].
-struct Step<'d, 'a> {
-    input: &'d PassInput<'a>,
-    receiver: SssDomain<'a>,
-    canonical: Reservoir<SssSample>,
-    shift: ShiftKind,
-    mis: &'d dyn MisScheme,
-    shade: Shade,
+pub(crate) struct Step<'d, 'a> {
+    pub(crate) input: &'d PassInput<'a>,
+    pub(crate) receiver: SssDomain<'a>,
+    pub(crate) canonical: Reservoir<SssSample>,
+    pub(crate) shift: ShiftKind,
+    pub(crate) mis: &'d dyn MisScheme,
+    pub(crate) shade: Shade,
 }
 
+/// A step's shift counters and failures by [`Fail`] kind (zero unless diagnostics are collected).
+pub(crate) type Counted = (ShiftCounts, [u32; Fail::ALL.len()]);
+
 impl<'a> Step<'_, 'a> {
-    fn run(
+    pub(crate) fn run(
         &self,
         neighbours: &[(SssDomain<'a>, Reservoir<SssSample>)],
+    ) -> Result<Reused, ResampleError> {
+        let sources: Vec<Source<'_, SssDomain<'a>>> = neighbours
+            .iter()
+            .map(|(domain, reservoir)| Source { domain, reservoir })
+            .collect();
+        self.shift.with_shift(self.receiver.material(), |shift| {
+            let counts = if self.input.collect_diagnostics {
+                self.count_shifts(shift, neighbours)
+            } else {
+                Counted::default()
+            };
+            self.finish(counts, |receiver, rng, observe| {
+                resample_observed(receiver, &sources, shift, self.mis, rng, observe)
+            })
+        })
+    }
+
+    /// The step with its resampling given by `resample(receiver, rng, observe)` (the canonical
+    /// reservoir in the receiver, the selection stream, the observer of the inputs), and the
+    /// shift counters `counts`.
+    pub(crate) fn finish(
+        &self,
+        counts: Counted,
+        resample: impl FnOnce(
+            Source<'_, SssDomain<'a>>,
+            &mut Stream,
+            &mut dyn FnMut(Observed<'_, SssSample>),
+        ) -> Result<Reservoir<SssSample>, ResampleError>,
     ) -> Result<Reused, ResampleError> {
         let receiver = &self.receiver;
         let all_inputs = self.shade == Shade::AllInputs;
@@ -146,10 +177,6 @@ impl<'a> Step<'_, 'a> {
                 telemetry.canonical_mis = Some(o.mis_weight);
             }
         };
-        let sources: Vec<Source<'_, SssDomain<'a>>> = neighbours
-            .iter()
-            .map(|(domain, reservoir)| Source { domain, reservoir })
-            .collect();
         let mut rng = StreamKey::new(
             receiver.pixel(),
             receiver.frame(),
@@ -157,31 +184,17 @@ impl<'a> Step<'_, 'a> {
             purpose::SELECT,
         )
         .stream(self.input.seed);
-        let (out, shifts) = self.shift.with_shift(receiver.material(), |shift| {
-            let mut out = resample_observed(
-                Source {
-                    domain: receiver,
-                    reservoir: &self.canonical,
-                },
-                &sources,
-                shift,
-                self.mis,
-                &mut rng,
-                &mut observe,
-            )?;
-            if self.shift.resolves_deferred_index()
-                && let Some(y) = &mut out.y
-            {
-                resolve_deferred_index(receiver, y);
-            }
-            let counts = if self.input.collect_diagnostics {
-                self.count_shifts(shift, neighbours)
-            } else {
-                (ShiftCounts::default(), [0; Fail::ALL.len()])
-            };
-            Ok::<_, ResampleError>((out, counts))
-        })?;
-        let (shifts, failed_by) = shifts;
+        let canonical = Source {
+            domain: receiver,
+            reservoir: &self.canonical,
+        };
+        let mut out = resample(canonical, &mut rng, &mut observe)?;
+        if self.shift.resolves_deferred_index()
+            && let Some(y) = &mut out.y
+        {
+            resolve_deferred_index(receiver, y);
+        }
+        let (shifts, failed_by) = counts;
         if out.y.is_none() {
             telemetry.selected = None;
         }
@@ -203,7 +216,7 @@ impl<'a> Step<'_, 'a> {
         &self,
         shift: &dyn for<'s> Shift<SssDomain<'s>>,
         neighbours: &[(SssDomain<'a>, Reservoir<SssSample>)],
-    ) -> (ShiftCounts, [u32; Fail::ALL.len()]) {
+    ) -> Counted {
         let canonical_target = self.canonical.y.map_or(0.0, |y| self.receiver.target(&y));
         let mut counts = ShiftCounts::default();
         let mut failed_by = [0; Fail::ALL.len()];
@@ -342,13 +355,14 @@ pub fn spatial(
 }
 
 /// `max_c d_c` of the receiver's material.
-fn max_d(domain: &SssDomain) -> f32 {
+pub(crate) fn max_d(domain: &SssDomain) -> f32 {
     domain.material().d().max_element()
 }
 
 /// The reuse pass `spec` at `pixel`: [`temporal`] or [`spatial`] with the pass's shift, MIS
 /// scheme, neighbours and cap, and the preset's `shade`; `None` for candidate generation, which
-/// is not a reuse pass.
+/// is not a reuse pass, and for a spatial pass with reciprocal pairs, which is not a per-pixel
+/// kernel (`crate::reciprocal`).
 pub fn pass(
     input: &PassInput,
     previous: Option<&Previous>,
@@ -357,7 +371,11 @@ pub fn pass(
     shade: Shade,
 ) -> Option<Result<Reused, ResampleError>> {
     Some(match *spec {
-        PassSpec::Candidates { .. } => return None,
+        PassSpec::Candidates { .. }
+        | PassSpec::Spatial {
+            pairs: Pairs::Reciprocal,
+            ..
+        } => return None,
         PassSpec::Temporal {
             shift,
             mis,
@@ -377,6 +395,7 @@ pub fn pass(
             neighbours,
             confidence_cap,
             radius,
+            pairs: Pairs::Independent,
         } => spatial(
             input,
             pixel,
@@ -397,7 +416,7 @@ pub fn shade(domain: &SssDomain, reservoir: &PixelReservoir) -> Vec3 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::candidates;
     use restir::mis::MisKind;
@@ -409,7 +428,7 @@ mod tests {
     }
 
     /// Canonical reservoirs of every pixel of `gbuffer` (candidates pass 0, shadow-tested).
-    fn canonical(scene: &Scene, gbuffer: &GBuffer, seed: u64) -> Vec<PixelReservoir> {
+    pub(crate) fn canonical(scene: &Scene, gbuffer: &GBuffer, seed: u64) -> Vec<PixelReservoir> {
         let input = PassInput {
             scene,
             gbuffer,

@@ -141,6 +141,8 @@ const CONTROL_BIAS: f64 = 0.03;
 
 /// Per-replica CVs of one preset on one design: rows are regions, columns channels.
 type Cvs = &'static [[f64; 4]];
+/// The most presets a design's `cv` lists.
+const MAX_TESTED: usize = 8;
 
 /// A test scene: its framing, the regions it shows, what was measured of it, and what the tests
 /// compute once per run.
@@ -151,7 +153,7 @@ struct Design {
     regions: &'static [Region],
     /// Per preset, the per-replica coefficient of variation of each region's mean (rows:
     /// `regions`, columns: [`Channel::ALL`]), measured on the CPU with N = 512 (seeds 0..512).
-    cv: [(&'static str, Cvs); 6],
+    cv: &'static [(&'static str, Cvs)],
     /// Bound on the reference's relative standard error in every row (measured: 0.11%
     /// for both designs).
     reference_rel_se: f64,
@@ -168,9 +170,9 @@ struct Design {
     /// 6 of 64 for sequential-exact on bumpy (its re-traced intersection index), none
     /// elsewhere (measured 2026-11-24).
     paired_cv: &'static [(&'static str, f64)],
-    /// The CPU test of each registered preset (in the order of `cv`), run once: its CPU test
-    /// and the CPU part of its Vulkan test's chain read it.
-    outcomes: [OnceLock<BiasOutcome>; 6],
+    /// The CPU test of each preset of `cv` (in its order; at most [`MAX_TESTED`]), run once:
+    /// its CPU test and the CPU part of its Vulkan test's chain read it.
+    outcomes: [OnceLock<BiasOutcome>; MAX_TESTED],
 }
 
 /// Per-replica CVs of `restir:hybrid/channels=rgb` (per-channel reservoirs) on `bumpy`, measured
@@ -185,6 +187,24 @@ const CHANNELS_HALF_SHADOW: Cvs = &[
     [0.048, 0.037, 0.043, 0.037],
     [0.048, 0.039, 0.047, 0.038],
     [0.065, 0.059, 0.077, 0.057],
+];
+
+/// The hybrid with reciprocal neighbour pairs (`engine::reciprocal`), tested on [`BUMPY`].
+const RECIPROCAL_HYBRID: &str = "hybrid/pairs=reciprocal";
+/// The sequential preset (two spatial passes, inversion) with reciprocal pairs in both.
+const RECIPROCAL_SEQUENTIAL: &str = "sequential/pairs=reciprocal";
+/// Per-replica CVs of [`RECIPROCAL_HYBRID`] on `bumpy`, measured by [`measure_cv`] (N = 512;
+/// below the independent hybrid's in every row).
+const RECIPROCAL_HYBRID_BUMPY: Cvs = &[
+    [0.046, 0.031, 0.052, 0.029],
+    [0.053, 0.036, 0.062, 0.034],
+    [0.070, 0.051, 0.077, 0.049],
+];
+/// The same of [`RECIPROCAL_SEQUENTIAL`].
+const RECIPROCAL_SEQUENTIAL_BUMPY: Cvs = &[
+    [0.045, 0.033, 0.058, 0.032],
+    [0.052, 0.038, 0.068, 0.036],
+    [0.066, 0.052, 0.091, 0.048],
 ];
 
 /// `bumpy` from its own eye path, looking at the top of the object through a 8° field of view
@@ -204,7 +224,7 @@ static BUMPY: Design = Design {
         Scene { camera, ..bumpy }
     },
     regions: &[Region::Translucent, Region::Lit, Region::Penumbra],
-    cv: [
+    cv: &[
         (
             "reconnection",
             &[
@@ -246,6 +266,8 @@ static BUMPY: Design = Design {
             ],
         ),
         ("hybrid/channels=rgb", CHANNELS_BUMPY),
+        (RECIPROCAL_HYBRID, RECIPROCAL_HYBRID_BUMPY),
+        (RECIPROCAL_SEQUENTIAL, RECIPROCAL_SEQUENTIAL_BUMPY),
     ],
     reference_rel_se: 0.0012,
     reference_batches: 64,
@@ -259,7 +281,7 @@ static BUMPY: Design = Design {
         ("sequential", 1.2e-6),
         ("sequential-exact", 1.0e-3),
     ],
-    outcomes: [const { OnceLock::new() }; 6],
+    outcomes: [const { OnceLock::new() }; MAX_TESTED],
 };
 
 /// `half-shadow` seen from 0.42 units above the shadow edge x = 0 through a 5° field of view
@@ -279,7 +301,7 @@ static HALF_SHADOW: Design = Design {
         Scene { camera, ..plane }
     },
     regions: &[Region::Translucent, Region::Lit, Region::Shadowed],
-    cv: [
+    cv: &[
         (
             "reconnection",
             &[
@@ -334,7 +356,7 @@ static HALF_SHADOW: Design = Design {
         ("sequential", 1.4e-7),
         ("sequential-exact", 1.4e-7),
     ],
-    outcomes: [const { OnceLock::new() }; 6],
+    outcomes: [const { OnceLock::new() }; MAX_TESTED],
 };
 
 /// reshift's best measured configuration on `bumpy` (the main job's), tested on `ajax`.
@@ -367,7 +389,7 @@ static AJAX: Design = Design {
     },
     regions: &[Region::Translucent, Region::Penumbra],
     // The translucent and penumbra pixels are the same ones here, hence the equal rows.
-    cv: [
+    cv: &[
         (
             "reconnection",
             &[[0.080, 0.056, 0.079, 0.049], [0.080, 0.056, 0.079, 0.049]],
@@ -406,7 +428,7 @@ static AJAX: Design = Design {
         ("sequential-exact", 2.3e-7),
         (BEST, 1.1e-7),
     ],
-    outcomes: [const { OnceLock::new() }; 6],
+    outcomes: [const { OnceLock::new() }; MAX_TESTED],
 };
 
 /// [`AJAX`], where the shared assets are (`../shared/assets/restir-sss`); `None` after saying
@@ -959,7 +981,7 @@ fn power_plan_detects_3pct_in_any_row() {
             plan.alpha,
             100.0 * plan.reference_rel_se,
         );
-        for (preset, _) in &design.cv {
+        for (preset, _) in design.cv {
             let n = design.replicas(preset) as usize;
             let tests = design.planned(preset);
             let level = plan.alpha / tests.len() as f64;
@@ -1051,6 +1073,23 @@ cpu_tests!(
     per_channel_reservoirs_are_equivalent_within_2pct_on_bumpy,
     per_channel_reservoirs_are_equivalent_within_2pct_on_half_shadow
 );
+/// Reciprocal neighbour pairs on `bumpy`, CPU only (the Vulkan backend refuses them).
+#[test]
+fn reciprocal_hybrid_is_equivalent_within_2pct_on_bumpy() {
+    assert_equivalent(&BUMPY, RECIPROCAL_HYBRID);
+}
+
+#[test]
+fn reciprocal_sequential_is_equivalent_within_2pct_on_bumpy() {
+    assert_equivalent(&BUMPY, RECIPROCAL_SEQUENTIAL);
+}
+
+/// The near-δ control of the reciprocal pairs' tests, at the reciprocal hybrid's N: blue × 1.03.
+#[test]
+fn control_reciprocal_blue_3pct_high_is_biased_on_bumpy() {
+    assert_tint_detected(&BUMPY, RECIPROCAL_HYBRID);
+}
+
 vulkan_tests!(
     "reconnection",
     vulkan_reconnection_is_equivalent_within_2pct_on_bumpy,
@@ -1326,7 +1365,7 @@ const CV_MEASURE_N: u32 = 512;
 fn measure_cv() {
     let wanted = std::env::var("RESHIFT_CV_PRESETS").ok();
     for design in measured_designs("measure_cv") {
-        for (name, _) in &design.cv {
+        for (name, _) in design.cv {
             if wanted
                 .as_ref()
                 .is_some_and(|w| !w.split(',').any(|p| p == *name))

@@ -228,7 +228,8 @@ fn gpu_runs_are_deterministic() {
     assert_ne!(bits(&one).0, bits(&other).0, "control: another seed");
 }
 
-/// The unclamped spatial radius and the mean and L2 targets have no Vulkan kernel: the backend
+/// The unclamped spatial radius, reciprocal pairs and the mean and L2 targets have no Vulkan
+/// kernel: the backend
 /// refuses each with one line naming the preset, and the same preset with the clamped radius, the
 /// luminance or a channel target runs (control).
 #[test]
@@ -239,6 +240,7 @@ fn cpu_only_modifiers_are_refused_in_one_line() {
     let scene = scene("bumpy", 16, 12);
     for spec in [
         "hybrid/radius=unclamped",
+        "hybrid/pairs=reciprocal",
         "hybrid/target=mean",
         "hybrid/target=l2",
     ] {
@@ -254,6 +256,7 @@ fn cpu_only_modifiers_are_refused_in_one_line() {
     }
     for control in [
         "hybrid/radius=clamped",
+        "hybrid/pairs=independent",
         "hybrid/target=luminance",
         "hybrid/target=green",
     ] {

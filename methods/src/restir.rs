@@ -1,10 +1,11 @@
-//! `restir:<preset>[/temporal=<shift>][/spatial=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/radius=<clamped|unclamped>][/target=<p̂>][/shade=<selected|all>][/channels=rgb]`:
+//! `restir:<preset>[/temporal=<shift>][/spatial=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/radius=<clamped|unclamped>][/pairs=<independent|reciprocal>][/target=<p̂>][/shade=<selected|all>][/channels=rgb]`:
 //! the ReSTIR SSS frame pipeline with a registered preset [001 §5.1] (DESIGN §6). Every frame of
 //! the trajectory is rendered (temporal reuse) and the last one is kept; `/temporal=<shift>`
 //! swaps the shift of the temporal pass [001 Fig. 10], `/spatial=<shift>` the one shift of the
 //! spatial passes (refused for a preset with several), `/cap=<κ>` sets its confidence cap,
 //! `/spatial-cap=<κ>` caps every spatial neighbour's confidence at κ × the receiver's,
-//! `/neighbours=<n>` sets every spatial pass's neighbour count, `/target=<p̂>` the target function
+//! `/neighbours=<n>` sets every spatial pass's neighbour count, `/pairs=reciprocal` makes every
+//! spatial pass take its neighbours in reciprocal pairs (`Pairs`), `/target=<p̂>` the target function
 //! of every domain (`Target`), `/shade=all` shades with all inputs of the last reuse pass
 //! (`Shade::AllInputs`), `/channels=rgb` runs the preset once per channel with that channel as
 //! `p̂` and the same seed, and keeps each run's channel ([`Channels`], `restir/channels.rs`:
@@ -17,7 +18,7 @@ use engine::{
     Backend, Keep, PassSpec, PipelineError, Preset, RadiusRule, RunConfig, Shade, ShiftKind,
     Stream, Target,
 };
-use shifts::preset::PRESET_NAMES;
+use shifts::preset::{PRESET_NAMES, Pairs};
 use sss::scene::Scene;
 
 use super::estimator::{Entry, Estimator, LastFrame, Method, Trajectory};
@@ -28,7 +29,7 @@ pub use channels::Channels;
 
 pub const ENTRY: Entry = Entry {
     family: "restir",
-    usage: "restir:<preset>[/temporal=<shift>][/spatial=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/radius=<clamped|unclamped>][/target=<luminance|mean|l2|red|green|blue>][/shade=<selected|all>][/channels=rgb]",
+    usage: "restir:<preset>[/temporal=<shift>][/spatial=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/radius=<clamped|unclamped>][/pairs=<independent|reciprocal>][/target=<luminance|mean|l2|red|green|blue>][/shade=<selected|all>][/channels=rgb]",
     about: "ReSTIR SSS with spatiotemporal reuse and the preset's shift mapping [001 §5.1]; \
             `/temporal=<shift>` swaps the temporal pass's shift (001 Fig. 10), \
             `/spatial=<shift>` the spatial passes' one shift (see `reshift shifts`); \
@@ -36,6 +37,7 @@ pub const ENTRY: Entry = Entry {
             `/spatial-cap=<κ>` caps spatial neighbours' confidence (default none); \
             `/neighbours=<n>` sets the spatial passes' neighbour count; \
             `/radius=unclamped` drops the spatial disk's [5, 30] px clamp (floor 1 px; CPU only); \
+            `/pairs=reciprocal` pairs pixels that take each other as spatial neighbours, so each pair's two shifts serve both (ReSTIR PT Enhanced; CPU only); \
             `/target=<mean|l2>` sets p̂ to the channel mean or the L2 norm of f (default luminance; CPU only), \
             `/target=<red|green|blue>` to one channel of f (an estimator of that channel alone); \
             `/shade=all` paints the last reuse pass's Rao-Blackwellised value over all its inputs; \
@@ -76,7 +78,8 @@ pub struct Restir(pub Preset);
 /// `/spatial=<shift>` (the same for the spatial passes' one shift, [`Preset::with_spatial_shift`]),
 /// `/cap=<κ>` (the temporal confidence cap, finite and > 0), `/spatial-cap=<κ>` (every spatial
 /// pass's cap), `/neighbours=<n>` (every spatial pass's count), `/radius=<clamped|unclamped>`
-/// (every spatial pass's [`RadiusRule`]), `/target=<p̂>` (the [`Target`] named `p̂`) and
+/// (every spatial pass's [`RadiusRule`]), `/pairs=<independent|reciprocal>` (every spatial
+/// pass's [`Pairs`]), `/target=<p̂>` (the [`Target`] named `p̂`) and
 /// `/shade=<selected|all>` ([`Shade`]). A modified preset is named `arg`. `/channels=rgb` is
 /// refused: it makes a method of three runs ([`Channels`]), not a preset.
 pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
@@ -101,6 +104,10 @@ pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
                     .map_err(|_| format!("neighbours {value:?} is not a whole number"))?;
                 preset.with_neighbours(count)
             }
+            Some(("pairs", value)) => preset.with_pairs(
+                Pairs::named(value)
+                    .ok_or_else(|| format!("pairs {value:?} is not {}", PAIRS.join(" or ")))?,
+            ),
             Some(("radius", value)) => preset.with_radius(
                 RadiusRule::named(value)
                     .ok_or_else(|| format!("radius {value:?} is not clamped or unclamped"))?,
@@ -140,7 +147,18 @@ pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
 }
 
 /// The modifiers [`preset`] knows, for its error message.
-const MODIFIERS: &str = "temporal=<shift>, spatial=<shift>, cap=<κ>, spatial-cap=<κ>, neighbours=<n>, radius=<clamped|unclamped>, target=<luminance|mean|l2|red|green|blue>, shade=<selected|all>, channels=rgb";
+const MODIFIERS: &str = "temporal=<shift>, spatial=<shift>, cap=<κ>, spatial-cap=<κ>, neighbours=<n>, radius=<clamped|unclamped>, pairs=<independent|reciprocal>, target=<luminance|mean|l2|red|green|blue>, shade=<selected|all>, channels=rgb";
+
+/// The choices `/pairs=` knows ([`Pairs::ALL`]), for its error message.
+const PAIRS: [&str; Pairs::ALL.len()] = {
+    let mut names = [""; Pairs::ALL.len()];
+    let mut i = 0;
+    while i < names.len() {
+        names[i] = Pairs::ALL[i].name();
+        i += 1;
+    }
+    names
+};
 
 /// The targets `/target=` knows, for its error message.
 const TARGETS: &str = "luminance, mean, l2, red, green, blue";
@@ -303,6 +321,19 @@ mod tests {
                 .with_neighbours(8)
                 .passes
         );
+        let paired = preset(Some("sequential/pairs=reciprocal/neighbours=3")).unwrap();
+        assert_eq!(
+            paired.passes,
+            Preset::named("sequential")
+                .unwrap()
+                .with_pairs(Pairs::Reciprocal)
+                .with_neighbours(3)
+                .passes
+        );
+        assert_eq!(
+            preset(Some("hybrid/pairs=independent")).unwrap().passes,
+            Preset::named("hybrid").unwrap().passes
+        );
         let wide = Method::parse("restir:sequential/radius=unclamped").unwrap();
         assert_eq!(wide.name(), "restir:sequential/radius=unclamped");
         assert_eq!(
@@ -353,6 +384,8 @@ mod tests {
             "restir:hybrid/neighbours=99",
             "restir:hybrid/shade=some",
             "restir:hybrid/radius=",
+            "restir:hybrid/pairs=",
+            "restir:hybrid/pairs=mirrored",
             "restir:hybrid/radius=Unclamped",
             "restir:hybrid/target=max",
             "restir:hybrid/channels=rg",

@@ -3,12 +3,13 @@
 //! [001 Alg. 2], streaming with no allocation.
 
 use std::fmt;
+use std::ops::Range;
 
 pub use crate::contract::ResampleCode;
 use crate::mis::{MAX_DOMAINS, MisScheme};
 use crate::reservoir::{InvalidCandidate, Reservoir, Ris};
 use crate::rng::Stream;
-use crate::shift::{CandidateSampler, Domain, Evaluated, Shift};
+use crate::shift::{CandidateSampler, Domain, Evaluated, Fail, Shift};
 
 /// A reservoir together with the domain its sample lives in.
 pub struct Source<'a, D: Domain> {
@@ -193,14 +194,73 @@ where
     }
     // Domain j: the receiver, then the neighbours' (padded with the receiver's).
     let mut domains = [receiver.domain; MAX_DOMAINS];
-    for (d, nb) in domains[1..n].iter_mut().zip(neighbours) {
-        *d = nb.domain;
+    let mut reservoirs = [receiver.reservoir; MAX_DOMAINS];
+    for (j, nb) in neighbours.iter().enumerate() {
+        domains[j + 1] = nb.domain;
+        reservoirs[j + 1] = nb.reservoir;
     }
-    let domain_of = |j: usize| domains[j];
+    let exchange = Shifting { shift, domains };
+    resample_exchanged(receiver, &reservoirs[1..n], &exchange, mis, rng, observe)
+}
+
+/// Where a resampling step takes its shifts from (DESIGN §9): the forward shift of each
+/// neighbour's sample into the receiver, and the back-shifts of a sample in the receiver into
+/// the other domains. [`resample_observed`] evaluates them with a [`Shift`]; a caller that has
+/// them already hands them to [`resample_exchanged`] (reciprocal neighbour pairs: the shift of
+/// `x_p` into `q` is `q`'s forward shift and `p`'s canonical back-shift at once).
+pub trait Exchange<D: Domain> {
+    /// `T_{i→r}(x_i)` with `p̂_r(y_i)` and `p̂_i(x_i)` ([`Shift::shift_with_targets`]), for the
+    /// sample `x` of neighbour `i ≥ 1` (domain `i` of the step).
+    fn forward(&self, i: usize, x: &D::Sample) -> Result<Evaluated<D>, Fail>;
+
+    /// `p̂_{←j}(y)` ([`Shift::target_from`]) for each domain `j` of `js` into `out` (same length),
+    /// where `y` is input `i`'s sample in the receiver (`i = 0`: the canonical sample).
+    fn back(&self, i: usize, y: &D::Sample, js: Range<usize>, out: &mut [f32]);
+}
+
+/// The [`Exchange`] that evaluates every shift with `shift` between `domains` (0: the receiver).
+struct Shifting<'a, 's, D: Domain, T: ?Sized> {
+    shift: &'s T,
+    domains: [&'a D; MAX_DOMAINS],
+}
+
+impl<D: Domain, T: Shift<D> + ?Sized> Exchange<D> for Shifting<'_, '_, D, T> {
+    fn forward(&self, i: usize, x: &D::Sample) -> Result<Evaluated<D>, Fail> {
+        self.shift
+            .shift_with_targets(x, self.domains[i], self.domains[0])
+    }
+
+    fn back(&self, _i: usize, y: &D::Sample, js: Range<usize>, out: &mut [f32]) {
+        self.shift
+            .targets_from(y, self.domains[0], &self.domains[js], out);
+    }
+}
+
+/// The streaming combination of [`resample_observed`] with its shifts from `exchange`:
+/// `neighbours[i − 1]` is the reservoir of domain `i` (its sample `x_i` in its own domain, its
+/// `W_i` and capped `c_i`). Given an exchange whose values equal the shift's, the result is the
+/// one [`resample_observed`] gives, bit for bit (`exchanged_shifts_give_the_same_reservoir`).
+pub fn resample_exchanged<D, M, E>(
+    receiver: Source<'_, D>,
+    neighbours: &[&Reservoir<D::Sample>],
+    exchange: &E,
+    mis: &M,
+    rng: &mut Stream,
+    observe: &mut dyn FnMut(Observed<'_, D::Sample>),
+) -> Result<Reservoir<D::Sample>, ResampleError>
+where
+    D: Domain,
+    M: MisScheme + ?Sized,
+    E: Exchange<D> + ?Sized,
+{
+    let n = neighbours.len() + 1;
+    if n > MAX_DOMAINS {
+        return Err(ResampleError::TooManyDomains(n));
+    }
     let mut confidences = [0.0f32; MAX_DOMAINS];
     confidences[0] = receiver.reservoir.confidence;
     for (c, nb) in confidences[1..n].iter_mut().zip(neighbours) {
-        *c = nb.reservoir.confidence;
+        *c = nb.confidence;
     }
     let confidences = &confidences[..n];
     let mut targets = [0.0f32; MAX_DOMAINS];
@@ -211,7 +271,7 @@ where
         let input = if i == 0 {
             receiver.reservoir
         } else {
-            neighbours[i - 1].reservoir
+            neighbours[i - 1]
         };
         let u = rng.next_f32();
         let wrap = |error| ResampleError::Candidate { source: i, error };
@@ -227,7 +287,7 @@ where
         let (y, jacobian, own_target, target) = if i == 0 {
             (x, 1.0, None, r.target(&x))
         } else {
-            match shift.shift_with_targets(&x, domain_of(i), r) {
+            match exchange.forward(i, &x) {
                 Ok(Evaluated {
                     shifted: s,
                     target,
@@ -261,7 +321,7 @@ where
                 // Every domain but r and i: those before i, then those after it.
                 let (before, after) = (1..i.max(1), (i + 1).max(1)..n);
                 for js in [before, after] {
-                    shift.targets_from(&y, r, &domains[js.clone()], &mut targets[js]);
+                    exchange.back(i, &y, js.clone(), &mut targets[js]);
                 }
             }
             mis.weight(i, targets, confidences)
@@ -439,6 +499,95 @@ mod tests {
             dark.verdict == Verdict::Biased && dark.ci_high < -DELTA,
             "negative control: {dark}"
         );
+    }
+
+    /// The shifts of a step stored beforehand, as reciprocal pairs share them: each neighbour's
+    /// forward shift, and the canonical sample's back-shift into each neighbour.
+    struct Stored {
+        forward: Vec<Result<Evaluated<ToyPixel>, Fail>>,
+        back: Vec<f32>,
+    }
+
+    impl Exchange<ToyPixel> for Stored {
+        fn forward(&self, i: usize, _x: &Point) -> Result<Evaluated<ToyPixel>, Fail> {
+            match &self.forward[i - 1] {
+                Ok(e) => Ok(Evaluated { ..*e }),
+                Err(fail) => Err(*fail),
+            }
+        }
+
+        fn back(&self, i: usize, _y: &Point, js: Range<usize>, out: &mut [f32]) {
+            assert_eq!(
+                i, 0,
+                "a pairwise scheme reads only the canonical sample's back-shifts"
+            );
+            out.copy_from_slice(&self.back[js.start - 1..js.end - 1]);
+        }
+    }
+
+    /// A step whose shifts come from an [`Exchange`] holding the values the shift gives (the
+    /// forward shift of each neighbour's sample, and `p̂_{←j}` of the canonical sample, which
+    /// for a reciprocal pair is the forward shift of the receiver's sample into `j`) selects
+    /// the same sample with the same `W` and `c` as [`resample`], bit for bit, with pairwise and
+    /// defensive pairwise MIS, over 2 000 replicas with three neighbours (one of them failing
+    /// about half its shifts). Control: an exchange whose back-shifts are 1% too large changes
+    /// `W` in some replica.
+    #[test]
+    fn exchanged_shifts_give_the_same_reservoir() {
+        let receiver = pixel([0.3, 0.6]);
+        let others = [pixel([0.35, 0.55]), pixel([0.65, 0.35]), pixel([0.2, 0.7])];
+        for mis in [&Pairwise as &dyn MisScheme, &DefensivePairwise] {
+            let mut control_differs = false;
+            for i in 0..2000u64 {
+                let key = |purpose| StreamKey::new(0, 0, 0, purpose).stream(i);
+                let canonical =
+                    generate_candidates(&receiver, &LinearSampler, 1, &mut key(0)).unwrap();
+                let stored: Vec<Reservoir<Point>> = (others.iter().enumerate())
+                    .map(|(j, d)| {
+                        generate_candidates(d, &LinearSampler, 2, &mut key(1 + j as u32)).unwrap()
+                    })
+                    .collect();
+                let sources: Vec<_> = (others.iter().zip(&stored))
+                    .map(|(d, r)| source(d, r))
+                    .collect();
+                let want = resample(
+                    source(&receiver, &canonical),
+                    &sources,
+                    &Translation,
+                    mis,
+                    &mut key(9),
+                )
+                .unwrap();
+                let forward = (others.iter().zip(&stored))
+                    .map(|(d, r)| match r.y {
+                        Some(x) => Translation.shift_with_targets(&x, d, &receiver),
+                        None => Err(Fail::Rejected),
+                    })
+                    .collect();
+                let back: Vec<f32> = others
+                    .iter()
+                    .map(|d| match canonical.y {
+                        Some(y) => match Translation.shift_with_targets(&y, &receiver, d) {
+                            Ok(e) => e.target * e.shifted.jacobian,
+                            Err(_) => 0.0,
+                        },
+                        None => 0.0,
+                    })
+                    .collect();
+                let refs: Vec<&Reservoir<Point>> = stored.iter().collect();
+                let mut exchange = Stored { forward, back };
+                let run = |exchange: &Stored| {
+                    let receiver = source(&receiver, &canonical);
+                    let mut observe = |_: Observed<'_, Point>| {};
+                    resample_exchanged(receiver, &refs, exchange, mis, &mut key(9), &mut observe)
+                        .unwrap()
+                };
+                assert_eq!(run(&exchange), want, "replica {i}, {}", mis.name());
+                exchange.back.iter_mut().for_each(|t| *t *= 1.01);
+                control_differs |= run(&exchange).ucw != want.ucw;
+            }
+            assert!(control_differs, "control: {}", mis.name());
+        }
     }
 
     /// The Rao-Blackwellised estimate of a step, `Σ_i f(y_i) m_i W_i J_i` from

@@ -30,6 +30,14 @@ pub struct Evaluated<D: Domain> {
     pub source_target: f32,
 }
 
+impl<D: Domain> Clone for Evaluated<D> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<D: Domain> Copy for Evaluated<D> {}
+
 /// A shift mapping `T_{src→dst}`.
 ///
 /// Deterministic given the two domains: a shift that needs randomness draws it from a
@@ -73,6 +81,23 @@ pub trait Shift<D: Domain>: Sync {
             target,
             source_target: src.target(x),
         })
+    }
+
+    /// [`Shift::shift_with_targets`] of one `x` into each of `dsts`, written to `out` (same
+    /// length): a spatial pass with reciprocal neighbour pairs shifts each pixel's sample into
+    /// its partner of every slot, once for both pixels of the pair. A shift that shares work
+    /// between them (locating `x` once, `p̂_src(x)` once) overrides it; the default calls
+    /// `shift_with_targets` for each.
+    fn shifts_with_targets(
+        &self,
+        x: &D::Sample,
+        src: &D,
+        dsts: &[&D],
+        out: &mut [Result<Evaluated<D>, Fail>],
+    ) {
+        for (o, dst) in out.iter_mut().zip(dsts) {
+            *o = self.shift_with_targets(x, src, dst);
+        }
     }
 
     /// `p̂_{←j}(y) = p̂_j(T_{r→j}(y)) · |T'_{r→j}(y)|`, 0 when the back-shift fails

@@ -35,14 +35,59 @@ pub enum PassSpec {
         confidence_cap: f32,
     },
     /// Spatial reuse: `neighbours` pixels drawn uniformly in the disk whose radius `radius`
-    /// gives; each neighbour's confidence capped at `confidence_cap` × the receiver's when given.
+    /// gives, independently per pixel or in reciprocal pairs (`pairs`); each neighbour's
+    /// confidence capped at `confidence_cap` × the receiver's when given.
     Spatial {
         shift: ShiftKind,
         mis: MisKind,
         neighbours: u32,
         confidence_cap: Option<f32>,
         radius: RadiusRule,
+        pairs: Pairs,
     },
+}
+
+/// How a spatial pass chooses its neighbours (`restir:<preset>/pairs=<name>`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Pairs {
+    /// Each pixel draws its own neighbours in its own disk.
+    #[default]
+    Independent,
+    /// Per neighbour slot, one offset for the whole frame pairs every pixel with one partner
+    /// that takes it back (ReSTIR PT Enhanced, Lin, Kettunen, Wyman 2025): the two shifts of a
+    /// pair serve as each pixel's forward shift and the other's MIS back-shift, evaluated once
+    /// (`engine::reciprocal`). Needs a pairwise MIS.
+    Reciprocal,
+}
+
+impl Pairs {
+    /// Every choice, in the order `reshift shifts` lists them.
+    pub const ALL: [Pairs; 2] = [Pairs::Independent, Pairs::Reciprocal];
+
+    /// `independent` or `reciprocal`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Pairs::Independent => "independent",
+            Pairs::Reciprocal => "reciprocal",
+        }
+    }
+
+    /// The choice named `name`.
+    pub fn named(name: &str) -> Option<Pairs> {
+        Pairs::ALL.into_iter().find(|p| p.name() == name)
+    }
+
+    /// One line for `reshift shifts`.
+    pub fn about(self) -> &'static str {
+        match self {
+            Pairs::Independent => {
+                "each pixel draws its neighbours uniformly in its own disk; each neighbour costs a shift and its MIS back-shift"
+            }
+            Pairs::Reciprocal => {
+                "per slot one frame-wide offset pairs pixels that take each other; a pair's two shifts serve both pixels (CPU only; pairwise MIS)"
+            }
+        }
+    }
 }
 
 /// The radius of a spatial pass's neighbour disk (DESIGN §9), from the screen length of
@@ -96,10 +141,14 @@ impl PassSpec {
             PassSpec::Candidates { .. } => "candidates".into(),
             PassSpec::Temporal { shift, .. } => format!("temporal:{}", shift.name()),
             PassSpec::Spatial {
-                shift, neighbours, ..
-            } => {
-                format!("spatial{neighbours}:{}", shift.name())
-            }
+                shift,
+                neighbours,
+                pairs,
+                ..
+            } => match pairs {
+                Pairs::Independent => format!("spatial{neighbours}:{}", shift.name()),
+                Pairs::Reciprocal => format!("spatial{neighbours}-reciprocal:{}", shift.name()),
+            },
         }
     }
 
@@ -189,6 +238,7 @@ fn spatial(shift: ShiftKind, neighbours: u32) -> PassSpec {
         neighbours,
         confidence_cap: None,
         radius: RadiusRule::Clamped,
+        pairs: Pairs::Independent,
     }
 }
 
@@ -324,6 +374,17 @@ impl Preset {
         self
     }
 
+    /// The preset with every spatial pass choosing its neighbours by `choice` (validated by
+    /// [`Preset::validate`]).
+    pub fn with_pairs(mut self, choice: Pairs) -> Preset {
+        for pass in &mut self.passes {
+            if let PassSpec::Spatial { pairs, .. } = pass {
+                *pairs = choice;
+            }
+        }
+        self
+    }
+
     /// Its passes' labels in order, e.g. `candidates → temporal:hybrid → spatial4:hybrid`.
     pub fn describe(&self) -> String {
         let labels: Vec<String> = self.passes.iter().map(PassSpec::label).collect();
@@ -342,7 +403,8 @@ impl Preset {
     }
 
     /// Checks that the preset can run: exactly one candidate pass, first; at least one BSSRDF
-    /// sample; neighbour counts in `1..MAX_DOMAINS`; caps finite and > 0; and no pass replays
+    /// sample; neighbour counts in `1..MAX_DOMAINS`; caps finite and > 0; reciprocal pairs only
+    /// with a pairwise MIS; and no pass replays
     /// stored random numbers that an earlier pass may have left foreign ([`Self::chain_error`]).
     pub fn validate(&self) -> Result<(), PresetError> {
         let err = |pass: usize, reason: String| PresetError {
@@ -374,8 +436,22 @@ impl Preset {
                 PassSpec::Spatial {
                     neighbours,
                     confidence_cap,
+                    mis,
+                    pairs,
                     ..
                 } => {
+                    // A reciprocal pair shares the shifts of its two pixels: a scheme that also
+                    // back-shifts a neighbour's sample into the other neighbours has no pair to
+                    // share them with.
+                    if pairs == Pairs::Reciprocal && mis.scheme().needs_all_targets(1) {
+                        return Err(err(
+                            i,
+                            format!(
+                                "pairs = reciprocal needs a pairwise MIS; {} reads every neighbour's back-shift",
+                                mis.scheme().name()
+                            ),
+                        ));
+                    }
                     if neighbours == 0 || neighbours as usize >= MAX_DOMAINS {
                         return Err(err(
                             i,
@@ -634,6 +710,42 @@ mod tests {
         use ShiftKind::{DelayedReconnection as D, Reconnection as R};
         spatial_only([D, R]).validate().unwrap();
         assert_eq!(spatial_only([R, D]).validate().unwrap_err().pass, 2);
+    }
+
+    /// The choices round-trip their names; `with_pairs` sets every spatial pass's choice and
+    /// labels it; reciprocal pairs validate with (defensive) pairwise MIS and are refused, in one
+    /// line naming the pass, with GBH, whose neighbour weights read back-shifts no pair shares.
+    #[test]
+    fn reciprocal_pairs_need_a_pairwise_mis() {
+        for pairs in Pairs::ALL {
+            assert_eq!(Pairs::named(pairs.name()), Some(pairs));
+        }
+        assert_eq!(Pairs::named("mirrored"), None);
+        let p = Preset::named("sequential")
+            .unwrap()
+            .with_pairs(Pairs::Reciprocal);
+        p.validate().unwrap();
+        assert_eq!(
+            p.describe(),
+            "candidates → temporal:inverting-reconnection-deferred → \
+             spatial2-reciprocal:inverting-reconnection-deferred → spatial2-reciprocal:delayed"
+        );
+        let mut gbh = Preset::named("hybrid")
+            .unwrap()
+            .with_pairs(Pairs::Reciprocal);
+        if let PassSpec::Spatial { mis, .. } = &mut gbh.passes[2] {
+            *mis = MisKind::Gbh;
+        }
+        let e = gbh.validate().unwrap_err();
+        assert_eq!(e.pass, 2);
+        assert!(
+            e.reason.contains("pairwise") && !e.to_string().contains('\n'),
+            "{e}"
+        );
+        if let PassSpec::Spatial { mis, .. } = &mut gbh.passes[2] {
+            *mis = MisKind::Pairwise;
+        }
+        gbh.validate().unwrap();
     }
 
     /// `/spatial=` replaces the one spatial shift of a preset and refuses a preset with several;

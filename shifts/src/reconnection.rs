@@ -80,6 +80,31 @@ impl<'s> Shift<SssDomain<'s>> for Reconnection {
         })
     }
 
+    /// `x` located and `p̂_src(x)` evaluated once for all of `dsts`.
+    fn shifts_with_targets(
+        &self,
+        x: &SssSample,
+        src: &SssDomain<'s>,
+        dsts: &[&SssDomain<'s>],
+        out: &mut [Result<Evaluated<SssDomain<'s>>, Fail>],
+    ) {
+        let Some(located) = src.locate(x) else {
+            out.fill(Err(Fail::Rejected));
+            return;
+        };
+        let source_target = src.target_located(&located, x);
+        for (o, dst) in out.iter_mut().zip(dsts) {
+            *o = reconnect_located(&located, x, dst).map(|target| Evaluated {
+                shifted: Shifted {
+                    y: *x,
+                    jacobian: 1.0,
+                },
+                target,
+                source_target,
+            });
+        }
+    }
+
     /// `y` located once for all of `others` (`J = 1`).
     fn targets_from(
         &self,

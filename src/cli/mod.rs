@@ -15,7 +15,7 @@ use methods::{REGISTRY, restir as restir_method};
 use restir::mis::MisKind;
 use serde_json::{Value, json};
 use shifts::ShiftKind;
-use shifts::preset::Preset;
+use shifts::preset::{Pairs, Preset};
 use sss::scene::Scene;
 
 /// `--json` for the listing commands.
@@ -92,7 +92,7 @@ pub fn methods(args: &ListArgs) {
 }
 
 /// `reshift shifts`: the shift registry (`shifts/src/registry.rs`) with what each shift
-/// declares, and the MIS schemes a pass can name.
+/// declares, the MIS schemes a pass can name, and how a spatial pass pairs its neighbours.
 pub fn shifts(args: &ListArgs) {
     let deferred = |k: &ShiftKind| k.resolves_deferred_index();
     if args.json {
@@ -112,7 +112,11 @@ pub fn shifts(args: &ListArgs) {
             .iter()
             .map(|m| json!({ "name": m.scheme().name(), "unbiased_when_supports_differ": m.scheme().bias().is_unbiased_when_supports_differ() }))
             .collect();
-        print_json(json!({ "shifts": shifts, "mis": mis }));
+        let pairs: Vec<_> = Pairs::ALL
+            .iter()
+            .map(|p| json!({ "name": p.name(), "description": p.about() }))
+            .collect();
+        print_json(json!({ "shifts": shifts, "mis": mis, "neighbour_pairs": pairs }));
     } else {
         for k in ShiftKind::ALL {
             println!("{}\n    {}", k.name(), k.about());

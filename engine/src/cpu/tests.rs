@@ -25,8 +25,8 @@ fn bits(run: &Run) -> (Vec<u32>, Vec<u8>) {
 }
 
 /// Same seed → bit-identical frames and final reservoirs with 1 and 2 threads, for a preset
-/// with every pass kind (sequential, deferred index), the hybrid and the hybrid with
-/// Rao-Blackwellised shading, diagnostics on.
+/// with every pass kind (sequential, deferred index), the hybrid, the hybrid with
+/// Rao-Blackwellised shading and the sequential preset with reciprocal pairs, diagnostics on.
 /// Control: another seed changes the output, so the comparison can see a difference.
 #[test]
 fn output_is_bit_identical_for_any_thread_count() {
@@ -45,6 +45,9 @@ fn output_is_bit_identical_for_any_thread_count() {
         Preset::named("sequential").unwrap(),
         Preset::named("hybrid").unwrap(),
         rao_blackwellised,
+        Preset::named("sequential")
+            .unwrap()
+            .with_pairs(shifts::preset::Pairs::Reciprocal),
     ];
     for preset in presets {
         let name = &preset.name;

@@ -67,6 +67,7 @@ mod tests {
             neighbours: 4,
             confidence_cap: None,
             radius: shifts::preset::RadiusRule::Clamped,
+            pairs: shifts::preset::Pairs::Independent,
         };
         let p = PassParams::new(2, Some(&spatial), true);
         assert_eq!((p.pass, p.shift, p.mis, p.neighbours), (2, 3, 2, 4));

@@ -13,6 +13,7 @@ use super::shaders::Shader;
 use crate::plan::Plan;
 use crate::stream::frame::{Finished, Frame};
 use crate::{PassSpec, PipelineError, Preset, RadiusRule, RunConfig};
+use shifts::preset::Pairs;
 
 /// The device side of an `engine::Stream`.
 pub struct VulkanStream<'a> {
@@ -41,7 +42,9 @@ impl<'a> VulkanStream<'a> {
     /// The stream of `preset` (validated by the caller) on `scene`: its kernels built, the
     /// scene uploaded and the frame buffers allocated. The target must have a kernel
     /// ([`shifts::Target::has_kernel`]) and the spatial kernel clamps its radius
-    /// ([`RadiusRule::Clamped`]): any other choice is a one-line configuration error.
+    /// ([`RadiusRule::Clamped`]) with independent neighbours (reciprocal pairs,
+    /// `crate::reciprocal`, have no kernel yet): any other choice is a one-line configuration
+    /// error.
     pub fn new(
         mut renderer: impl DerefMut<Target = Renderer> + 'a,
         scene: &'a Scene,
@@ -93,6 +96,17 @@ impl<'a> VulkanStream<'a> {
         ) {
             return Err(PipelineError::Config(format!(
                 "preset `{}`: {} with a non-clamped radius has no Vulkan kernel; use the CPU backend",
+                preset.name,
+                pass.label()
+            )));
+        }
+        if let Some(pass) = preset
+            .passes
+            .iter()
+            .find(|p| matches!(p, PassSpec::Spatial { pairs, .. } if *pairs != Pairs::Independent))
+        {
+            return Err(PipelineError::Config(format!(
+                "preset `{}`: {} (reciprocal pairs) has no Vulkan kernel; use the CPU backend",
                 preset.name,
                 pass.label()
             )));

@@ -6,7 +6,12 @@ use sss::scene::Scene;
 pub const RESOLUTION_FACTORS: [u32; 2] = [2, 3];
 
 /// Modifiers without a Vulkan kernel: their rows run on the CPU backend only.
-pub const CPU_ONLY: [&str; 3] = ["/radius=unclamped", "/target=mean", "/target=l2"];
+pub const CPU_ONLY: [&str; 4] = [
+    "/radius=unclamped",
+    "/pairs=reciprocal",
+    "/target=mean",
+    "/target=l2",
+];
 
 /// How the camera moves over the trajectory.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -82,6 +87,7 @@ pub fn variations(base: &str, resolution: (u32, u32)) -> Vec<Variation> {
         here("neighbours 2", "/neighbours=2"),
         here("neighbours 8", "/neighbours=8"),
         here("radius unclamped", "/radius=unclamped"),
+        here("reciprocal pairs", "/pairs=reciprocal"),
         here("target mean", "/target=mean"),
         here("target l2", "/target=l2"),
         here("shade=all", "/shade=all"),
@@ -128,6 +134,7 @@ mod tests {
             "neighbours 2",
             "neighbours 8",
             "radius unclamped",
+            "reciprocal pairs",
             "target mean",
             "target l2",
             "shade=all",

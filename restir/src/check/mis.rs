@@ -3,7 +3,7 @@
 use super::{CheckName, CheckReport, PASS_CHECK};
 use crate::mis::{Bias, MAX_DOMAINS, MisScheme};
 use crate::rng::StreamKey;
-use crate::shift::{CandidateSampler, Domain, Shift};
+use crate::shift::{CandidateSampler, Domain, Evaluated, Fail, Shift};
 
 /// A receiver, the domains it reuses from, their confidences (`confidences[0]` = receiver's),
 /// and the points of the receiver to test, drawn by `sampler`.
@@ -25,7 +25,10 @@ pub struct MisCase<'a, D: Domain> {
 ///     [`Shift::targets_from`] with [`Shift::target_from`] per domain, and
 ///     [`Shift::shift_with_targets`] with [`Shift::shift_supported`], `p̂_j(T(y))` and
 ///     `p̂_r(y)` wherever the shift succeeds (the targets resampling reads are what the MIS
-///     weights above were computed from).
+///     weights above were computed from); and [`Shift::shifts_with_targets`] into all the
+///     other domains with `shift_with_targets` into each, whose `p̂_j(T(y)) · J` is
+///     [`Shift::target_from`]: a reciprocal pair uses one shift as the partner's forward shift
+///     and as its own MIS back-shift.
 pub fn partition_of_unity<D, T, M>(
     shift: &T,
     mis: &M,
@@ -67,6 +70,9 @@ where
         tested += 1;
         let mut failed = [false; MAX_DOMAINS];
         shift.targets_from(&y, case.receiver, &case.others, &mut targets[1..n]);
+        let mut batched: [Result<Evaluated<D>, Fail>; MAX_DOMAINS] =
+            [Err(Fail::Rejected); MAX_DOMAINS];
+        shift.shifts_with_targets(&y, case.receiver, &case.others, &mut batched[..n - 1]);
         for (j, other) in case.others.iter().enumerate() {
             let one = shift.target_from(&y, case.receiver, other);
             failed[j + 1] = shift.shift(&y, case.receiver, other).is_err();
@@ -79,10 +85,18 @@ where
                 .ok()
                 .map(|e| (e.shifted.jacobian, e.target, e.source_target));
             let same = |a: f32, b: f32| a.to_bits() == b.to_bits();
+            let from_batch = batched[j]
+                .as_ref()
+                .ok()
+                .map(|e| (e.shifted.jacobian, e.target, e.source_target));
+            let paired = shortcut.map_or(0.0, |(jacobian, target, _)| target * jacobian);
             let agrees = same(one, targets[j + 1])
-                && match (forward, shortcut) {
-                    (Some(a), Some(b)) => same(a.0, b.0) && same(a.1, b.1) && same(a.2, b.2),
-                    (None, None) => true,
+                && same(one, paired)
+                && match (forward, shortcut, from_batch) {
+                    (Some(a), Some(b), Some(c)) => [(a, b), (b, c)]
+                        .iter()
+                        .all(|(a, b)| same(a.0, b.0) && same(a.1, b.1) && same(a.2, b.2)),
+                    (None, None, None) => true,
                     _ => false,
                 };
             if !agrees {

@@ -216,6 +216,22 @@ fn finish(mut child: Child) -> Output {
     child.wait_with_output().expect("output")
 }
 
+/// `reshift view` on a fresh Xvfb display running `script` and recording into `record`; it
+/// must exit 0.
+fn record_script(script: &Path, record: &Path) {
+    let xvfb = Xvfb::start();
+    let o = finish(viewer(
+        &xvfb.display,
+        &[
+            "--script",
+            script.to_str().unwrap(),
+            "--record",
+            record.to_str().unwrap(),
+        ],
+    ));
+    assert!(o.status.success(), "exit {:?}\n{}", o.status, stderr(&o));
+}
+
 /// The rendered part of a screenshot (the image at the top-left corner, `SCALE` times), as RGB.
 fn rendered_part(path: &Path) -> Vec<[u8; 3]> {
     let shot = image::open(path).expect("a PNG screenshot").to_rgb8();
@@ -270,17 +286,7 @@ fn a_scripted_session_switches_the_preset_moves_the_camera_and_records() {
     )
     .unwrap();
     let record = dir.join("record");
-    let xvfb = Xvfb::start();
-    let o = finish(viewer(
-        &xvfb.display,
-        &[
-            "--script",
-            script.to_str().unwrap(),
-            "--record",
-            record.to_str().unwrap(),
-        ],
-    ));
-    assert!(o.status.success(), "exit {:?}\n{}", o.status, stderr(&o));
+    record_script(&script, &record);
     let [start, rest, preset, moved] =
         ["start", "rest", "preset", "moved"].map(|n| rendered_part(&shot(n)));
     for (part, what) in [(&start, "start"), (&preset, "preset"), (&moved, "moved")] {
@@ -413,17 +419,7 @@ fn an_orbiting_camera_carries_temporal_history() {
     text += "close\n";
     std::fs::write(&script, text).unwrap();
     let record = dir.join("record");
-    let xvfb = Xvfb::start();
-    let o = finish(viewer(
-        &xvfb.display,
-        &[
-            "--script",
-            script.to_str().unwrap(),
-            "--record",
-            record.to_str().unwrap(),
-        ],
-    ));
-    assert!(o.status.success(), "exit {:?}\n{}", o.status, stderr(&o));
+    record_script(&script, &record);
     let frames = recorded_frames(&record);
     eprintln!("{frames:?}");
     let (flight, restarts) = frames.split_at(STEPS + 1);

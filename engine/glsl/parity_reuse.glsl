@@ -2,8 +2,9 @@
 // Function-level parity kernel of the reuse GLSL (engine/tests/vulkan_reuse.rs): mode 0
 // evaluates MIS weights (restir/glsl/mis.glsl), mode 1 streams candidates through a reservoir
 // (restir/glsl/reservoir.glsl), mode 2 shifts a pixel's reservoir sample into another pixel
-// (shifts/glsl/shift.glsl). Bindings: 0-8 the scene, 9 GPixel, 10 PixelReservoir (read by mode
-// 2 only), 11 the cases, 12 the results.
+// (shifts/glsl/shift.glsl), mode 3 computes a reciprocal pass's frame radius per case (its
+// pass; engine/glsl/include/frame_radius.glsl). Bindings: 0-8 the scene, 9 GPixel (modes 2 and
+// 3), 10 PixelReservoir (read by mode 2 only), 11 the cases, 12 the results.
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #define SCENE_BINDING 0
 #include "scene.glsl"
@@ -71,6 +72,11 @@ layout(std430, binding = 10) readonly buffer Reservoirs { PixelReservoir reservo
 layout(std430, binding = 11) readonly buffer ShiftCases { ShiftCase shift_cases[]; };
 layout(std430, binding = 12) writeonly buffer ShiftResults { ShiftResult shift_results[]; };
 
+layout(std430, binding = 11) readonly buffer RadiusCases { uint radius_passes[]; };
+layout(std430, binding = 12) writeonly buffer RadiusResults { float radius_results[]; };
+
+#include "include/frame_radius.glsl"
+
 layout(push_constant) uniform Params {
     uint mode;
     uint count;
@@ -87,6 +93,10 @@ void main() {
         MisCase m = mis_cases[c];
         float w = mis_weight(m.kind, m.i, m.targets, m.confidences, m.n);
         mis_results[c] = vec2(w, mis_needs_all_targets(m.kind, m.i) ? 1.0 : 0.0);
+        return;
+    }
+    if (params.mode == 3u) {
+        radius_results[c] = reciprocal_frame_radius(radius_passes[c]);
         return;
     }
     if (params.mode == 2u) {

@@ -8,6 +8,7 @@
 use bytemuck::{Pod, Zeroable};
 use engine::PixelReservoir;
 use engine::candidates;
+use engine::reciprocal;
 use engine::reuse::{self, PassInput, Previous, Reused};
 use engine::vulkan::testing::{Tally, kernel_or_skip, rel_error, scaled_error};
 use engine::vulkan::{
@@ -22,7 +23,7 @@ use restir::shift::Domain;
 use shifts::ShiftKind;
 use shifts::SssSample;
 use shifts::Target;
-use shifts::preset::{PassSpec, Preset, Shade, TEMPORAL_CAP};
+use shifts::preset::{PassSpec, Preset, RadiusRule, Shade, TEMPORAL_CAP};
 use sss::scene::{GBuffer, Scene};
 
 /// `parity_reuse.glsl`: bindings 0–10 scene and pass inputs of the shift modes, 11 cases,
@@ -666,6 +667,77 @@ struct PassCase {
     spec: PassSpec,
     /// The pass's index in its preset.
     pass: u32,
+}
+
+/// The frame radius of a reciprocal spatial pass (`engine::reciprocal::frame_radius` with the
+/// clamped rule; GLSL twin `engine/glsl/include/frame_radius.glsl`) on both scenes at 192×192
+/// (at [`SIZE`] every radius clamps to 5 px), frames 0 and 5, passes 1 and 2: bit-identical. Negative controls: the mean accumulated in f32, and the
+/// mean over the translucent pixels of the frame before (another camera pose), differ from it.
+#[test]
+fn frame_radius_is_bit_identical() {
+    let Some((mut context, kernel)) = kernel_or_skip("frame radius parity", PARITY_REUSE) else {
+        return;
+    };
+    let placeholder = Buffer::zeroed(&context, 16).unwrap();
+    for name in SCENES {
+        let mut scene = Scene::builtin(name).unwrap();
+        scene.camera = scene.camera.with_resolution(192, 192);
+        let gpu_scene = GpuScene::upload(&context, &scene).unwrap();
+        let mut before = None;
+        for frame in [0u32, 5] {
+            let gbuffer = GBuffer::render(&scene, frame);
+            let passes = [1u32, 2];
+            let cpu: Vec<f32> = passes
+                .iter()
+                .map(|&pass| {
+                    let input = pass_input(&scene, &gbuffer, &[], pass, SEED);
+                    let domains = reciprocal::domains(&input);
+                    reciprocal::frame_radius(&input, &domains, RadiusRule::Clamped)
+                })
+                .collect();
+            let frame_buffer = FrameParams::new(&scene, frame, None, SEED)
+                .buffer(&context)
+                .unwrap();
+            let pixels = Buffer::from_slice(&context, &gpu_pixels(&gbuffer)).unwrap();
+            let mut inputs: Vec<&Buffer> = gpu_scene.buffers().to_vec();
+            inputs.extend([&frame_buffer, &pixels, &placeholder]);
+            let gpu: Vec<f32> = run_parity(&mut context, &kernel, &inputs, 3, &passes);
+            let bits = |v: &[f32]| v.iter().map(|r| r.to_bits()).collect::<Vec<_>>();
+            assert_eq!(
+                bits(&gpu),
+                bits(&cpu),
+                "{name}, frame {frame}: {gpu:?} vs {cpu:?}"
+            );
+            let input = pass_input(&scene, &gbuffer, &[], 1, SEED);
+            let radii: Vec<f32> = reciprocal::domains(&input)
+                .iter()
+                .flatten()
+                .map(|d| {
+                    let x1 = d.x1().position;
+                    let max_d = d.material().d().max_element();
+                    RadiusRule::Clamped.radius_px(&scene.camera, frame, x1, max_d)
+                })
+                .collect();
+            let single = radii.iter().sum::<f32>() / radii.len() as f32;
+            assert_ne!(
+                single.to_bits(),
+                gpu[0].to_bits(),
+                "{name}: an f32 sum matched"
+            );
+            if let Some(previous) = before.replace(gpu[0]) {
+                assert_ne!(previous, gpu[0], "{name}: another frame's radius matched");
+            }
+            let (low, high) = radii
+                .iter()
+                .fold((f32::MAX, f32::MIN), |(l, h), &r| (l.min(r), h.max(r)));
+            eprintln!(
+                "frame radius parity, {name}, frame {frame}: {} translucent pixels, radii \
+                 {low}–{high} px, mean {} px (f32 sum: {single})",
+                radii.len(),
+                gpu[0]
+            );
+        }
+    }
 }
 
 /// Paper 001's temporal confidence cap, run besides the presets' default

@@ -2,8 +2,10 @@
 // Function-level parity kernel of the reuse GLSL (engine/tests/vulkan_reuse.rs): mode 0
 // evaluates MIS weights (restir/glsl/mis.glsl), mode 1 streams candidates through a reservoir
 // (restir/glsl/reservoir.glsl), mode 2 shifts a pixel's reservoir sample into another pixel
-// (shifts/glsl/shift.glsl). Bindings: 0-8 the scene, 9 GPixel, 10 PixelReservoir (read by mode
-// 2 only), 11 the cases, 12 the results.
+// (shifts/glsl/shift.glsl), mode 3 computes a reciprocal pass's frame radius per case (its
+// pass; engine/glsl/include/frame_radius.glsl), mode 4 what a pixel sends its partner of one
+// slot of a reciprocal pass (engine/glsl/include/exchange.glsl). Bindings: 0-8 the scene, 9
+// GPixel (modes 2-4), 10 PixelReservoir (modes 2 and 4), 11 the cases, 12 the results.
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #define SCENE_BINDING 0
 #include "scene.glsl"
@@ -71,6 +73,38 @@ layout(std430, binding = 10) readonly buffer Reservoirs { PixelReservoir reservo
 layout(std430, binding = 11) readonly buffer ShiftCases { ShiftCase shift_cases[]; };
 layout(std430, binding = 12) writeonly buffer ShiftResults { ShiftResult shift_results[]; };
 
+layout(std430, binding = 11) readonly buffer RadiusCases { uint radius_passes[]; };
+layout(std430, binding = 12) writeonly buffer RadiusResults { float radius_results[]; };
+
+#include "include/frame_radius.glsl"
+#include "include/reciprocal.glsl"
+#include "include/exchange.glsl"
+
+// Mode 4: slot `slot` of pass `pass` (pairings in the disk of `radius`) at pixel `pixel`, with
+// shift kind `kind`.
+struct ExchangeCase {
+    uint pixel;
+    uint slot;
+    uint pass;
+    uint kind;
+    float radius;
+    uint pad0;
+    uint pad1;
+    uint pad2;
+};
+
+// exchange_send's status and values; status = 255 when the pixel has no domain.
+struct ExchangeResult {
+    Sent sent;
+    uint status;
+    uint pad0;
+    uint pad1;
+    uint pad2;
+};
+
+layout(std430, binding = 11) readonly buffer ExchangeCases { ExchangeCase exchange_cases[]; };
+layout(std430, binding = 12) writeonly buffer ExchangeResults { ExchangeResult exchange_results[]; };
+
 layout(push_constant) uniform Params {
     uint mode;
     uint count;
@@ -87,6 +121,34 @@ void main() {
         MisCase m = mis_cases[c];
         float w = mis_weight(m.kind, m.i, m.targets, m.confidences, m.n);
         mis_results[c] = vec2(w, mis_needs_all_targets(m.kind, m.i) ? 1.0 : 0.0);
+        return;
+    }
+    if (params.mode == 3u) {
+        radius_results[c] = reciprocal_frame_radius(radius_passes[c]);
+        return;
+    }
+    if (params.mode == 4u) {
+        ExchangeCase ec = exchange_cases[c];
+        ExchangeResult r;
+        r.status = 255u;
+        r.sent.y = reservoir_empty().y;
+        r.sent.jacobian = 0.0;
+        r.sent.target = 0.0;
+        r.sent.source_target = 0.0;
+        r.pad0 = 0u;
+        r.pad1 = 0u;
+        r.pad2 = 0u;
+        uint64_t seed = scene_seed();
+        uint frame = frame_params.frame;
+        GPixel g = gpixels[ec.pixel];
+        SssDomain source;
+        if (domain_new(g, ec.pixel, frame, ec.pass, seed, source)) {
+            Pairing pairing;
+            bool paired = pairing_draw(ec.radius, ec.slot, frame, ec.pass, seed, pairing);
+            r.status = exchange_send(source, g.object, reservoirs[ec.pixel], paired, pairing,
+                                     ec.kind, r.sent);
+        }
+        exchange_results[c] = r;
         return;
     }
     if (params.mode == 2u) {

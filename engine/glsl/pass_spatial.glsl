@@ -16,25 +16,13 @@
 #include "scene.glsl"
 #include "resample.glsl"
 #include "loop_budget.glsl"
+#include "sampling.glsl"
 
 layout(local_size_x = 64) in;
 
 #include "contract/pass_spatial_bindings.glsl"
 
 #include "contract/pass_params.glsl"
-
-// std::f32::consts::TAU as an f32.
-const float REUSE_TAU = 6.28318548202514648;
-
-// sss::sampling::sample_uniform_disk: r = R sqrt(u1), phi = 2 pi u2 (density 1 / (pi R^2)).
-vec2 reuse_sample_disk(float radius, float u_radius, float u_angle) {
-    precise float r = radius * sqrt(u_radius);
-    precise float phi = REUSE_TAU * u_angle;
-    float c = cos(phi);
-    float s = sin(phi);
-    precise vec2 p = vec2(r * c, r * s);
-    return p;
-}
 
 void main() {
     uint pixel = gl_GlobalInvocationID.x;
@@ -64,7 +52,7 @@ void main() {
     for (uint k = 0u; k < params.neighbours; k++) {
         float u_radius = stream_next_f32(rng);
         float u_angle = stream_next_f32(rng);
-        precise vec2 qf = centre + reuse_sample_disk(radius, u_radius, u_angle);
+        precise vec2 qf = centre + sampling_uniform_disk(radius, u_radius, u_angle);
         if (!(qf.x >= 0.0 && qf.y >= 0.0 && qf.x < float(width) && qf.y < float(height))) {
             continue;
         }

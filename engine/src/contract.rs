@@ -26,6 +26,17 @@ twin::contract! {
         Translucent,
     }
 
+    /// What a pixel sent its partner of one slot of a reciprocal spatial pass
+    /// (`engine::reciprocal::Exchanged`; `engine/glsl/include/exchange.glsl`). A failed shift's
+    /// status carries its `SHIFT_FAIL_*` code in bits 8–15.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub enum ExchangeStatus in EXCHANGE {
+        Untaken,
+        Unshifted,
+        Sent,
+        Failed,
+    }
+
     /// `GpuLight::kind`.
     #[derive(Clone, Copy, Debug, PartialEq, Eq)]
     pub enum LightKind in LIGHT {

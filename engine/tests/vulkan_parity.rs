@@ -4,13 +4,14 @@
 //! Without Vulkan (no loader, no driver, no device, or a build without `glslc`) each test prints
 //! why it is skipped and passes, unless `RESHIFT_REQUIRE_VULKAN=1`, which makes it fail.
 
+use engine::reciprocal::Pairing;
 use engine::vulkan::testing::kernel_or_skip;
 use engine::vulkan::{
     BVH_MAX_HITS, Buffer, BurleyInput, BurleyOutput, BvhRayInput, BvhRayOutput, Context, Dispatch,
-    GpuBvh, GpuStreamKey, Kernel, RngParams, Shader, VulkanError, groups_for,
+    GpuBvh, GpuStreamKey, Kernel, PairingQuery, RngParams, Shader, VulkanError, groups_for,
 };
 use geometry::{Geometry, Hit, Ray, shapes};
-use glam::{Affine3A, Vec3, Vec3A};
+use glam::{Affine3A, IVec2, Vec3, Vec3A};
 use restir::rng::StreamKey;
 use sss::profile::Burley;
 
@@ -479,4 +480,123 @@ fn bvh_queries_match_cpu() {
         "negative control: origins moved by 1e-4 rejected on only {shifted_rejected} of \
          {closest_hits} hits"
     );
+}
+
+/// Pixels whose partners the pairing test compares: every pixel of `[−12, 12]²` (negative
+/// coordinates, where GLSL's truncating `/` is not `div_euclid`) and a few far ones.
+fn pairing_pixels() -> Vec<IVec2> {
+    let mut pixels: Vec<IVec2> = (-12..=12)
+        .flat_map(|y| (-12..=12).map(move |x| IVec2::new(x, y)))
+        .collect();
+    pixels.extend([
+        IVec2::new(1919, 1079),
+        IVec2::new(-1000, 37),
+        IVec2::new(37, -1001),
+    ]);
+    pixels
+}
+
+/// The CPU partners of `pixels` in the pairing of `query` (the pixel itself where the slot is
+/// empty), as `parity_pairing.glsl` writes them.
+fn cpu_partners(query: &PairingQuery, seed: u64, pixels: &[IVec2]) -> Vec<IVec2> {
+    let pairing = Pairing::draw(query.radius, query.slot, query.frame, query.pass, seed);
+    pixels
+        .iter()
+        .map(|&p| pairing.map_or(p, |pairing| pairing.partner(p)))
+        .collect()
+}
+
+/// The pairings of a reciprocal spatial pass (`engine::reciprocal::Pairing`; GLSL twin
+/// `engine/glsl/include/reciprocal.glsl`): for 1200 queries (radius from 0.3 px, where most
+/// slots are empty, to 60 px; 8 slots; 5 frames; 3 passes) under two run seeds, the partners of
+/// 628 pixels are identical on the GPU and the CPU. Negative controls: the partners with the
+/// stripes' signs swapped match no paired query, and the pairings of the neighbouring frame
+/// match fewer than half the paired queries of radius ≥ 4 px (two independent offsets uniform in
+/// such a disk round to the same pixel with probability below 1/(π·4²) ≈ 2%).
+#[test]
+fn pairings_are_identical() {
+    let Some((mut context, kernel)) = kernel_or_skip("pairing parity", Shader::PARITY_PAIRING)
+    else {
+        return;
+    };
+    let pixels = pairing_pixels();
+    let mut queries = Vec::new();
+    for radius in [0.3f32, 1.0, 2.5, 4.0, 7.3, 16.0, 25.5, 33.3, 47.9, 60.0] {
+        for slot in 0..8 {
+            for frame in 0..5 {
+                for pass in 1..4 {
+                    queries.push(PairingQuery {
+                        radius,
+                        slot,
+                        frame,
+                        pass,
+                    });
+                }
+            }
+        }
+    }
+    let gpu_pixels: Vec<[i32; 2]> = pixels.iter().map(|p| p.to_array()).collect();
+    let query_buffer = Buffer::from_slice(&context, &queries).unwrap();
+    let pixel_buffer = Buffer::from_slice(&context, &gpu_pixels).unwrap();
+    let partners = Buffer::zeroed(&context, queries.len() * pixels.len() * 8).unwrap();
+    for seed in [5u64, 0xDEAD_BEEF_0123_4567] {
+        let params = RngParams {
+            count: queries.len() as u32,
+            draws: pixels.len() as u32,
+            seed_lo: seed as u32,
+            seed_hi: (seed >> 32) as u32,
+        };
+        let timing = context
+            .dispatch(
+                &kernel,
+                &[&query_buffer, &pixel_buffer, &partners],
+                bytemuck::bytes_of(&params),
+                [
+                    groups_for(params.count, Shader::PARITY_PAIRING.local_size),
+                    1,
+                    1,
+                ],
+            )
+            .unwrap();
+        let gpu: Vec<IVec2> = partners
+            .read::<[i32; 2]>()
+            .unwrap()
+            .into_iter()
+            .map(IVec2::from_array)
+            .collect();
+        let (mut paired, mut swapped_equal, mut wide, mut neighbour_equal) = (0, 0, 0, 0);
+        for (query, got) in queries.iter().zip(gpu.chunks(pixels.len())) {
+            let want = cpu_partners(query, seed, &pixels);
+            assert_eq!(got, &want[..], "seed {seed:#x}, {query:?}");
+            if want == pixels {
+                continue;
+            }
+            paired += 1;
+            let swapped: Vec<IVec2> = pixels.iter().zip(got).map(|(&p, &q)| 2 * p - q).collect();
+            swapped_equal += usize::from(swapped == want);
+            if query.radius >= 4.0 {
+                wide += 1;
+                let neighbour = PairingQuery {
+                    frame: query.frame + 5,
+                    ..*query
+                };
+                neighbour_equal += usize::from(cpu_partners(&neighbour, seed, &pixels) == got);
+            }
+        }
+        assert_eq!(
+            swapped_equal, 0,
+            "negative control: partners with swapped signs matched"
+        );
+        assert!(
+            2 * neighbour_equal < wide,
+            "negative control: {neighbour_equal} of {wide} pairings of another frame matched"
+        );
+        eprintln!(
+            "pairing parity: seed {seed:#x}, {} queries ({paired} paired) × {} pixels identical; \
+             another frame's pairings matched {neighbour_equal} of {wide} ({})",
+            queries.len(),
+            pixels.len(),
+            gpu_time(timing.gpu_seconds)
+        );
+    }
 }

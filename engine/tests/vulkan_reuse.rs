@@ -8,6 +8,8 @@
 use bytemuck::{Pod, Zeroable};
 use engine::PixelReservoir;
 use engine::candidates;
+use engine::contract::ExchangeStatus;
+use engine::reciprocal::{self, Exchanged};
 use engine::reuse::{self, PassInput, Previous, Reused};
 use engine::vulkan::testing::{Tally, kernel_or_skip, rel_error, scaled_error};
 use engine::vulkan::{
@@ -22,7 +24,7 @@ use restir::shift::Domain;
 use shifts::ShiftKind;
 use shifts::SssSample;
 use shifts::Target;
-use shifts::preset::{PassSpec, Preset, Shade, TEMPORAL_CAP};
+use shifts::preset::{PassSpec, Preset, RadiusRule, Shade, TEMPORAL_CAP};
 use sss::scene::{GBuffer, Scene};
 
 /// `parity_reuse.glsl`: bindings 0–10 scene and pass inputs of the shift modes, 11 cases,
@@ -660,12 +662,267 @@ fn every_shift_kind_matches_the_cpu() {
     }
 }
 
+/// `parity_reuse.glsl` mode 4: slot `slot` of pass `pass` at `pixel`, shift kind `kind`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct ExchangeCase {
+    pixel: u32,
+    slot: u32,
+    pass: u32,
+    kind: u32,
+    radius: f32,
+    pad: [u32; 3],
+}
+
+/// `exchange_send`'s status (`EXCHANGE_*` of `engine/glsl/include/exchange.glsl`) and values
+/// (`y`, `J`, `p̂_partner(y)`, `p̂_own(x)`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct ExchangeResult {
+    y: SssSample,
+    jacobian: f32,
+    target: f32,
+    source_target: f32,
+    status: u32,
+    pad: [u32; 3],
+}
+
+/// The `EXCHANGE_*` codes.
+const UNTAKEN: u32 = ExchangeStatus::Untaken.code();
+const UNSHIFTED: u32 = ExchangeStatus::Unshifted.code();
+const SENT: u32 = ExchangeStatus::Sent.code();
+const FAILED: u32 = ExchangeStatus::Failed.code();
+
+/// The CPU's [`Exchanged`] as `exchange_send` encodes it.
+fn exchange_result(sent: &Exchanged) -> ExchangeResult {
+    let (status, y, jacobian, target, source_target) = match *sent {
+        Exchanged::Untaken => (UNTAKEN, SssSample::zeroed(), 0.0, 0.0, 0.0),
+        Exchanged::Unshifted => (UNSHIFTED, SssSample::zeroed(), 0.0, 0.0, 0.0),
+        Exchanged::Sent {
+            shifted,
+            target,
+            source_target,
+        } => (SENT, shifted.y, shifted.jacobian, target, source_target),
+        Exchanged::Failed(fail) => (
+            FAILED | fail.code() << 8,
+            SssSample::zeroed(),
+            0.0,
+            0.0,
+            0.0,
+        ),
+    };
+    ExchangeResult {
+        y,
+        jacobian,
+        target,
+        source_target,
+        status,
+        pad: [0; 3],
+    }
+}
+
+/// Compares exchanged entries as shifts: the status (and `y`'s integer fields where sent) must
+/// match, `J`, both targets and `y`'s floats stay within [`SHIFT_BOUNDS`]. A failure matches a
+/// failure whatever its reason, and a GPU shift sent with `p̂_partner(y) = 0` matches a CPU
+/// failure: the CPU shifts with `Shift::shift_supported`, which may fail with any reason where
+/// `p̂_dst = 0` (its contract; resampling gives such an input weight 0 either way), while
+/// `shift_shift` reports its first failed check.
+fn compare_exchanged(cpu: &[ExchangeResult], gpu: &[ExchangeResult], tally: &mut Tally) {
+    let class = |r: &ExchangeResult| r.status & 0xFF;
+    let as_shift = |r: &ExchangeResult, status: u32, target: f32| ShiftResult {
+        y: r.y,
+        jacobian: r.jacobian,
+        fail: if status == SENT { 0 } else { status | 0x100 },
+        target,
+        pad: 0,
+    };
+    let (mut want, mut got, mut want_own, mut got_own) = (vec![], vec![], vec![], vec![]);
+    for (c, g) in cpu.iter().zip(gpu) {
+        let unsupported = class(c) == FAILED && class(g) == SENT && g.target == 0.0;
+        let g_class = if unsupported { FAILED } else { class(g) };
+        want.push(as_shift(c, class(c), c.target));
+        got.push(as_shift(g, g_class, g.target));
+        want_own.push(as_shift(c, class(c), c.source_target));
+        got_own.push(as_shift(g, g_class, g.source_target));
+    }
+    compare_shifts(&want, &got, tally);
+    let mut own = Tally::new(&SHIFT_BOUNDS);
+    compare_shifts(&want_own, &got_own, &mut own);
+    tally.beyond_bounds += own.beyond_bounds;
+    if let Some(&(_, e)) = own.worst.iter().find(|(n, _)| *n == "target") {
+        tally.float("target", e);
+    }
+}
+
+/// Phase 1 of a reciprocal spatial pass (`engine::reciprocal::shift_to_partners`; GLSL twin
+/// `engine/glsl/include/exchange.glsl`) on `bumpy` and `half-shadow` (32×32, frame 0, pass 1,
+/// CPU canonical reservoirs, the CPU's frame radius): what every translucent pixel sends its
+/// partner of each of 4 slots, for every shift kind. Statuses (see [`compare_exchanged`]) and
+/// `y`'s integer fields equal up to [`SHIFT_MISMATCH_FRACTION`], `J`, `p̂_partner(y)`, `p̂_own(x)` and `y`'s floats within
+/// [`SHIFT_BOUNDS`], as for single shifts. Negative control: the GPU's entries of the next slot
+/// must be rejected.
+#[test]
+fn reciprocal_exchange_matches_the_cpu() {
+    let Some((mut context, kernel)) = kernel_or_skip("exchange parity", PARITY_REUSE) else {
+        return;
+    };
+    const SLOTS: u32 = 4;
+    for name in SCENES {
+        let scene = scene(name);
+        let gbuffer = GBuffer::render(&scene, 0);
+        let reservoirs = canonical(&scene, &gbuffer, SEED);
+        let input = pass_input(&scene, &gbuffer, &reservoirs, 1, SEED);
+        let domains = reciprocal::domains(&input);
+        let radius = reciprocal::frame_radius(&input, &domains, RadiusRule::Clamped);
+        let pairings = reciprocal::pairings(&input, radius, SLOTS);
+        let (mut cases, mut cpu) = (Vec::new(), Vec::new());
+        let mut sent = [Exchanged::Untaken; SLOTS as usize];
+        for (kind, shift) in ShiftKind::ALL.iter().enumerate() {
+            for pixel in 0..gbuffer.pixels.len() as u32 {
+                if domains[pixel as usize].is_none() {
+                    continue;
+                }
+                reciprocal::shift_to_partners(
+                    &input, &domains, &pairings, *shift, pixel, &mut sent,
+                );
+                for slot in 0..SLOTS {
+                    cases.push(ExchangeCase {
+                        pixel,
+                        slot,
+                        pass: 1,
+                        kind: kind as u32,
+                        radius,
+                        pad: [0; 3],
+                    });
+                    cpu.push(exchange_result(&sent[slot as usize]));
+                }
+            }
+        }
+        let gpu_scene = GpuScene::upload(&context, &scene).unwrap();
+        let pixels = Buffer::from_slice(&context, &gpu_pixels(&gbuffer)).unwrap();
+        let stored = Buffer::from_slice(&context, &reservoirs).unwrap();
+        let frame = FrameParams::new(&scene, 0, None, SEED)
+            .buffer(&context)
+            .unwrap();
+        let mut inputs: Vec<&Buffer> = gpu_scene.buffers().to_vec();
+        inputs.extend([&frame, &pixels, &stored]);
+        let gpu: Vec<ExchangeResult> = run_parity(&mut context, &kernel, &inputs, 4, &cases);
+        let mut tally = Tally::new(&SHIFT_BOUNDS);
+        compare_exchanged(&cpu, &gpu, &mut tally);
+        let count = |status: u32| cpu.iter().filter(|r| r.status & 0xFF == status).count();
+        let next_slot: Vec<ExchangeResult> = gpu
+            .chunks(SLOTS as usize)
+            .flat_map(|slots| (0..slots.len()).map(move |s| slots[(s + 1) % slots.len()]))
+            .collect();
+        let mut control = Tally::new(&SHIFT_BOUNDS);
+        compare_exchanged(&cpu, &next_slot, &mut control);
+        eprintln!(
+            "exchange parity, {name}: radius {radius} px, {} entries ({} untaken, {} unshifted, \
+             {} sent, {} failed), {} mismatched ({:.2e}), {} beyond bounds; worst {:?}; \
+             control (next slot) rejected {:.3}",
+            tally.compared,
+            count(UNTAKEN),
+            count(UNSHIFTED),
+            count(SENT),
+            count(FAILED),
+            tally.mismatched,
+            tally.mismatch_fraction(),
+            tally.beyond_bounds,
+            tally.worst,
+            control.rejected_fraction()
+        );
+        assert!(
+            tally.mismatch_fraction() <= SHIFT_MISMATCH_FRACTION,
+            "{name}: {} of {} entries differ in status or integer fields",
+            tally.mismatched,
+            tally.compared
+        );
+        assert_eq!(tally.beyond_bounds, 0, "{name}: worst {:?}", tally.worst);
+        assert!(
+            control.rejected_fraction() > 10.0 * SHIFT_MISMATCH_FRACTION,
+            "{name}: negative control (next slot) undetected"
+        );
+    }
+}
+
 /// One reuse pass configuration of the registered presets.
 #[derive(Clone, Copy, Debug)]
 struct PassCase {
     spec: PassSpec,
     /// The pass's index in its preset.
     pass: u32,
+}
+
+/// The frame radius of a reciprocal spatial pass (`engine::reciprocal::frame_radius` with the
+/// clamped rule; GLSL twin `engine/glsl/include/frame_radius.glsl`) on both scenes at 192×192
+/// (at [`SIZE`] every radius clamps to 5 px), frames 0 and 5, passes 1 and 2: bit-identical.
+/// Negative controls: the mean accumulated in f32, and the mean over the translucent pixels of
+/// the frame before (another camera pose), differ from it.
+#[test]
+fn frame_radius_is_bit_identical() {
+    let Some((mut context, kernel)) = kernel_or_skip("frame radius parity", PARITY_REUSE) else {
+        return;
+    };
+    let placeholder = Buffer::zeroed(&context, 16).unwrap();
+    for name in SCENES {
+        let mut scene = Scene::builtin(name).unwrap();
+        scene.camera = scene.camera.with_resolution(192, 192);
+        let gpu_scene = GpuScene::upload(&context, &scene).unwrap();
+        let mut before = None;
+        for frame in [0u32, 5] {
+            let gbuffer = GBuffer::render(&scene, frame);
+            let passes = [1u32, 2];
+            let cpu: Vec<f32> = passes
+                .iter()
+                .map(|&pass| {
+                    let input = pass_input(&scene, &gbuffer, &[], pass, SEED);
+                    let domains = reciprocal::domains(&input);
+                    reciprocal::frame_radius(&input, &domains, RadiusRule::Clamped)
+                })
+                .collect();
+            let frame_buffer = FrameParams::new(&scene, frame, None, SEED)
+                .buffer(&context)
+                .unwrap();
+            let pixels = Buffer::from_slice(&context, &gpu_pixels(&gbuffer)).unwrap();
+            let mut inputs: Vec<&Buffer> = gpu_scene.buffers().to_vec();
+            inputs.extend([&frame_buffer, &pixels, &placeholder]);
+            let gpu: Vec<f32> = run_parity(&mut context, &kernel, &inputs, 3, &passes);
+            let bits = |v: &[f32]| v.iter().map(|r| r.to_bits()).collect::<Vec<_>>();
+            assert_eq!(
+                bits(&gpu),
+                bits(&cpu),
+                "{name}, frame {frame}: {gpu:?} vs {cpu:?}"
+            );
+            let input = pass_input(&scene, &gbuffer, &[], 1, SEED);
+            let radii: Vec<f32> = reciprocal::domains(&input)
+                .iter()
+                .flatten()
+                .map(|d| {
+                    let x1 = d.x1().position;
+                    let max_d = d.material().d().max_element();
+                    RadiusRule::Clamped.radius_px(&scene.camera, frame, x1, max_d)
+                })
+                .collect();
+            let single = radii.iter().sum::<f32>() / radii.len() as f32;
+            assert_ne!(
+                single.to_bits(),
+                gpu[0].to_bits(),
+                "{name}: an f32 sum matched"
+            );
+            if let Some(previous) = before.replace(gpu[0]) {
+                assert_ne!(previous, gpu[0], "{name}: another frame's radius matched");
+            }
+            let (low, high) = radii
+                .iter()
+                .fold((f32::MAX, f32::MIN), |(l, h), &r| (l.min(r), h.max(r)));
+            eprintln!(
+                "frame radius parity, {name}, frame {frame}: {} translucent pixels, radii \
+                 {low}–{high} px, mean {} px (f32 sum: {single})",
+                radii.len(),
+                gpu[0]
+            );
+        }
+    }
 }
 
 /// Paper 001's temporal confidence cap, run besides the presets' default

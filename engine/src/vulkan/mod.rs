@@ -85,7 +85,8 @@ impl From<restir::rng::StreamKey> for GpuStreamKey {
     }
 }
 
-/// Push constants of [`Shader::PARITY_RNG`]: key count, draws per key, run seed split in halves.
+/// Push constants of [`Shader::PARITY_RNG`] (key count, draws per key, run seed split in halves)
+/// and [`Shader::PARITY_PAIRING`] (query count, pixels per query, run seed).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
 pub struct RngParams {
@@ -93,6 +94,17 @@ pub struct RngParams {
     pub draws: u32,
     pub seed_lo: u32,
     pub seed_hi: u32,
+}
+
+/// `parity_pairing.glsl`'s `PairingQuery` (std430: four 4-byte scalars, 16 bytes): the arguments
+/// of [`Pairing::draw`](crate::reciprocal::Pairing::draw) but the run seed.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PairingQuery {
+    pub radius: f32,
+    pub slot: u32,
+    pub frame: u32,
+    pub pass: u32,
 }
 
 /// `parity_burley.glsl`'s `BurleyInput` (std430: three `float`, 12 bytes).
@@ -131,6 +143,15 @@ mod tests {
         assert_eq!(offset_of!(GpuStreamKey, purpose), 12);
         assert_eq!(size_of::<RngParams>() as u32, Shader::PARITY_RNG.push_bytes);
         assert_eq!(offset_of!(RngParams, seed_hi), 12);
+        assert_eq!(
+            size_of::<RngParams>() as u32,
+            Shader::PARITY_PAIRING.push_bytes
+        );
+        assert_eq!(
+            (size_of::<PairingQuery>(), align_of::<PairingQuery>()),
+            (16, 4)
+        );
+        assert_eq!(offset_of!(PairingQuery, pass), 12);
         assert_eq!(
             (size_of::<BurleyInput>(), align_of::<BurleyInput>()),
             (12, 4)

@@ -34,6 +34,10 @@ impl Shader {
     /// `parity_rng.glsl`: keys (`StreamKey`) → `draws` u32 and `draws` f32 per key.
     /// Push constants: [`RngParams`](super::RngParams).
     pub const PARITY_RNG: Shader = Shader::new("parity_rng", 3, 16);
+    /// `parity_pairing.glsl`: queries ([`PairingQuery`](super::PairingQuery)) and pixels
+    /// (`[i32; 2]`) → the partner of each pixel per query. Push constants:
+    /// [`RngParams`](super::RngParams).
+    pub const PARITY_PAIRING: Shader = Shader::new("parity_pairing", 3, 16);
     /// `parity_burley.glsl`: [`BurleyInput`](super::BurleyInput) →
     /// [`BurleyOutput`](super::BurleyOutput). Push constants: the count (`u32`).
     pub const PARITY_BURLEY: Shader = Shader::new("parity_burley", 2, 4);

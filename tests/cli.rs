@@ -294,7 +294,12 @@ fn render_writes_exr_png_and_timing() {
         "--json",
     ])))
     .unwrap();
+    assert_valid(&schemas()[2], &json, "render");
     assert_eq!(json["frames_rendered"], 2);
+    assert_eq!(
+        (&json["interrupted"], &json["frame"]),
+        (&Value::Bool(false), &1.into())
+    );
     assert!(json["seconds_per_frame"].as_f64().unwrap() > 0.0);
     for key in ["exr", "png"] {
         let path = json[key].as_str().unwrap();
@@ -696,7 +701,7 @@ fn compare_shards_merge_into_a_report() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// The JSON Schema blocks of docs/results-schema.md: compare, then bias.
+/// The JSON Schema blocks of docs/results-schema.md: compare, bias, render.
 fn schemas() -> Vec<Value> {
     let doc = include_str!("../docs/results-schema.md");
     doc.split("```json")
@@ -1100,6 +1105,90 @@ fn interrupt_leaves_a_resumable_reference_checkpoint() {
     .unwrap_or(Value::Null);
     let done = summary["batches"][1].as_u64().unwrap();
     assert!(done >= 3, "resumed to {done} batches: {summary}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The pixels of the EXR at `path`: its size and linear RGB, row by row.
+fn read_exr(path: &str) -> ((usize, usize), Vec<[f32; 3]>) {
+    let read = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |size, _| {
+            (
+                size.width(),
+                vec![[0.0f32; 3]; size.width() * size.height()],
+            )
+        },
+        |(width, pixels), at, (r, g, b, _a): (f32, f32, f32, f32)| {
+            pixels[at.y() * *width + at.x()] = [r, g, b]
+        },
+    )
+    .unwrap_or_else(|e| panic!("{path}: {e}"));
+    let size = read.layer_data.size;
+    (
+        (size.width(), size.height()),
+        read.layer_data.channel_data.pixels.1,
+    )
+}
+
+/// Ctrl-C (SIGINT) during a long `restir:hybrid` render: the stream ends after the frame in
+/// progress, the EXR and PNG are that frame's (readable, finite), the JSON summary is valid and
+/// says `interrupted` with the true `frames_rendered` (more than 0, fewer than asked), and the
+/// process exits 1 with one line, as `bias` and `compare` do. The negative control (no signal,
+/// `interrupted` false, every frame rendered) is `render_writes_exr_png_and_timing`.
+#[cfg(unix)]
+#[test]
+fn interrupt_leaves_the_last_finished_frame_of_a_render() {
+    let dir = scratch("render-interrupt");
+    let frames = sss::limits::MAX_FRAMES.to_string();
+    let child = common::command(&[
+        "render",
+        "--method",
+        "restir:hybrid",
+        "--scene",
+        "bumpy",
+        "--resolution",
+        "32x24",
+        "--frames",
+        &frames,
+        "--json",
+        "--out",
+        dir.to_str().unwrap(),
+    ])
+    .stdout(std::process::Stdio::piped())
+    .stderr(std::process::Stdio::piped())
+    .spawn()
+    .expect("spawn");
+    std::thread::sleep(std::time::Duration::from_secs(2));
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill");
+    assert!(kill.success());
+    let o = child.wait_with_output().expect("wait");
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    let last = err.lines().last().unwrap();
+    assert!(last.starts_with("reshift: interrupted after "), "{err}");
+    let json: Value = serde_json::from_slice(&o.stdout).expect("JSON summary");
+    assert_valid(&schemas()[2], &json, "interrupted render");
+    let rendered = json["frames_rendered"].as_u64().unwrap();
+    eprintln!("interrupted after {rendered} of {frames} frames");
+    assert!(
+        rendered > 0 && rendered < u64::from(sss::limits::MAX_FRAMES),
+        "{json}"
+    );
+    assert_eq!(json["interrupted"], true);
+    assert_eq!(json["frame"].as_u64(), Some(rendered - 1));
+    let (size, pixels) = read_exr(json["exr"].as_str().unwrap());
+    assert_eq!(size, (32, 24));
+    assert!(
+        pixels.iter().flatten().all(|v| v.is_finite()),
+        "non-finite pixel"
+    );
+    assert!(pixels.iter().flatten().any(|&v| v > 0.0), "a black frame");
+    let png = image::open(json["png"].as_str().unwrap()).expect("PNG");
+    assert_eq!((png.width(), png.height()), (32, 24));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

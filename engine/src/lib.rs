@@ -127,6 +127,9 @@ pub struct Run {
     /// Per-frame shaded linear RGB, one image per frame of the trajectory (only the last for a
     /// stream's run that keeps [`Keep::Last`]).
     pub frames: Vec<Image>,
+    /// Frames rendered: the trajectory's, or fewer where a stream's run was stopped
+    /// ([`Stream::run_until`]).
+    pub frames_rendered: u32,
     /// Per-pass seconds, summed over frames, in execution order.
     pub timings: Vec<PassTiming>,
     pub diagnostics: Option<Diagnostics>,
@@ -256,6 +259,7 @@ pub fn run_pt(scene: &Scene, spp: u32, config: &RunConfig) -> Run {
         .collect();
     Run {
         frames,
+        frames_rendered: config.frames,
         timings: vec![
             PassTiming::timed("gbuffer".into(), &gbuffer_seconds),
             PassTiming::timed("pt".into(), &pt_seconds),

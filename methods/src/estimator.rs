@@ -1,6 +1,7 @@
 //! The [`Estimator`] trait a method implements, the [`Method`] handle that shares one, and the
 //! [`Entry`] that registers a family of methods by name.
 
+use std::cell::Cell;
 use std::fmt;
 use std::path::Path;
 use std::sync::Arc;
@@ -56,6 +57,23 @@ pub trait Estimator: fmt::Debug + Send + Sync + 'static {
         seed: u64,
     ) -> Result<(LastFrame, Option<SampleCounts>), PipelineError> {
         Ok((self.render(backend, scene, frames, seed)?, None))
+    }
+
+    /// [`Estimator::render_counted`] that may end early: a method that streams its frames
+    /// (`restir:<preset>`) asks `stop` before each frame after the first and, once it says yes,
+    /// returns the last frame it finished ([`LastFrame::frames_rendered`] counts them). A method
+    /// that sees `stop` say yes returns at once; one that is not streamed (the default:
+    /// `render_counted`) and `restir:<preset>/channels=rgb` (three streams in turn) ignore it.
+    fn render_until(
+        &self,
+        backend: &Backend,
+        scene: &Scene,
+        frames: u32,
+        seed: u64,
+        stop: &dyn Fn() -> bool,
+    ) -> Result<(LastFrame, Option<SampleCounts>), PipelineError> {
+        let _ = stop;
+        self.render_counted(backend, scene, frames, seed)
     }
 
     /// The path-tracer settings whose converged image this method estimates, i.e. its
@@ -194,6 +212,9 @@ pub struct Rendered {
     pub wall_seconds_per_frame: f64,
     /// Frames the method rendered to produce `image` (1 for memoryless estimators).
     pub frames_rendered: u32,
+    /// Whether the run ended early at its stop check ([`Method::render_until`]): `image` is
+    /// then frame `frames_rendered − 1`.
+    pub stopped: bool,
     /// Shaded values that were NaN or infinite (written as 0 or left out of the mean).
     pub nonfinite: u64,
     /// Mean samples per pixel of the frame over the pixels with a primary hit: the method's
@@ -256,6 +277,21 @@ impl Method {
         frames: u32,
         seed: u64,
     ) -> Result<Rendered, PipelineError> {
+        self.render_until(backend, scene, frames, seed, &|| false)
+    }
+
+    /// [`Method::render_on`] that a streamed method ends early once `stop` says yes
+    /// ([`Estimator::render_until`]), e.g. at a Ctrl-C: the frames rendered so far are timed and
+    /// the last of them returned, with [`Rendered::stopped`] set. Methods that are not streamed
+    /// ignore `stop`.
+    pub fn render_until(
+        &self,
+        backend: &Backend,
+        scene: &Scene,
+        frames: u32,
+        seed: u64,
+        stop: &dyn Fn() -> bool,
+    ) -> Result<Rendered, PipelineError> {
         let origin = Path::new("(run)");
         let (width, height) = (scene.camera.width(), scene.camera.height());
         limits::frames(origin, "frames", frames)
@@ -266,14 +302,24 @@ impl Method {
                 limits::memory(origin, "frames", &value, bytes, "the run")
             })
             .map_err(|e| PipelineError::Config(e.to_string()))?;
+        // A method that sees `stop` say yes ends there, so a yes seen is a run stopped early.
+        let stopped = Cell::new(false);
+        let watched = || {
+            let yes = stop();
+            stopped.set(stopped.get() || yes);
+            yes
+        };
         let watch = Stopwatch::start(backend);
-        let (frame, counts) = self.0.render_counted(backend, scene, frames, seed)?;
+        let (frame, counts) = self
+            .0
+            .render_until(backend, scene, frames, seed, &watched)?;
         let timing = watch.read().per(frame.frames_rendered);
         Ok(Rendered {
             seconds_per_frame: timing.seconds,
             wall_seconds_per_frame: timing.wall_seconds,
             image: frame.image,
             frames_rendered: frame.frames_rendered,
+            stopped: stopped.get(),
             nonfinite: frame.nonfinite,
             passes: frame.passes,
             spp: counts

@@ -21,7 +21,7 @@ use engine::{
 use shifts::preset::{PRESET_NAMES, Pairs};
 use sss::scene::Scene;
 
-use super::estimator::{Entry, Estimator, LastFrame, Method, Trajectory};
+use super::estimator::{Entry, Estimator, LastFrame, Method, SampleCounts, Trajectory};
 
 mod channels;
 
@@ -224,6 +224,19 @@ impl Estimator for Restir {
         streamed(&self.0, backend, scene, frames, seed, Keep::Last)?.last_frame()
     }
 
+    /// [`Estimator::render`]'s stream, ended early once `stop` says yes.
+    fn render_until(
+        &self,
+        backend: &Backend,
+        scene: &Scene,
+        frames: u32,
+        seed: u64,
+        stop: &dyn Fn() -> bool,
+    ) -> Result<(LastFrame, Option<SampleCounts>), PipelineError> {
+        let run = streamed_until(&self.0, backend, scene, frames, seed, Keep::Last, stop)?;
+        Ok((run.last_frame()?, None))
+    }
+
     /// A stream of `frames` frames, every one kept.
     fn render_trajectory(
         &self,
@@ -245,15 +258,28 @@ fn streamed(
     seed: u64,
     keep: Keep,
 ) -> Result<Trajectory, PipelineError> {
+    streamed_until(preset, backend, scene, frames, seed, keep, &|| false)
+}
+
+/// [`streamed`], ended early once `stop` says yes ([`Stream::run_until`]).
+fn streamed_until(
+    preset: &Preset,
+    backend: &Backend,
+    scene: &Scene,
+    frames: u32,
+    seed: u64,
+    keep: Keep,
+    stop: &dyn Fn() -> bool,
+) -> Result<Trajectory, PipelineError> {
     let config = RunConfig {
         seed,
         frames,
         collect_diagnostics: false,
     };
-    let run = Stream::new(backend, scene, preset, &config)?.run(frames, keep)?;
+    let run = Stream::new(backend, scene, preset, &config)?.run_until(frames, keep, stop)?;
     Ok(Trajectory {
         frames: run.frames,
-        frames_rendered: frames,
+        frames_rendered: run.frames_rendered,
         nonfinite: run.nan_count,
         counts: None,
         passes: run.timings,
@@ -263,6 +289,39 @@ fn streamed(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A `restir` render whose stop check says yes on its third ask ends after 3 of 12 frames
+    /// and returns, flagged as stopped, frame 2 bit for bit as a 3-frame render does. Controls:
+    /// a check that never says yes gives the 12-frame render, unflagged; a path tracer, which is
+    /// not streamed, ignores the check.
+    #[test]
+    fn a_stopped_stream_returns_the_last_frame_it_finished() {
+        let mut scene = Scene::builtin("bumpy").unwrap();
+        scene.camera = scene.camera.with_resolution(16, 12);
+        let asks = std::cell::Cell::new(0);
+        let third = || {
+            asks.set(asks.get() + 1);
+            asks.get() >= 3
+        };
+        let restir = Method::parse("restir:hybrid").unwrap();
+        let stopped = restir
+            .render_until(&Backend::Cpu, &scene, 12, 5, &third)
+            .unwrap();
+        let three = restir.render(&scene, 3, 5).unwrap();
+        assert_eq!((stopped.stopped, stopped.frames_rendered), (true, 3));
+        assert_eq!(stopped.image.bits(), three.image.bits());
+        let never = restir
+            .render_until(&Backend::Cpu, &scene, 12, 5, &|| false)
+            .unwrap();
+        let whole = restir.render(&scene, 12, 5).unwrap();
+        assert_eq!((never.stopped, never.frames_rendered), (false, 12));
+        assert_eq!(never.image.bits(), whole.image.bits());
+        let pt = Method::parse("pt:1")
+            .unwrap()
+            .render_until(&Backend::Cpu, &scene, 12, 5, &|| true)
+            .unwrap();
+        assert_eq!((pt.stopped, pt.frames_rendered), (false, 1));
+    }
 
     #[test]
     fn every_preset_parses_and_the_modifiers_apply() {

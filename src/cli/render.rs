@@ -5,7 +5,10 @@
 //! each pass per rendered frame (process CPU time and wall time on the CPU backend, GPU
 //! timestamps on Vulkan), which says where a configuration's cost goes. With `--timing`, paper
 //! 001's timing protocol instead (`lab::timing`): warm-up frames, timed frames along the
-//! trajectory, repeats, and per pass the median and spread.
+//! trajectory, repeats, and per pass the median and spread. The first Ctrl-C ends a streamed
+//! method's run (`restir:<preset>`) after the frame in progress: the output is that frame's,
+//! the summary says how many frames were rendered and that the run was interrupted, and the
+//! exit status is 1 (as for `bias` and `compare`); other methods finish their render.
 
 use std::path::PathBuf;
 
@@ -20,7 +23,8 @@ use serde_json::json;
 use sss::limits::{self, MAX_FRAMES};
 
 use super::common::{
-    BackendArgs, CliError, CliResult, command_line, json_number, load_scene_at, scene_and_frames,
+    BackendArgs, CliError, CliResult, command_line, interrupted, json_number, load_scene_at,
+    scene_and_frames,
 };
 
 #[derive(Args, Clone, Debug)]
@@ -85,7 +89,12 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
     let scene = loaded.scene;
     let out = output_dir(&args.out)?;
     let backend = args.backend.open()?;
-    let rendered = method.render_on(&backend, &scene, frames, args.seed)?;
+    let rendered = method.render_until(&backend, &scene, frames, args.seed, &interrupted)?;
+    // The frame written: the last of the trajectory, or the last rendered before a Ctrl-C.
+    let frame = match rendered.stopped {
+        true => rendered.frames_rendered - 1,
+        false => frames - 1,
+    };
     let stem = format!("{}-{}", file_stem(&loaded.key), file_stem(&method.name()));
     let (exr, png) = (
         out.join(format!("{stem}.exr")),
@@ -106,7 +115,7 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
     let per_frame = f64::from(rendered.frames_rendered.max(1));
     if args.json {
         let value = json!({
-            "schema": "reshift-render/1",
+            "schema": "reshift-render/2",
             "scene": scene.name,
             "method": method.name(),
             "backend": backend.to_string(),
@@ -114,6 +123,8 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
             "height": rendered.image.height,
             "frames": frames,
             "frames_rendered": rendered.frames_rendered,
+            "interrupted": rendered.stopped,
+            "frame": frame,
             "seed": args.seed,
             "clock": Clock::of(&backend).name(),
             "seconds_per_frame": json_number(rendered.seconds_per_frame),
@@ -132,13 +143,18 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
         print_json(&value);
     } else {
         println!(
-            "{} on {} ({}×{}, frame {} of {}, {}): {:.1} ms/frame of {} ({:.1} ms wall) over {} rendered frame(s), {:.2} samples per pixel, {} non-finite\n{}\n{}{}",
+            "{} on {} ({}×{}, frame {} of {}{}, {}): {:.1} ms/frame of {} ({:.1} ms wall) over {} rendered frame(s), {:.2} samples per pixel, {} non-finite\n{}\n{}{}",
             method,
             scene.name,
             rendered.image.width,
             rendered.image.height,
-            frames - 1,
+            frame,
             frames,
+            if rendered.stopped {
+                ", interrupted"
+            } else {
+                ""
+            },
             backend,
             1e3 * rendered.seconds_per_frame,
             Clock::of(&backend).name(),
@@ -153,6 +169,12 @@ pub fn command(args: &RenderArgs) -> CliResult<()> {
         if !rendered.passes.is_empty() {
             print!("{}", pass_table(&rendered.passes, per_frame));
         }
+    }
+    if rendered.stopped {
+        return Err(CliError(format!(
+            "interrupted after {} of {frames} frames; the images are frame {frame}'s",
+            rendered.frames_rendered
+        )));
     }
     Ok(())
 }

@@ -140,7 +140,20 @@ impl<'a> Stream<'a> {
     /// only the last holds one image whatever `frames` is), with the per-step timings summed
     /// into [`PassTiming`]s (none where a frame came without them). [`Backend::run`] keeps
     /// every one.
-    pub fn run(mut self, frames: u32, keep: Keep) -> Result<Run, PipelineError> {
+    pub fn run(self, frames: u32, keep: Keep) -> Result<Run, PipelineError> {
+        self.run_until(frames, keep, &|| false)
+    }
+
+    /// [`Stream::run`] that asks `stop` before each frame after the first and, once it says
+    /// yes, ends with the frames rendered so far ([`Run::frames_rendered`]; [`Keep::Last`]
+    /// keeps the last of them): a caller's interrupt leaves a valid, shorter run. A `stop` that
+    /// never says yes gives [`Stream::run`]'s run.
+    pub fn run_until(
+        mut self,
+        frames: u32,
+        keep: Keep,
+        stop: &dyn Fn() -> bool,
+    ) -> Result<Run, PipelineError> {
         let mut images = Vec::with_capacity(match keep {
             Keep::Every => frames as usize,
             Keep::Last => 1,
@@ -148,16 +161,19 @@ impl<'a> Stream<'a> {
         let mut steps = vec![Vec::with_capacity(frames as usize); self.labels.len()];
         let mut timed = true;
         let mut nan_count = 0;
-        for i in 0..frames {
+        let mut rendered = 0;
+        while rendered < frames && (rendered == 0 || !stop()) {
             let frame = self.frame()?;
             nan_count += frame.nan_count;
             timed &= frame.steps.len() == steps.len();
             for (seconds, timing) in steps.iter_mut().zip(frame.steps) {
                 seconds.push(timing);
             }
-            if keep == Keep::Every || i + 1 == frames {
-                images.push(frame.image);
+            if keep == Keep::Last {
+                images.clear();
             }
+            images.push(frame.image);
+            rendered += 1;
         }
         let timings = match timed {
             true => (self.labels.iter().zip(steps))
@@ -171,6 +187,7 @@ impl<'a> Stream<'a> {
         } = self.finish()?;
         Ok(Run {
             frames: images,
+            frames_rendered: rendered,
             timings,
             diagnostics,
             nan_count,
@@ -274,6 +291,39 @@ mod tests {
         assert_eq!(labels(&last), labels(&every));
         assert_eq!(last.nan_count, every.nan_count);
         assert_eq!(last.reservoirs, every.reservoirs);
+    }
+
+    /// A run stopped once `stop` says yes ends with the frames rendered so far: asked to stop
+    /// after 3 of 8 frames, it has rendered 3, keeps the third bit for bit as a whole run's
+    /// frame 2, and ends with a 3-frame run's reservoirs. Control: a `stop` that never says
+    /// yes renders all 8, and one that says yes at once still renders the first frame.
+    #[test]
+    fn a_stopped_run_keeps_the_frames_rendered_so_far() {
+        let (scene, preset) = setting();
+        let whole = Backend::Cpu.run(&scene, &preset, &config(8, 8)).unwrap();
+        let three = Backend::Cpu.run(&scene, &preset, &config(8, 3)).unwrap();
+        let stopped_after = |n: u32| {
+            let asked = std::cell::Cell::new(0);
+            let stop = || {
+                asked.set(asked.get() + 1);
+                asked.get() > n
+            };
+            Stream::new(&Backend::Cpu, &scene, &preset, &config(8, 8))
+                .and_then(|s| s.run_until(8, Keep::Last, &stop))
+                .unwrap()
+        };
+        // `stop` is first asked before the second frame.
+        let stopped = stopped_after(2);
+        assert_eq!((stopped.frames_rendered, stopped.frames.len()), (3, 1));
+        assert_eq!(stopped.frames[0].bits(), whole.frames[2].bits());
+        assert_eq!(stopped.reservoirs, three.reservoirs);
+        assert_eq!(stopped.nan_count, three.nan_count);
+        let never = Stream::new(&Backend::Cpu, &scene, &preset, &config(8, 8))
+            .and_then(|s| s.run_until(8, Keep::Last, &|| false))
+            .unwrap();
+        assert_eq!(never.frames_rendered, 8);
+        assert_eq!(never.frames[0].bits(), whole.frames[7].bits());
+        assert_eq!(stopped_after(0).frames_rendered, 1);
     }
 
     /// The poses of a trajectory, four frames of the bumpy camera's path apart.

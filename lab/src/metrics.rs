@@ -51,12 +51,13 @@ pub enum Area {
 
 impl Area {
     /// The whole frame, then the regions in table order.
-    pub const ALL: [Area; 5] = [
+    pub const ALL: [Area; 6] = [
         Area::Image,
         Area::Region(Region::Translucent),
         Area::Region(Region::Lit),
         Area::Region(Region::Penumbra),
         Area::Region(Region::Shadowed),
+        Area::Region(Region::Disoccluded),
     ];
 
     pub fn name(self) -> &'static str {

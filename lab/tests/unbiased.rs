@@ -522,7 +522,7 @@ impl Design {
             let regions = Regions::classify(&scene, &gbuffer, REFERENCE_SEED);
             Framing { scene, regions }
         });
-        let present: Vec<Region> = Region::ALL
+        let present: Vec<Region> = Region::VISIBILITY
             .into_iter()
             .filter(|&r| !framing.regions.pixels(r).is_empty())
             .collect();

@@ -135,7 +135,7 @@ pub(super) fn findings(measured: &[Measurement]) -> String {
         let bar = match region {
             Region::Translucent => Some((1.0, false)),
             Region::Penumbra | Region::Shadowed => Some((5.0, true)),
-            Region::Lit => None,
+            Region::Lit | Region::Disoccluded => None,
         };
         let decided = |word: &str| {
             let labels: Vec<&str> = measured
@@ -143,7 +143,7 @@ pub(super) fn findings(measured: &[Measurement]) -> String {
                 .filter(|m| {
                     m.over_default
                         .as_ref()
-                        .and_then(|d| d[i].as_ref())
+                        .and_then(|d| d.get(i)?.as_ref())
                         .is_some_and(|r| verdict_word(r) == word)
                 })
                 .map(|m| m.variation.spec.as_str())
@@ -156,7 +156,10 @@ pub(super) fn findings(measured: &[Measurement]) -> String {
                 let clear: Vec<String> = measured
                     .iter()
                     .filter(|m| {
-                        m.over_pt[i]
+                        m.over_pt
+                            .get(i)
+                            .copied()
+                            .flatten()
                             .and_then(|r| r.ci)
                             .is_some_and(|ci| if inclusive { ci.lo >= bar } else { ci.lo > bar })
                     })

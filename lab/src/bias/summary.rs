@@ -45,7 +45,7 @@ pub(super) fn region_means(
     images: &[Vec<DVec3>],
     regions: &Regions,
 ) -> Vec<(Region, usize, Vec<DVec3>)> {
-    Region::ALL
+    Region::VISIBILITY
         .into_iter()
         .filter_map(|region| {
             let pixels = regions.pixels(region);

@@ -1,4 +1,4 @@
-//! `results.json` of a comparison (schema `reshift-compare/5`, docs/results-schema.md) as typed
+//! `results.json` of a comparison (schema `reshift-compare/6`, docs/results-schema.md) as typed
 //! structs. Optional and non-finite numbers are written as `null`, never NaN; keys are written
 //! in sorted order ([`Results::to_json`]).
 
@@ -16,7 +16,7 @@ use crate::regions::{Region, Regions};
 use crate::uncertainty::{CONFIDENCE, INTERVAL_METHOD, Interval};
 
 /// The schema name written into [`Results::schema`].
-pub const SCHEMA: &str = "reshift-compare/5";
+pub const SCHEMA: &str = "reshift-compare/6";
 
 /// The whole document.
 #[derive(Clone, Debug, PartialEq, Serialize)]

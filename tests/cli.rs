@@ -1035,6 +1035,17 @@ fn bias_budgeted_validates() {
     }
 }
 
+/// Sends `child` one Ctrl-C (SIGINT) after `delay` and waits for its output.
+fn interrupt_after(child: std::process::Child, delay: std::time::Duration) -> Output {
+    std::thread::sleep(delay);
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill");
+    assert!(kill.success());
+    child.wait_with_output().expect("wait")
+}
+
 /// Ctrl-C (SIGINT) while the reference renders: the process finishes the current batch, saves a
 /// resumable checkpoint, prints one line and exits non-zero; the checkpoint then resumes.
 #[cfg(unix)]
@@ -1064,13 +1075,7 @@ fn interrupt_leaves_a_resumable_reference_checkpoint() {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .expect("spawn");
-    std::thread::sleep(std::time::Duration::from_millis(1500));
-    let kill = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .expect("kill");
-    assert!(kill.success());
-    let o = child.wait_with_output().expect("wait");
+    let o = interrupt_after(child, std::time::Duration::from_millis(1500));
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(!err.contains("panicked"), "{err}");
@@ -1158,13 +1163,7 @@ fn interrupt_leaves_the_last_finished_frame_of_a_render() {
     .stderr(std::process::Stdio::piped())
     .spawn()
     .expect("spawn");
-    std::thread::sleep(std::time::Duration::from_secs(2));
-    let kill = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .expect("kill");
-    assert!(kill.success());
-    let o = child.wait_with_output().expect("wait");
+    let o = interrupt_after(child, std::time::Duration::from_secs(2));
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(!err.contains("panicked"), "{err}");

@@ -143,7 +143,7 @@ pub(super) fn findings(measured: &[Measurement]) -> String {
                 .filter(|m| {
                     m.over_default
                         .as_ref()
-                        .and_then(|d| d.get(i)?.as_ref())
+                        .and_then(|d| d[i].as_ref())
                         .is_some_and(|r| verdict_word(r) == word)
                 })
                 .map(|m| m.variation.spec.as_str())
@@ -156,10 +156,7 @@ pub(super) fn findings(measured: &[Measurement]) -> String {
                 let clear: Vec<String> = measured
                     .iter()
                     .filter(|m| {
-                        m.over_pt
-                            .get(i)
-                            .copied()
-                            .flatten()
+                        m.over_pt[i]
                             .and_then(|r| r.ci)
                             .is_some_and(|ci| if inclusive { ci.lo >= bar } else { ci.lo > bar })
                     })
@@ -248,7 +245,7 @@ mod tests {
     /// intervals, an interval containing 1 in neither list.
     #[test]
     fn findings_decide_by_lower_bounds() {
-        let row = |spec: &str, over_pt: [Option<Measured>; 4], over_default| Measurement {
+        let row = |spec: &str, over_pt: [Option<Measured>; 5], over_default| Measurement {
             variation: Variation {
                 label: spec.into(),
                 spec: spec.into(),
@@ -269,18 +266,26 @@ mod tests {
                     measured(2.0, 3.0, 4.0),
                     measured(5.0, 6.0, 7.0),
                     measured(4.9, 8.0, 12.0),
+                    measured(0.2, 0.3, 0.4),
                 ],
                 Some(vec![
                     measured(1.1, 1.2, 1.3),
                     measured(0.8, 1.0, 1.2),
                     None,
                     None,
+                    None,
                 ]),
             ),
             row(
                 "b",
-                [measured(0.9, 1.2, 1.5), None, None, measured(5.0, 6.0, 7.0)],
-                Some(vec![measured(0.5, 0.6, 0.7), None, None, None]),
+                [
+                    measured(0.9, 1.2, 1.5),
+                    None,
+                    None,
+                    measured(5.0, 6.0, 7.0),
+                    None,
+                ],
+                Some(vec![measured(0.5, 0.6, 0.7), None, None, None, None]),
             ),
         ];
         let text = findings(&rows);
@@ -294,5 +299,9 @@ mod tests {
         assert_eq!(line("lit"), "| lit | none | none | no bar |");
         assert_eq!(line("penumbra"), "| penumbra | none | none | ≥ 5: a (a) |");
         assert_eq!(line("shadowed"), "| shadowed | none | none | ≥ 5: b (b) |");
+        assert_eq!(
+            line("disoccluded"),
+            "| disoccluded | none | none | no bar |"
+        );
     }
 }

@@ -162,7 +162,9 @@ fn imports(code: &str, module: &[String]) -> Vec<Vec<String>> {
         let s = s.strip_prefix("pub(crate) ").unwrap_or(s);
         let s = s.strip_prefix("pub(super) ").unwrap_or(s);
         let s = s.strip_prefix("pub ").unwrap_or(s);
-        if let Some(tree) = s.strip_prefix("use ") {
+        // A `use` declaration holds no string literal: text after `; use` inside a string is not
+        // one.
+        if let Some(tree) = s.strip_prefix("use ").filter(|t| !t.contains('"')) {
             paths.extend(expand(&tree.replace(char::is_whitespace, "")));
         }
     }

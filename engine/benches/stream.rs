@@ -1,5 +1,6 @@
 //! Long streams: CPU time per frame and peak memory of a preset's stream at 16 and at 256
-//! frames, side by side, on the built-in `bumpy` scene. A stream keeps no frame
+//! frames, side by side, on a built-in scene (`bumpy`; `RESHIFT_BENCH_SCENE=passing` for one
+//! whose object moves, posed and its BVH rebuilt every frame of its motion). A stream keeps no frame
 //! ([`engine::Keep::Last`]), so neither figure should grow with the frame count.
 //!
 //! `cargo bench -p engine --bench stream`. Each measurement is a child process (this bench run
@@ -10,7 +11,8 @@
 //! printed as the mean over rounds with a 95% t interval, and the ratio of 256 frames' to 16
 //! frames' per round as a geometric mean with its interval.
 //!
-//! Environment: `RESHIFT_BENCH_SIZE` (`WxH`, default 128x96) and the presets' knobs the other
+//! Environment: `RESHIFT_BENCH_SCENE` (a built-in scene, default bumpy), `RESHIFT_BENCH_SIZE`
+//! (`WxH`, default 128x96) and the presets' knobs the other
 //! benches take (`RESHIFT_BENCH_PRESETS`, comma-separated names, default every registered
 //! preset; `RESHIFT_BENCH_SHADE`, `RESHIFT_BENCH_NEIGHBOURS`).
 
@@ -28,7 +30,8 @@ const LENGTHS: [u32; 2] = [16, 256];
 
 /// The child: one stream of `frames` frames; prints `cpu_seconds wall_seconds peak_kib`.
 fn child(frames: u32, preset: &Preset, size: (u32, u32)) -> Result<(), String> {
-    let mut scene = Scene::builtin("bumpy").ok_or("no built-in scene bumpy")?;
+    let name = std::env::var("RESHIFT_BENCH_SCENE").unwrap_or_else(|_| "bumpy".into());
+    let mut scene = Scene::builtin(&name).ok_or(format!("no built-in scene {name}"))?;
     scene.camera = scene.camera.with_resolution(size.0, size.1);
     let config = RunConfig {
         seed: 1,
@@ -101,8 +104,9 @@ fn main() -> Result<(), String> {
         return child(frames, preset, size);
     }
     let rounds = common::rounds(3)?;
+    let scene = std::env::var("RESHIFT_BENCH_SCENE").unwrap_or_else(|_| "bumpy".into());
     println!(
-        "# streams on bumpy at {}x{}, {rounds} rounds, CPU time",
+        "# streams on {scene} at {}x{}, {rounds} rounds, CPU time",
         size.0, size.1
     );
     println!(

@@ -17,11 +17,12 @@ use sss::scene::{GBuffer, Pose, Scene};
 use restir::resample::ResampleError;
 use restir::reservoir::InvalidCandidate;
 use shifts::PixelReservoir;
-use shifts::preset::{Pairs, PassSpec, Preset, Shade};
+use shifts::preset::{Duplication, Pairs, PassSpec, Preset, Shade};
 
 use crate::candidates::{self, ProbeCounts};
 use crate::clock::Stopwatch;
 use crate::diagnostics::{Counters, HybridChoice, Recorder};
+use crate::duplication;
 use crate::image::Image;
 use crate::plan::{PassKernel, Plan, Resource, Role, Rotation, Slot, Step};
 use crate::reciprocal::{self, Combine, Exchanged};
@@ -109,6 +110,8 @@ impl<'a> CpuStream<'a> {
             .map(|(_, step)| step.label.clone());
         let state = RunState {
             config: *config,
+            duplication: preset.duplication,
+            sharing: None,
             shade: preset.shade,
             target: preset.target,
             width,
@@ -119,6 +122,7 @@ impl<'a> CpuStream<'a> {
             rotation: Rotation::FIRST,
             gbuffer: None,
             previous_gbuffer: None,
+            previous_scene: None,
             counters: config
                 .collect_diagnostics
                 .then(|| Counters::new(width, height, reuse_labels.collect())),
@@ -149,19 +153,28 @@ impl<'a> CpuStream<'a> {
         }
         let mut steps = Vec::with_capacity(self.plan.steps.len());
         let mut shaded = None;
+        // The scene posed at the frame (a new BVH where objects move) is timed with the first
+        // step, the G-buffer's.
+        let mut watch = Stopwatch::start(&Backend::Cpu);
+        let scene = self.scene.at_frame(frame);
         for step in &self.plan.steps {
-            let watch = Stopwatch::start(&Backend::Cpu);
-            if let Some(image) = self.state.step(&self.scene, frame, step)? {
+            if let Some(image) = self.state.step(&scene, frame, step)? {
                 shaded = Some(image);
             }
             steps.push(watch.read());
+            watch = Stopwatch::start(&Backend::Cpu);
         }
+        // Temporal reuse evaluates its history in the scene of its frame.
+        self.state.previous_scene = scene.motion.is_some().then(|| scene.into_owned());
         let (image, nan_count) =
             shaded.ok_or_else(|| PipelineError::Config("a plan without a shade step".into()))?;
         self.state.rotation = self.state.rotation.next(&self.plan);
         self.state.previous_gbuffer = self.state.gbuffer.take();
         self.next += 1;
         let last = self.state.rotation.buffer(Slot::Previous);
+        if self.state.duplication == Duplication::Divides {
+            self.state.sharing = Some(duplication::sharing(&self.state.reservoirs[last]));
+        }
         Ok(Frame {
             index: frame,
             image,
@@ -195,6 +208,10 @@ impl<'a> CpuStream<'a> {
 /// G-buffers, their rotation) and the diagnostics.
 struct RunState {
     config: RunConfig,
+    duplication: Duplication,
+    /// With [`Duplication::Divides`], the duplication map of the previous frame's final
+    /// reservoirs.
+    sharing: Option<Vec<u32>>,
     shade: Shade,
     target: Target,
     width: u32,
@@ -210,13 +227,15 @@ struct RunState {
     rotation: Rotation,
     gbuffer: Option<GBuffer>,
     previous_gbuffer: Option<GBuffer>,
+    /// The previous frame's scene where objects move (posed there); `None` where nothing moves.
+    previous_scene: Option<Scene>,
     counters: Option<Counters>,
     /// The reuse telemetry, during the last frame of a run with diagnostics.
     recorder: Option<Recorder>,
 }
 
 impl RunState {
-    /// Runs `step` of frame `frame` of `scene`; shade returns the frame's image and its
+    /// Runs `step` of frame `frame` of `scene` (posed at `frame`); shade returns the frame's image and its
     /// non-finite count.
     fn step(
         &mut self,
@@ -264,8 +283,10 @@ impl RunState {
             target: self.target,
         };
         let previous = self.previous_gbuffer.as_ref().map(|gbuffer| Previous {
+            scene: self.previous_scene.as_ref().unwrap_or(scene),
             gbuffer,
             reservoirs: bound(Role::PreviousReservoirs),
+            sharing: self.sharing.as_deref(),
         });
         let cells = &mut self.cells;
         run_pass(

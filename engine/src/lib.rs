@@ -18,6 +18,7 @@ pub mod contract;
 mod cpu;
 pub mod denoise;
 pub mod diagnostics;
+pub mod duplication;
 pub mod hash;
 pub mod image;
 pub mod limits;

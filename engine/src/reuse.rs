@@ -109,9 +109,15 @@ impl<'a> PassInput<'a> {
 
 /// The previous frame, for temporal reuse.
 pub struct Previous<'a> {
+    /// The scene posed at the previous frame (`Scene::at_frame`): where objects move, the
+    /// history's domains and the MIS back-shifts into them are evaluated there.
+    pub scene: &'a Scene,
     pub gbuffer: &'a GBuffer,
     /// The previous frame's final reservoirs.
     pub reservoirs: &'a [PixelReservoir],
+    /// With `restir:<preset>/duplication=divides`, the previous frame's duplication map
+    /// (`crate::duplication::sharing` of `reservoirs`), which divides a history's confidence.
+    pub sharing: Option<&'a [u32]>,
 }
 
 /// A reuse step's shared tail: resample, resolve a deferred index, collect diagnostics, sum the
@@ -258,10 +264,14 @@ pub fn temporal(
         let q = prev.gbuffer.reproject(&input.scene.camera, g)?;
         let g_prev = prev.gbuffer.pixels[q as usize].as_ref()?;
         let frame = prev.gbuffer.frame;
-        let domain = SssDomain::new(input.scene, g_prev, q, frame, input.pass, input.seed)?
+        let domain = SssDomain::new(prev.scene, g_prev, q, frame, input.pass, input.seed)?
             .with_target(input.target);
         let mut reservoir = prev.reservoirs[q as usize].get();
         reservoir.confidence = cap_confidence(reservoir.confidence, canonical.confidence, cap);
+        // The duplication map [PTE]: a history held by k pixels counts 1/k.
+        if let Some(sharing) = prev.sharing {
+            reservoir.confidence /= sharing[q as usize].max(1) as f32;
+        }
         Some((domain, reservoir))
     });
     let Some(history) = history else {

@@ -467,7 +467,7 @@ fn bvh_queries_match_cpu() {
         "the rays must exercise the BVH: {closest_hits} hits, {multi} multi-hit chords"
     );
     // An empty scene uploads (zero nodes) and is never hit.
-    let empty = GpuBvh::upload(&context, &Geometry::new(&[])).unwrap();
+    let empty = GpuBvh::upload(&context, &Geometry::new::<geometry::TriangleMesh>(&[])).unwrap();
     trace_rays(&mut context, &kernel, &empty, &ray_buffer, &results, 1);
     let first = results.read::<BvhRayOutput>().unwrap()[0];
     assert_eq!(

@@ -1154,8 +1154,10 @@ fn reuse_passes_match_the_cpu() {
         for case in preset_pass_cases() {
             let input = pass_input(&scene, &g1, &r1, case.pass, SEED);
             let previous = Previous {
+                scene: &scene,
                 gbuffer: &g0,
                 reservoirs: &r0,
+                sharing: None,
             };
             let cpu = cpu_reuse(&input, Some(&previous), &case.spec);
             let is_temporal = matches!(case.spec, PassSpec::Temporal { .. });

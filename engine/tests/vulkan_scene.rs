@@ -173,6 +173,10 @@ fn gbuffer_matches_cpu_on_builtin_scenes() {
     let mut totals = GBufferDiff::default();
     for &(name, _) in Scene::BUILTIN {
         let scene = small(Scene::builtin(name).unwrap());
+        // The device renders scenes at rest; a moving one is refused (`passing`, below).
+        if scene.motion.is_some() {
+            continue;
+        }
         let gpu_scene = GpuScene::upload(&context, &scene).unwrap();
         let mut frame0 = Vec::new();
         for frame in [0, 15] {

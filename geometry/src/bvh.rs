@@ -18,6 +18,7 @@
 //! limit: a ray with a zero direction component that runs exactly in a child box's face plane
 //! can miss that box (a measure-zero grazing case).
 
+use std::borrow::Borrow;
 use std::mem::MaybeUninit;
 
 use glam::{Vec2, Vec3};
@@ -93,18 +94,49 @@ impl Geometry {
     ///
     /// Panics if a mesh indexes past its positions or has non-finite vertices (the loaders and
     /// shapes never produce such meshes; this is a programming error, not bad input).
-    pub fn new(objects: &[TriangleMesh]) -> Geometry {
+    pub fn new<M: Borrow<TriangleMesh>>(objects: &[M]) -> Geometry {
         Geometry::with_build_params(objects, build_params())
     }
 
     /// [`Geometry::new`] with explicit obvhs build parameters (quality vs build time).
     /// `pre_split` is ignored: with spatial splits a triangle can sit in several leaves, and
     /// all-hits queries would report it more than once.
-    pub fn with_build_params(objects: &[TriangleMesh], params: BvhBuildParams) -> Geometry {
+    pub fn with_build_params<M: Borrow<TriangleMesh>>(
+        objects: &[M],
+        params: BvhBuildParams,
+    ) -> Geometry {
+        Geometry::build(objects, params, |_| None)
+    }
+
+    /// [`Geometry::with_build_params`] for `objects` that equal the objects this geometry was
+    /// built from, triangle for triangle, except those marked in `moved` (a moving object's
+    /// pose at another frame): the trees of the objects at rest are this geometry's, cloned;
+    /// the scene's trees and the moved objects' are built anew. The same geometry as a full
+    /// build with `params` where this one was built with them.
+    pub fn reposed<M: Borrow<TriangleMesh>>(
+        &self,
+        objects: &[M],
+        moved: &[bool],
+        params: BvhBuildParams,
+    ) -> Geometry {
+        Geometry::build(objects, params, |object| {
+            let kept = !moved.get(object).copied().unwrap_or(true);
+            kept.then(|| self.object_trees.get(object).cloned())
+                .flatten()
+        })
+    }
+
+    /// The build of [`Geometry::with_build_params`] that takes object `i`'s own tree from
+    /// `kept(i)` where it gives one.
+    fn build<M: Borrow<TriangleMesh>>(
+        objects: &[M],
+        params: BvhBuildParams,
+        kept: impl Fn(usize) -> Option<WideBvh>,
+    ) -> Geometry {
         let mut vertices = Vec::new();
         let mut shading_normals = Vec::new();
         let mut object_of = Vec::new();
-        for (object, mesh) in objects.iter().enumerate() {
+        for (object, mesh) in objects.iter().map(Borrow::borrow).enumerate() {
             for (i, &[a, b, c]) in mesh.indices.iter().enumerate() {
                 let tri = [a, b, c].map(|v| {
                     let p = *mesh.positions.get(v as usize).unwrap_or_else(|| {
@@ -146,9 +178,11 @@ impl Geometry {
         let mut object_trees = Vec::new();
         if objects.len() > 1 {
             let mut first = 0;
-            for mesh in objects {
+            for (object, mesh) in objects.iter().map(Borrow::borrow).enumerate() {
                 let own = &triangles[first..first + mesh.indices.len()];
-                let tree = if own.is_empty() {
+                let tree = if let Some(tree) = kept(object) {
+                    tree
+                } else if own.is_empty() {
                     WideBvh::default()
                 } else {
                     let mut bvh2 = build_bvh2(own, &params);
@@ -670,7 +704,7 @@ mod tests {
 
     #[test]
     fn degenerate_inputs() {
-        let empty = Geometry::new(&[]);
+        let empty = Geometry::new::<TriangleMesh>(&[]);
         let ray = Ray::new(Vec3A::ZERO, Vec3A::X, 0.0, f32::INFINITY);
         assert!(empty.closest_hit(&ray).is_none() && !empty.occluded(&ray));
         let single = Geometry::new(&[TriangleMesh {
@@ -685,5 +719,36 @@ mod tests {
         let hit = single.closest_hit(&ray).expect("single triangle");
         assert_eq!((hit.prim, hit.object, hit.t), (0, 0, 1.0));
         assert!((single.position(0, hit.bary) - Vec3::X).length() < 1e-6);
+    }
+
+    /// A geometry reposed from another frame's (the sphere moved, the floor at rest) hits what a
+    /// full build of the new pose hits, for scene and per-object queries, along a fan of rays.
+    /// Control: claiming the sphere did not move keeps its old tree, and its hits differ.
+    #[test]
+    fn a_reposed_geometry_hits_what_a_full_build_hits() {
+        let params = BvhBuildParams::fast_build();
+        let (sphere, floor) = (shapes::icosphere(0.5, 3), shapes::quad(4.0, 4.0));
+        let before = Geometry::with_build_params(&[sphere.clone(), floor.clone()], params);
+        let moved = sphere.transformed(&Affine3A::from_translation(Vec3::new(0.3, 0.6, 0.0)));
+        let now = [moved, floor];
+        let full = Geometry::with_build_params(&now, params);
+        let reposed = before.reposed(&now, &[true, false], params);
+        let stale = before.reposed(&now, &[false, false], params);
+        let (mut hits, mut stale_differs) = (0, 0);
+        for i in 0..400 {
+            let (a, b) = ((i % 20) as f32 / 20.0 - 0.5, (i / 20) as f32 / 20.0 - 0.5);
+            let dir = Vec3A::new(a, -1.0, b).normalize();
+            let ray = Ray::new(Vec3A::new(0.2, 3.0, 0.0), dir, 0.0, 1e3);
+            assert_eq!(reposed.closest_hit(&ray), full.closest_hit(&ray), "ray {i}");
+            for object in 0..2 {
+                let want = full.closest_hit_on_object(&ray, object);
+                assert_eq!(reposed.closest_hit_on_object(&ray, object), want, "ray {i}");
+                hits += want.is_some() as u32;
+            }
+            stale_differs += (stale.closest_hit_on_object(&ray, 0)
+                != full.closest_hit_on_object(&ray, 0)) as u32;
+        }
+        assert!(hits > 400, "{hits} hits");
+        assert!(stale_differs > 20, "control: {stale_differs} rays");
     }
 }

@@ -83,7 +83,7 @@ pub(super) const EMPTY_LANE: u32 = u32::MAX;
 
 /// The CPU BVH: wide nodes, triangle packets, the root reference, and the traversal stack depth
 /// the tree can need.
-#[derive(Default)]
+#[derive(Clone, Default)]
 pub(super) struct WideBvh {
     pub nodes: Vec<WideNode>,
     pub packets: Vec<Packet>,

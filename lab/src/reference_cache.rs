@@ -218,6 +218,7 @@ pub fn accumulate(
     max_batches: Option<u32>,
     progress: &mut dyn Progress,
 ) -> Result<(), Error> {
+    let scene = &*scene.at_frame(reference.config.frame);
     let gbuffer = GBuffer::render(scene, reference.config.frame);
     progress.begin(
         what,

@@ -109,8 +109,10 @@ pub struct Regions {
 
 impl Regions {
     /// Classifies the pixels of `gbuffer` (a frame of `scene`, whose previous frame it renders
-    /// for the reprojection); `seed` keys the light samples.
+    /// for the reprojection; light samples see the scene posed at the frame); `seed` keys the
+    /// light samples.
     pub fn classify(scene: &Scene, gbuffer: &GBuffer, seed: u64) -> Regions {
+        let scene = &*scene.at_frame(gbuffer.frame);
         let previous = (gbuffer.frame.checked_sub(1)).map(|f| GBuffer::render(scene, f));
         let disoccluded = (gbuffer.pixels.iter())
             .map(|g| {

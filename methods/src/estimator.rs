@@ -76,6 +76,12 @@ pub trait Estimator: fmt::Debug + Send + Sync + 'static {
         self.render_counted(backend, scene, frames, seed)
     }
 
+    /// Whether it renders scenes whose objects move (`sss::scene::motion`) on the CPU, each
+    /// frame in the scene posed there; [`Method`] refuses a moving scene otherwise.
+    fn renders_motion(&self) -> bool {
+        false
+    }
+
     /// The path-tracer settings whose converged image this method estimates, i.e. its
     /// reference in `bias` (DESIGN §7): the default path tracer (Burley BSSRDF) unless the
     /// method renders another transport model (`image-space`: the dipole profile).
@@ -268,6 +274,11 @@ impl Method {
         self.0.reference()
     }
 
+    /// Whether it renders scenes whose objects move ([`Estimator::renders_motion`]).
+    pub fn renders_motion(&self) -> bool {
+        self.0.renders_motion()
+    }
+
     /// [`Method::render`] on `backend`, timed per rendered frame on the backend's clock
     /// ([`engine::clock`]) and on the wall clock.
     pub fn render_on(
@@ -292,6 +303,7 @@ impl Method {
         seed: u64,
         stop: &dyn Fn() -> bool,
     ) -> Result<Rendered, PipelineError> {
+        self.refuse_motion(scene)?;
         let origin = Path::new("(run)");
         let (width, height) = (scene.camera.width(), scene.camera.height());
         limits::frames(origin, "frames", frames)
@@ -329,6 +341,19 @@ impl Method {
         })
     }
 
+    /// The one-line refusal of a scene with a moving object for a method that renders only
+    /// scenes at rest ([`Estimator::renders_motion`]; the Vulkan backend refuses them itself).
+    fn refuse_motion(&self, scene: &Scene) -> Result<(), PipelineError> {
+        match scene.moving_object() {
+            Some(object) if !self.0.renders_motion() => Err(PipelineError::Config(format!(
+                "{}: object {object:?} moves, and {} renders only scenes at rest",
+                scene.file.display(),
+                self.name()
+            ))),
+            _ => Ok(()),
+        }
+    }
+
     /// [`Estimator::render_trajectory`] of replica `seed` on `backend`, timed like
     /// [`Method::render_on`]: the returned timing is the whole trajectory's per rendered frame
     /// (a memoryless method renders every frame, so it is timed on every frame of the
@@ -343,6 +368,7 @@ impl Method {
         if frames == 0 {
             return Err(PipelineError::Config("frames = 0; need at least 1".into()));
         }
+        self.refuse_motion(scene)?;
         let watch = Stopwatch::start(backend);
         let trajectory = self.0.render_trajectory(backend, scene, frames, seed)?;
         let timing = watch.read().per(trajectory.frames_rendered);

@@ -55,7 +55,7 @@ impl<T: PerSample> Estimator for T {
         Some(Method::new(T::at(spp)))
     }
 
-    /// Memoryless: only the last frame is rendered.
+    /// Memoryless: only the last frame is rendered, in the scene posed there.
     fn render(
         &self,
         backend: &Backend,
@@ -63,7 +63,12 @@ impl<T: PerSample> Estimator for T {
         frames: u32,
         seed: u64,
     ) -> Result<LastFrame, PipelineError> {
-        self.render_frame(backend, scene, frames - 1, seed)
+        let frame = frames - 1;
+        self.render_frame(backend, &scene.at_frame(frame), frame, seed)
+    }
+
+    fn renders_motion(&self) -> bool {
+        true
     }
 
     fn reference(&self) -> PtSettings {

@@ -1,4 +1,4 @@
-//! `restir:<preset>[/temporal=<shift>][/spatial=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/radius=<clamped|unclamped>][/pairs=<independent|reciprocal>][/target=<p̂>][/shade=<selected|all>][/channels=rgb]`:
+//! `restir:<preset>[/temporal=<shift>][/spatial=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/radius=<clamped|unclamped>][/pairs=<independent|reciprocal>][/duplication=<ignored|divides>][/target=<p̂>][/shade=<selected|all>][/channels=rgb]`:
 //! the ReSTIR SSS frame pipeline with a registered preset [001 §5.1] (DESIGN §6). Every frame of
 //! the trajectory is rendered (temporal reuse) and the last one is kept; `/temporal=<shift>`
 //! swaps the shift of the temporal pass [001 Fig. 10], `/spatial=<shift>` the one shift of the
@@ -18,7 +18,7 @@ use engine::{
     Backend, Keep, PassSpec, PipelineError, Preset, RadiusRule, RunConfig, Shade, ShiftKind,
     Stream, Target,
 };
-use shifts::preset::{PRESET_NAMES, Pairs};
+use shifts::preset::{Duplication, PRESET_NAMES, Pairs};
 use sss::scene::Scene;
 
 use super::estimator::{Entry, Estimator, LastFrame, Method, SampleCounts, Trajectory};
@@ -29,7 +29,7 @@ pub use channels::Channels;
 
 pub const ENTRY: Entry = Entry {
     family: "restir",
-    usage: "restir:<preset>[/temporal=<shift>][/spatial=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/radius=<clamped|unclamped>][/pairs=<independent|reciprocal>][/target=<luminance|mean|l2|red|green|blue>][/shade=<selected|all>][/channels=rgb]",
+    usage: "restir:<preset>[/temporal=<shift>][/spatial=<shift>][/cap=<κ>][/spatial-cap=<κ>][/neighbours=<n>][/radius=<clamped|unclamped>][/pairs=<independent|reciprocal>][/duplication=<ignored|divides>][/target=<luminance|mean|l2|red|green|blue>][/shade=<selected|all>][/channels=rgb]",
     about: "ReSTIR SSS with spatiotemporal reuse and the preset's shift mapping [001 §5.1]; \
             `/temporal=<shift>` swaps the temporal pass's shift (001 Fig. 10), \
             `/spatial=<shift>` the spatial passes' one shift (see `reshift shifts`); \
@@ -38,6 +38,7 @@ pub const ENTRY: Entry = Entry {
             `/neighbours=<n>` sets the spatial passes' neighbour count; \
             `/radius=unclamped` drops the spatial disk's [5, 30] px clamp (floor 1 px; CPU only); \
             `/pairs=reciprocal` pairs pixels that take each other as spatial neighbours, so each pair's two shifts serve both (ReSTIR PT Enhanced; CPU only); \
+            `/duplication=divides` divides a temporal history's confidence by the number of pixels that held its sample after the previous frame's reuse (ReSTIR PT Enhanced's duplication map; biased, CPU only); \
             `/target=<mean|l2>` sets p̂ to the channel mean or the L2 norm of f (default luminance; CPU only), \
             `/target=<red|green|blue>` to one channel of f (an estimator of that channel alone); \
             `/shade=all` paints the last reuse pass's Rao-Blackwellised value over all its inputs; \
@@ -78,7 +79,8 @@ pub struct Restir(pub Preset);
 /// `/spatial=<shift>` (the same for the spatial passes' one shift, [`Preset::with_spatial_shift`]),
 /// `/cap=<κ>` (the temporal confidence cap, finite and > 0), `/spatial-cap=<κ>` (every spatial
 /// pass's cap), `/neighbours=<n>` (every spatial pass's count), `/radius=<clamped|unclamped>`
-/// (every spatial pass's [`RadiusRule`]), `/pairs=<independent|reciprocal>` (every spatial
+/// (every spatial pass's [`RadiusRule`]), `/duplication=<ignored|divides>` ([`Duplication`]),
+/// `/pairs=<independent|reciprocal>` (every spatial
 /// pass's [`Pairs`]), `/target=<p̂>` (the [`Target`] named `p̂`) and
 /// `/shade=<selected|all>` ([`Shade`]). A modified preset is named `arg`. `/channels=rgb` is
 /// refused: it makes a method of three runs ([`Channels`]), not a preset.
@@ -104,6 +106,10 @@ pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
                     .map_err(|_| format!("neighbours {value:?} is not a whole number"))?;
                 preset.with_neighbours(count)
             }
+            Some(("duplication", value)) => preset.with_duplication(
+                Duplication::named(value)
+                    .ok_or_else(|| format!("duplication {value:?} is not ignored or divides"))?,
+            ),
             Some(("pairs", value)) => preset.with_pairs(
                 Pairs::named(value)
                     .ok_or_else(|| format!("pairs {value:?} is not {}", PAIRS.join(" or ")))?,
@@ -147,7 +153,7 @@ pub fn preset(arg: Option<&str>) -> Result<Preset, String> {
 }
 
 /// The modifiers [`preset`] knows, for its error message.
-const MODIFIERS: &str = "temporal=<shift>, spatial=<shift>, cap=<κ>, spatial-cap=<κ>, neighbours=<n>, radius=<clamped|unclamped>, pairs=<independent|reciprocal>, target=<luminance|mean|l2|red|green|blue>, shade=<selected|all>, channels=rgb";
+const MODIFIERS: &str = "temporal=<shift>, spatial=<shift>, cap=<κ>, spatial-cap=<κ>, neighbours=<n>, radius=<clamped|unclamped>, pairs=<independent|reciprocal>, duplication=<ignored|divides>, target=<luminance|mean|l2|red|green|blue>, shade=<selected|all>, channels=rgb";
 
 /// The choices `/pairs=` knows ([`Pairs::ALL`]), for its error message.
 const PAIRS: [&str; Pairs::ALL.len()] = {
@@ -210,6 +216,12 @@ impl Estimator for Restir {
 
     fn with_spp(&self, _spp: u32) -> Option<Method> {
         None
+    }
+
+    /// Streams pose the scene at each frame and evaluate temporal reuse's history in the
+    /// previous frame's pose (`engine::reuse::Previous`).
+    fn renders_motion(&self) -> bool {
+        true
     }
 
     /// A stream of `frames` frames that keeps only the last image: memory does not grow with

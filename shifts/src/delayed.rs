@@ -179,7 +179,7 @@ pub(crate) fn replay(
 /// direction to x2 (resp. y2): the change of x3's solid angle when x2 moves to y2 [001 Eq. 11].
 /// 1 for delta lights (x3 is not a dimension of the path); 0 for an unknown light (the caller
 /// fails with `Degenerate`).
-fn light_jacobian(lights: &Lights, light: u32, x3: Vec3, x2: Vec3, y2: Vec3) -> f32 {
+pub(crate) fn light_jacobian(lights: &Lights, light: u32, x3: Vec3, x2: Vec3, y2: Vec3) -> f32 {
     if light as usize >= lights.len() {
         return 0.0;
     }

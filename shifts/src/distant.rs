@@ -7,12 +7,11 @@
 //! `shifts/glsl/distant.glsl` and one line of `registry.rs`.
 
 use restir::shift::{Fail, Shift, Shifted};
-use sss::bssrdf::ExitPoint;
 use sss::material::Translucent;
 
 use crate::domain::SssDomain;
 use crate::numbers::{Cell, DeclaresNumbers, Effect, Interval, Numbers, Outcome, Region};
-use crate::reconnection::reconnect;
+use crate::reconnection::reconnect_shifted;
 use crate::sample::SssSample;
 
 /// Reconnection where `‖x2 − x1‖ ≥ min_distance` for the exit points x1 of both domains.
@@ -41,8 +40,9 @@ impl DeclaresNumbers for DistantReconnection {
     }]);
 }
 
-/// `J = 1` (reconnection). The rule reads x2 and both exit points, which a round trip
-/// exchanges, so the shift fails in one direction exactly when it fails in the other.
+/// `J = 1` (reconnection; across two poses of a moving object, the light factor of
+/// `reconnect_shifted`). The rule reads x2 and both exit points, which a round trip exchanges,
+/// so the shift fails in one direction exactly when it fails in the other.
 impl Shift<SssDomain<'_>> for DistantReconnection {
     fn shift(
         &self,
@@ -50,11 +50,13 @@ impl Shift<SssDomain<'_>> for DistantReconnection {
         src: &SssDomain,
         dst: &SssDomain,
     ) -> Result<Shifted<SssSample>, Fail> {
-        let x2 = src.entry_point(x).ok_or(Fail::Rejected)?;
-        let far = |x1: &ExitPoint| (x2.position - x1.position).length() >= self.min_distance;
-        if !(far(src.x1()) && far(dst.x1())) {
+        let far = |d: &SssDomain| {
+            d.entry_point(x)
+                .is_some_and(|x2| (x2.position - d.x1().position).length() >= self.min_distance)
+        };
+        if !(far(src) && far(dst)) {
             return Err(Fail::Rejected);
         }
-        reconnect(x, dst).map(|y| Shifted { y, jacobian: 1.0 })
+        reconnect_shifted(x, src, dst)
     }
 }

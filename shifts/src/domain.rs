@@ -3,6 +3,7 @@
 //! x2–x3 segment, and keys the random streams that some shifts need.
 
 use std::fmt;
+use std::sync::Arc;
 
 use geometry::Ray;
 use glam::{Vec3, Vec3A};
@@ -28,7 +29,8 @@ pub struct LightPath {
     pub shadow_target: Vec3,
 }
 
-/// What of a sample does not depend on the domain it is evaluated in ([`SssDomain::locate`]).
+/// What of a sample does not depend on the domain it is evaluated in, among domains that share
+/// a pose of the scene ([`SssDomain::locate`], [`SssDomain::shares_pose`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Located {
     /// x2.
@@ -115,6 +117,13 @@ impl<'s> SssDomain<'s> {
         self.scene
     }
 
+    /// Whether `other` sees the scene's objects where this domain does (the same geometry: the
+    /// same frame, or a scene where nothing moves), so that what [`SssDomain::locate`] finds here
+    /// holds there.
+    pub fn shares_pose(&self, other: &SssDomain) -> bool {
+        Arc::ptr_eq(&self.scene.geometry, &other.scene.geometry)
+    }
+
     pub fn material(&self) -> &Translucent {
         &self.material
     }
@@ -149,7 +158,7 @@ impl<'s> SssDomain<'s> {
 
     /// x2 of `y` wherever it lies (no check against x1's object); `None` if its triangle does
     /// not exist or is not on `y`'s object.
-    fn locate_x2(&self, y: &SssSample) -> Option<EntryPoint> {
+    pub(crate) fn locate_x2(&self, y: &SssSample) -> Option<EntryPoint> {
         let geometry = &self.scene.geometry;
         if y.prim() >= geometry.triangle_count() || geometry.object_of(y.prim()) != y.object() {
             return None;
@@ -158,7 +167,7 @@ impl<'s> SssDomain<'s> {
     }
 
     /// What of `y` does not depend on the domain: its x2 and light path ([`Located`]), for
-    /// evaluating it in several domains of the scene ([`SssDomain::target_located`]).
+    /// evaluating it in several domains of one pose ([`SssDomain::target_located`]).
     pub fn locate(&self, y: &SssSample) -> Option<Located> {
         let x2 = self.locate_x2(y)?;
         Some(Located {

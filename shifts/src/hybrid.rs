@@ -9,7 +9,7 @@ use sss::material::Translucent;
 use crate::delayed::{Checks, Wanted, replay};
 use crate::domain::SssDomain;
 use crate::numbers::{Cell, DeclaresNumbers, Effect, Interval, Numbers, Outcome, Region};
-use crate::reconnection::reconnect;
+use crate::reconnection::reconnect_shifted;
 use crate::sample::SssSample;
 
 /// Hybrid shift with thresholds `κ_dist` (scene units) and `κ_orient` (cosine).
@@ -58,11 +58,16 @@ impl Hybrid {
     ) -> Result<Shifted<SssSample>, Fail> {
         let x2 = src.entry_point(x).ok_or(Fail::Rejected)?;
         if self.connectable(src.x1(), &x2) {
-            let y = reconnect(x, dst)?;
-            if respect_offset && !self.connectable(dst.x1(), &x2) {
+            let shifted = reconnect_shifted(x, src, dst)?;
+            // x2 where `dst` sees it (a moving object carries it between poses).
+            let y2 = match src.shares_pose(dst) {
+                true => x2,
+                false => dst.entry_point(&shifted.y).ok_or(Fail::Rejected)?,
+            };
+            if respect_offset && !self.connectable(dst.x1(), &y2) {
                 return Err(Fail::Rejected);
             }
-            Ok(Shifted { y, jacobian: 1.0 })
+            Ok(shifted)
         } else {
             let replayed = replay(x, src, dst, Checks::ALL)?;
             let rejected = respect_offset && self.connectable(dst.x1(), &replayed.y2);

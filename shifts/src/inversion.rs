@@ -7,7 +7,7 @@ use sss::bssrdf::{BssrdfSample, EntryPoint, Probe, find_index, invert_random_num
 
 use crate::domain::{PURPOSE_INVERSION, SssDomain};
 use crate::numbers::{DeclaresNumbers, Numbers};
-use crate::reconnection::reconnect;
+use crate::reconnection::reconnect_shifted;
 use crate::sample::SssSample;
 
 pub use crate::contract::IndexPolicy;
@@ -56,16 +56,18 @@ impl Shift<SssDomain<'_>> for InvertingReconnection {
         src: &SssDomain,
         dst: &SssDomain,
     ) -> Result<Shifted<SssSample>, Fail> {
-        let y = reconnect(x, dst)?;
+        let Shifted { y, jacobian } = reconnect_shifted(x, src, dst)?;
         let x2 = dst.entry_point(&y).ok_or(Fail::Rejected)?;
         let exact = self.policy == IndexPolicy::Exact;
         let (probe, p_disk, index) = invert_at(dst, src, &x2, exact)?;
         if exact {
-            // The back-shift's own inversion: T_{dst→src} fails exactly when this does.
-            invert_at(src, dst, &x2, true)?;
+            // The back-shift's own inversion: T_{dst→src} fails exactly when this does. It
+            // inverts x2 where `src` sees it (a moving object carries it between poses).
+            let x2_src = src.entry_point(x).ok_or(Fail::Rejected)?;
+            invert_at(src, dst, &x2_src, true)?;
         }
         let y = y.with_bssrdf(&BssrdfSample::new(&probe, index, &x2, p_disk));
-        Ok(Shifted { y, jacobian: 1.0 })
+        Ok(Shifted { y, jacobian })
     }
 }
 

@@ -175,6 +175,36 @@ pub enum Shade {
     AllInputs,
 }
 
+/// What temporal reuse does with the duplication of a history's sample
+/// (`restir:<preset>/duplication=<name>`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Duplication {
+    /// The history's confidence is its capped one [001 §5.1].
+    #[default]
+    Ignored,
+    /// The duplication map [PTE]: the history's capped confidence divided by the number of
+    /// pixels whose final sample in the previous frame had the same x2 (spatial reuse copies
+    /// one good sample into many pixels, whose histories then carry it as if independent). The
+    /// divisor depends on the history's own sample, so the MIS weights are no longer fixed
+    /// given the inputs: a biased option, its bias measured in docs/experiments.md. CPU only.
+    Divides,
+}
+
+impl Duplication {
+    pub const ALL: [Duplication; 2] = [Duplication::Ignored, Duplication::Divides];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Duplication::Ignored => "ignored",
+            Duplication::Divides => "divides",
+        }
+    }
+
+    pub fn named(name: &str) -> Option<Duplication> {
+        Duplication::ALL.into_iter().find(|d| d.name() == name)
+    }
+}
+
 /// A named list of passes run once per frame, and what the frame's shade step paints.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Preset {
@@ -183,6 +213,8 @@ pub struct Preset {
     pub shade: Shade,
     /// The target function `p̂` of every pass's domains.
     pub target: Target,
+    /// What temporal reuse does with a history's duplication.
+    pub duplication: Duplication,
 }
 
 /// Why a preset cannot run.
@@ -278,6 +310,7 @@ impl Preset {
             passes: vec![candidates(), temporal(shift), spatial(shift, 4)],
             shade: Shade::Selected,
             target: Target::Luminance,
+            duplication: Duplication::Ignored,
         }
     }
 
@@ -300,6 +333,7 @@ impl Preset {
             ],
             shade: Shade::Selected,
             target: Target::Luminance,
+            duplication: Duplication::Ignored,
         }
     }
 
@@ -383,6 +417,14 @@ impl Preset {
             }
         }
         self
+    }
+
+    /// The preset whose temporal reuse treats a history's duplication as `choice`.
+    pub fn with_duplication(self, choice: Duplication) -> Preset {
+        Preset {
+            duplication: choice,
+            ..self
+        }
     }
 
     /// Its passes' labels in order, e.g. `candidates → temporal:hybrid → spatial4:hybrid`.
@@ -654,6 +696,7 @@ mod tests {
             }],
             shade: Shade::Selected,
             target: Target::Luminance,
+            duplication: Duplication::Ignored,
         };
         assert!(p.validate().is_err());
     }
@@ -706,6 +749,7 @@ mod tests {
             passes: vec![candidates(), spatial(shifts[0], 2), spatial(shifts[1], 2)],
             shade: Shade::Selected,
             target: Target::Luminance,
+            duplication: Duplication::Ignored,
         };
         use ShiftKind::{DelayedReconnection as D, Reconnection as R};
         spatial_only([D, R]).validate().unwrap();
@@ -812,11 +856,12 @@ mod tests {
         ) -> Result<Shifted<crate::SssSample>, Fail> {
             let x2 = src.entry_point(x).ok_or(Fail::Rejected)?.position;
             if Self::far(src.x1(), x2, src) {
-                let y = crate::reconnection::reconnect(x, dst)?;
-                if !Self::far(dst.x1(), x2, dst) {
+                let shifted = crate::reconnection::reconnect_shifted(x, src, dst)?;
+                let y2 = dst.entry_point(&shifted.y).ok_or(Fail::Rejected)?.position;
+                if !Self::far(dst.x1(), y2, dst) {
                     return Err(Fail::Rejected);
                 }
-                return Ok(Shifted { y, jacobian: 1.0 });
+                return Ok(shifted);
             }
             let replayed = replay(x, src, dst, Checks::ALL)?;
             let far = Self::far(dst.x1(), replayed.y2.position, dst);

@@ -2,6 +2,7 @@
 
 use restir::shift::{Evaluated, Fail, Shift, Shifted};
 
+use crate::delayed::light_jacobian;
 use crate::domain::{Located, SssDomain};
 use crate::numbers::{DeclaresNumbers, Numbers};
 use crate::sample::SssSample;
@@ -45,20 +46,22 @@ impl<'s> Shift<SssDomain<'s>> for Reconnection {
     fn shift(
         &self,
         x: &SssSample,
-        _src: &SssDomain,
+        src: &SssDomain,
         dst: &SssDomain,
     ) -> Result<Shifted<SssSample>, Fail> {
-        reconnect(x, dst).map(|y| Shifted { y, jacobian: 1.0 })
+        reconnect_shifted(x, src, dst)
     }
 
     /// The support check has evaluated `p̂_dst(y)`: it is returned, not evaluated again.
     fn shift_with_target(
         &self,
         x: &SssSample,
-        _src: &SssDomain,
+        src: &SssDomain,
         dst: &SssDomain,
     ) -> Result<(Shifted<SssSample>, f32), Fail> {
-        reconnect_with_target(x, dst).map(|(y, target)| (Shifted { y, jacobian: 1.0 }, target))
+        let (y, target) = reconnect_with_target(x, dst)?;
+        let jacobian = pose_jacobian(x, src, dst)?;
+        Ok((Shifted { y, jacobian }, target))
     }
 
     /// `y = x`: both targets from one [`SssDomain::locate`] of x.
@@ -69,11 +72,11 @@ impl<'s> Shift<SssDomain<'s>> for Reconnection {
         dst: &SssDomain<'s>,
     ) -> Result<Evaluated<SssDomain<'s>>, Fail> {
         let located = src.locate(x).ok_or(Fail::Rejected)?;
-        let target = reconnect_located(&located, x, dst)?;
+        let target = reconnect_from(&located, x, src, dst)?;
         Ok(Evaluated {
             shifted: Shifted {
                 y: *x,
-                jacobian: 1.0,
+                jacobian: pose_jacobian(x, src, dst)?,
             },
             target,
             source_target: src.target_located(&located, x),
@@ -94,18 +97,20 @@ impl<'s> Shift<SssDomain<'s>> for Reconnection {
         };
         let source_target = src.target_located(&located, x);
         for (o, dst) in out.iter_mut().zip(dsts) {
-            *o = reconnect_located(&located, x, dst).map(|target| Evaluated {
-                shifted: Shifted {
-                    y: *x,
-                    jacobian: 1.0,
-                },
-                target,
-                source_target,
+            *o = reconnect_from(&located, x, src, dst).and_then(|target| {
+                Ok(Evaluated {
+                    shifted: Shifted {
+                        y: *x,
+                        jacobian: pose_jacobian(x, src, dst)?,
+                    },
+                    target,
+                    source_target,
+                })
             });
         }
     }
 
-    /// `y` located once for all of `others` (`J = 1`).
+    /// `y` located once for all of `others` that share its pose (`J = 1` there).
     fn targets_from(
         &self,
         y: &SssSample,
@@ -116,9 +121,45 @@ impl<'s> Shift<SssDomain<'s>> for Reconnection {
         let located = receiver.locate(y);
         for (t, other) in out.iter_mut().zip(others) {
             *t = located
-                .and_then(|l| reconnect_located(&l, y, other).ok())
+                .and_then(|l| {
+                    let target = reconnect_from(&l, y, receiver, other).ok()?;
+                    Some(target * pose_jacobian(y, receiver, other).ok()?)
+                })
                 .unwrap_or(0.0);
         }
+    }
+}
+
+/// [`reconnect`] as the shift from `src` to `dst`: `y = x` with [`pose_jacobian`].
+pub(crate) fn reconnect_shifted(
+    x: &SssSample,
+    src: &SssDomain,
+    dst: &SssDomain,
+) -> Result<Shifted<SssSample>, Fail> {
+    let y = reconnect(x, dst)?;
+    let jacobian = pose_jacobian(x, src, dst)?;
+    Ok(Shifted { y, jacobian })
+}
+
+/// The Jacobian of reconnecting `x` from `src` to `dst`: 1 where both see the scene in one pose
+/// (x2 and x3 stay where they are). Where a moving object carried x2 from `src`'s pose to
+/// `dst`'s, its area is kept (the motion is rigid) but x3's solid angle at x2 changes: the
+/// light factor of [001 Eq. 11], as delayed reconnection's (`Degenerate` where it is not
+/// positive and finite).
+pub(crate) fn pose_jacobian(x: &SssSample, src: &SssDomain, dst: &SssDomain) -> Result<f32, Fail> {
+    if src.shares_pose(dst) {
+        return Ok(1.0);
+    }
+    let (from, to) = (src.locate_x2(x), dst.locate_x2(x));
+    let (Some(from), Some(to)) = (from, to) else {
+        return Err(Fail::Rejected);
+    };
+    let lights = &dst.scene().lights;
+    let jacobian = light_jacobian(lights, x.light(), x.x3(), from.position, to.position);
+    if jacobian > 0.0 && jacobian.is_finite() {
+        Ok(jacobian)
+    } else {
+        Err(Fail::Degenerate)
     }
 }
 
@@ -133,6 +174,22 @@ pub(crate) fn reconnect(x: &SssSample, dst: &SssDomain) -> Result<SssSample, Fai
 fn reconnect_with_target(x: &SssSample, dst: &SssDomain) -> Result<(SssSample, f32), Fail> {
     let located = dst.locate(x).ok_or(Fail::Rejected)?;
     reconnect_located(&located, x, dst).map(|target| (*x, target))
+}
+
+/// [`reconnect_located`] of `x` located in `src`: that location where `dst` shares its pose
+/// ([`SssDomain::shares_pose`]), else `x` located again in `dst` (a moving object carried its
+/// x2 from one frame's pose to the other's).
+fn reconnect_from(
+    located: &Located,
+    x: &SssSample,
+    src: &SssDomain,
+    dst: &SssDomain,
+) -> Result<f32, Fail> {
+    if src.shares_pose(dst) {
+        reconnect_located(located, x, dst)
+    } else {
+        reconnect_with_target(x, dst).map(|(_, target)| target)
+    }
 }
 
 /// [`reconnect`]'s checks of `x`, found where `located` says, into `dst`; `p̂_dst(x)` if they

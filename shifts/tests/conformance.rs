@@ -276,6 +276,25 @@ fn sequential_pair_conforms() {
     }
 }
 
+/// Across the two poses of a moving object (`passing`: the wax sphere moves and turns between
+/// frames 0 and 1), the shifts that reconnect at x2 carry it with the object and scale by the
+/// change of x3's solid angle, and stay bijections with reciprocal Jacobians and MIS weights
+/// that sum to one: checks 1, 2 and 4 on the sphere's temporal pairs (and its spatial pairs).
+#[test]
+fn shifts_conform_across_the_poses_of_a_moving_object() {
+    let fx = fixture("passing");
+    let sphere = fx.domain(1, 32, 32, 0).expect("the sphere at the centre");
+    assert!(!fx.domain(0, 32, 32, 0).unwrap().shares_pose(&sphere));
+    conforms_on("reconnection", &Reconnection, fx, POINTS);
+    conforms_on("delayed reconnection", &DelayedReconnection, fx, POINTS);
+    let hybrid = Hybrid::for_material(sphere.material());
+    conforms_on("hybrid", &hybrid, fx, POINTS);
+    for policy in [IndexPolicy::Exact, IndexPolicy::Deferred] {
+        let name = format!("inverting reconnection, {policy:?}");
+        conforms_on(&name, &InvertingReconnection { policy }, fx, POINTS);
+    }
+}
+
 /// Negative control: the hybrid that ignores the criterion on the offset path is not a bijection;
 /// the round trip (check 1) catches it on the bumpy scene, where both branches occur.
 #[test]

@@ -92,8 +92,10 @@ fn reference_matches_the_half_plane_integral_across_the_shadow_edge() {
                 .geometry
                 .closest_hit_on_object(&ray, plane)
                 .expect("plane below x1");
+            let position = scene.geometry.position(hit.prim, hit.bary);
             GPixel {
-                position: scene.geometry.position(hit.prim, hit.bary),
+                position,
+                previous: position,
                 geometric_normal: Vec3::Y,
                 shading_normal: Vec3::Y,
                 object: plane,

@@ -316,10 +316,11 @@ impl Session {
             return false;
         }
         self.scene.camera = camera;
-        let gbuffer = GBuffer::render(&self.scene, self.window - 1);
+        let scene = self.scene.at_frame(self.window - 1);
+        let gbuffer = GBuffer::render(&scene, self.window - 1);
         let settings = self.method.reference();
         let means = pt::render(
-            &self.scene,
+            &scene,
             &gbuffer,
             &settings,
             REFERENCE_SEED,

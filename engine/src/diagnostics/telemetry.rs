@@ -5,8 +5,6 @@
 //! diagnostics on the CPU backend. It only observes: no random number is drawn and no output
 //! changes (`engine/src/cpu.rs` tests the bits).
 
-use std::collections::HashMap;
-
 use restir::shift::Fail;
 use shifts::PixelReservoir;
 
@@ -113,20 +111,11 @@ impl Recorder {
 
     /// The telemetry, with the confidence and x2 sharing of the frame's final `reservoirs`.
     pub(crate) fn finish(mut self, reservoirs: &[PixelReservoir]) -> Telemetry {
-        let key = |r: &PixelReservoir| {
-            let b = r.y.bary();
-            let (object, prim) = (r.y.object(), r.y.prim());
-            (r.has_sample != 0).then_some((object, prim, b.x.to_bits(), b.y.to_bits()))
-        };
-        let mut holders: HashMap<(u32, u32, u32, u32), u32> = HashMap::new();
-        for k in reservoirs.iter().filter_map(key) {
-            *holders.entry(k).or_default() += 1;
-        }
         let t = &mut self.telemetry;
         for (i, r) in reservoirs.iter().enumerate() {
             t.confidence[i] = (r.has_sample != 0).then_some(r.confidence);
-            t.sharing[i] = key(r).map_or(0, |k| holders[&k]);
         }
+        t.sharing = crate::duplication::sharing(reservoirs);
         self.telemetry
     }
 }

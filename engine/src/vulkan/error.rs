@@ -57,6 +57,9 @@ pub enum VulkanError {
     Allocation(String),
     /// An environment setting of the backend has a value it does not know.
     BadSetting(String),
+    /// The scene of file `file` has a moving object, `object`: the device renders scenes at
+    /// rest (`sss::scene::motion`).
+    MovingScene { file: String, object: String },
 }
 
 impl fmt::Display for VulkanError {
@@ -130,6 +133,11 @@ impl fmt::Display for VulkanError {
             Self::Validation(message) => write!(f, "Vulkan validation error: {message}"),
             Self::Allocation(why) => write!(f, "allocating Vulkan device memory failed: {why}"),
             Self::BadSetting(why) => write!(f, "{why}"),
+            Self::MovingScene { file, object } => write!(
+                f,
+                "{file}: object {object:?} moves, and the Vulkan backend renders only scenes at \
+                 rest (run it with --backend cpu)"
+            ),
         }
     }
 }

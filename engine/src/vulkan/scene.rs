@@ -164,10 +164,12 @@ impl FrameParams {
 }
 
 impl GpuPixel {
-    /// The CPU's G-buffer entry (`None` where `valid` is 0).
+    /// The CPU's G-buffer entry (`None` where `valid` is 0); `previous` is `position`, the
+    /// device renders scenes at rest ([`GpuScene::upload`] refuses moving objects).
     pub fn to_cpu(&self) -> Option<GPixel> {
         (self.valid != 0).then(|| GPixel {
             position: Vec3::from_array(self.position),
+            previous: Vec3::from_array(self.position),
             geometric_normal: Vec3::from_array(self.geometric_normal),
             shading_normal: Vec3::from_array(self.shading_normal),
             object: self.object,
@@ -203,8 +205,15 @@ pub struct GpuScene {
 }
 
 impl GpuScene {
-    /// Uploads `scene`'s BVH, triangles, object materials, materials and lights.
+    /// Uploads `scene`'s BVH, triangles, object materials, materials and lights; a scene with
+    /// a moving object is refused.
     pub fn upload(context: &Context, scene: &Scene) -> Result<GpuScene, VulkanError> {
+        if let Some(object) = scene.moving_object() {
+            return Err(VulkanError::MovingScene {
+                file: scene.file.display().to_string(),
+                object: object.to_string(),
+            });
+        }
         let geometry = &scene.geometry;
         let mut triangles: Vec<GpuTriangle> = (0..geometry.triangle_count())
             .map(|prim| GpuTriangle {

@@ -13,7 +13,7 @@ use super::shaders::Shader;
 use crate::plan::Plan;
 use crate::stream::frame::{Finished, Frame};
 use crate::{PassSpec, PipelineError, Preset, RadiusRule, RunConfig};
-use shifts::preset::Pairs;
+use shifts::preset::{Duplication, Pairs};
 
 /// The device side of an `engine::Stream`.
 pub struct VulkanStream<'a> {
@@ -109,6 +109,13 @@ impl<'a> VulkanStream<'a> {
                 "preset `{}`: {} (reciprocal pairs) has no Vulkan kernel; use the CPU backend",
                 preset.name,
                 pass.label()
+            )));
+        }
+        if preset.duplication != Duplication::Ignored {
+            return Err(PipelineError::Config(format!(
+                "preset `{}`: duplication={} has no Vulkan kernel; use the CPU backend",
+                preset.name,
+                preset.duplication.name()
             )));
         }
         let plan = Plan::lower(preset);

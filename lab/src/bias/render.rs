@@ -138,6 +138,7 @@ pub fn reference_batches(
             "batches × spp_per_batch must not exceed 2³² samples per pixel",
         );
     }
+    let scene = &*scene.at_frame(frame);
     let gbuffer = GBuffer::render(scene, frame);
     let images: Vec<pt::SampleMeans> = batches
         .map(|b| {

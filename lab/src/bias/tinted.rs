@@ -51,4 +51,8 @@ impl Estimator for Tinted {
     fn reference(&self) -> PtSettings {
         self.method.reference()
     }
+
+    fn renders_motion(&self) -> bool {
+        self.method.renders_motion()
+    }
 }

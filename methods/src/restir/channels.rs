@@ -67,6 +67,12 @@ impl Estimator for Channels {
         None
     }
 
+    /// Streams pose the scene at each frame and evaluate temporal reuse's history in the
+    /// previous frame's pose (`engine::reuse::Previous`).
+    fn renders_motion(&self) -> bool {
+        true
+    }
+
     /// The three runs' last frames, merged; each run keeps only its last image.
     fn render(
         &self,

@@ -5,12 +5,13 @@
 
 use std::sync::OnceLock;
 
+use glam::Vec3;
 use restir::rng::{Stream, StreamKey};
 use restir::shift::{CandidateSampler, Domain};
 use shifts::{SssDomain, SssSample, Target};
 use sss::bssrdf::{BssrdfSample, EntryPoint, Probe, pick_hit};
 use sss::material::{Material, Translucent};
-use sss::scene::{GBuffer, Scene};
+use sss::scene::{Camera, GBuffer, Scene};
 
 /// Run seed of every test stream.
 pub const SEED: u64 = 0x5_1F75;
@@ -18,21 +19,27 @@ pub const SEED: u64 = 0x5_1F75;
 /// A built-in scene with the G-buffers of frames 0 and 1, and the target function `p̂` of its
 /// domains.
 pub struct Fixture {
+    /// The scene as loaded (its objects posed at frame 0).
     pub scene: Scene,
+    /// The scene posed at frames 0 and 1 (`Scene::at_frame`): the domains of frame `f` see
+    /// `posed[f]`, so a temporal pair of a moving object spans two poses.
+    pub posed: [Scene; 2],
     pub frames: [GBuffer; 2],
     pub target: Target,
 }
 
-/// The fixture of built-in scene `name` ("bumpy", "half-shadow" or "far-knot"), built once per
-/// test binary.
+/// The fixture of built-in scene `name` ("bumpy", "half-shadow", "far-knot" or "passing"),
+/// built once per test binary.
 pub fn fixture(name: &str) -> &'static Fixture {
     static BUMPY: OnceLock<Fixture> = OnceLock::new();
     static HALF_SHADOW: OnceLock<Fixture> = OnceLock::new();
     static FAR_KNOT: OnceLock<Fixture> = OnceLock::new();
+    static PASSING: OnceLock<Fixture> = OnceLock::new();
     let cell = match name {
         "bumpy" => &BUMPY,
         "half-shadow" => &HALF_SHADOW,
         "far-knot" => &FAR_KNOT,
+        "passing" => &PASSING,
         _ => panic!("no test fixture for scene {name}"),
     };
     cell.get_or_init(|| Fixture::new(name))
@@ -54,9 +61,17 @@ impl Fixture {
         if name == "bumpy" {
             scene.camera = scene.camera.with_resolution(160, 120);
         }
+        // The moving wax sphere of `passing` fills the view: its temporal pairs span its poses
+        // of frames 0 and 1.
+        if name == "passing" {
+            let (eye, target) = (Vec3::new(0.0, 1.1, 3.0), Vec3::new(-0.17, 0.6, 0.95));
+            scene.camera = Camera::new([64, 64], 12.0, [eye; 2], [target; 2], Vec3::Y, true);
+        }
+        let posed = [0, 1].map(|f| scene.at_frame(f).into_owned());
         let frames = [GBuffer::render(&scene, 0), GBuffer::render(&scene, 1)];
         Fixture {
             scene,
+            posed,
             frames,
             target,
         }
@@ -84,7 +99,7 @@ impl Fixture {
         }
         let (px, py) = (px as u32, py as u32);
         SssDomain::new(
-            &self.scene,
+            &self.posed[frame as usize],
             g.get(px, py)?,
             py * g.width + px,
             frame,

@@ -45,6 +45,10 @@ pub const BUILTIN: &[(&str, &str)] = &[
         "translucent plane, directional light, shadow exactly over x < 0 (analytic BSSRDF check)",
     ),
     (
+        "passing",
+        "the bumpy scene with a small wax sphere moving across in front of the object (moving objects, disocclusion)",
+    ),
+    (
         "far-knot",
         "fine thin torus knot 1000 units from the origin: re-traced probe chords miss x2 (deferred-index stress)",
     ),
@@ -76,6 +80,7 @@ pub fn source(name: &str) -> Option<&'static str> {
         "mfp-4" => include_str!("../../../scenes/mfp-4.toml"),
         "slab" => include_str!("../../../scenes/slab.toml"),
         "half-shadow" => include_str!("../../../scenes/half-shadow.toml"),
+        "passing" => include_str!("../../../scenes/passing.toml"),
         "far-knot" => include_str!("../../../scenes/far-knot.toml"),
         "ajax" => include_str!("../../../scenes/ajax.toml"),
         "ajax-many-lights" => include_str!("../../../scenes/ajax-many-lights.toml"),

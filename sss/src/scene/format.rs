@@ -106,6 +106,19 @@ pub struct ObjectDesc {
     pub asset: Option<String>,
     #[serde(default)]
     pub transform: TransformDesc,
+    /// Keyframed rigid motion along the frames (`motion::Keyframes`); absent: at rest.
+    pub motion: Option<Vec<KeyDesc>>,
+}
+
+/// `motion = [{ frame, translate, rotate }, …]`: the object's pose at `frame`, a rotation about
+/// its pivot (the centre of its placed bounds) and then a translation, both relative to where
+/// `transform` placed it.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KeyDesc {
+    pub frame: u32,
+    pub translate: Option<[f32; 3]>,
+    pub rotate: Option<RotateDesc>,
 }
 
 /// `transform = { translate, rotate, scale }`: scale, then rotate (about X, then Y, then Z, or

@@ -7,6 +7,7 @@ mod objects;
 mod shape;
 
 use std::path::Path;
+use std::sync::Arc;
 
 use geometry::limits::MAX_COORDINATE;
 use geometry::{Geometry, TriangleMesh};
@@ -16,6 +17,7 @@ use super::emitter_field::{DEFAULT_COLORS, EmitterField, MAX_DRAWS};
 use super::format::{CameraDesc, EmitterFieldDesc, LightDesc, ManyLightsDesc, SceneFile};
 use super::light::{Light, Lights};
 use super::many_lights::ManyLights;
+use super::motion::Motion;
 use super::parse::parse;
 use super::{Camera, Scene};
 use crate::InputError;
@@ -67,6 +69,7 @@ pub fn scene_from_toml(text: &str, origin: &Path) -> Result<Scene, InputError> {
     let Placed {
         objects,
         meshes,
+        keyframes,
         dropped: dropped_degenerate,
         ..
     } = placed;
@@ -88,13 +91,21 @@ pub fn scene_from_toml(text: &str, origin: &Path) -> Result<Scene, InputError> {
     let name = origin
         .file_stem()
         .map_or_else(|| "scene".to_string(), |s| s.to_string_lossy().into_owned());
+    let (geometry, motion) = if keyframes.iter().any(Option::is_some) {
+        let motion = Motion::new(meshes, keyframes);
+        (motion.geometry_at(0), Some(Arc::new(motion)))
+    } else {
+        (Arc::new(Geometry::new(&meshes)), None)
+    };
     Ok(Scene {
         name,
         file: origin.to_path_buf(),
         camera,
         materials,
         objects,
-        geometry: Geometry::new(&meshes).into(),
+        geometry,
+        motion,
+        posed_at: 0,
         lights,
         dropped_degenerate,
     })

@@ -11,9 +11,11 @@ mod gbuffer;
 mod light;
 mod load;
 mod many_lights;
+pub mod motion;
 mod parse;
 pub mod trajectory;
 
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -21,6 +23,7 @@ pub use camera::{Camera, FRAMES};
 pub use gbuffer::{GBuffer, GPixel, REPROJECTION_DEPTH_TOLERANCE, REPROJECTION_NORMAL_COSINE};
 pub use light::{DIRECTIONAL_DISTANCE, Light, LightSample, Lights};
 pub use many_lights::ManyLights;
+pub use motion::Motion;
 pub use trajectory::{Pose, Trajectory};
 
 use geometry::Geometry;
@@ -42,6 +45,10 @@ pub struct Object {
 /// in camera rays) unless the scene file adds objects with matching geometry; emissive objects
 /// are in both: geometry, and one light per triangle. A clone shares the geometry (a stream
 /// that moves the camera owns its scene: `engine::Stream`).
+///
+/// Objects may move ([`motion`]): `geometry` is then their pose at frame `posed_at`, and
+/// [`Scene::at_frame`] poses the scene at another frame. Whatever traces rays at frame `f`
+/// traces them in `scene.at_frame(f)`.
 #[derive(Clone)]
 pub struct Scene {
     /// The file stem of the scene file.
@@ -53,6 +60,10 @@ pub struct Scene {
     pub materials: Vec<Material>,
     pub objects: Vec<Object>,
     pub geometry: Arc<Geometry>,
+    /// The moving objects, `None` where nothing moves.
+    pub motion: Option<Arc<Motion>>,
+    /// The frame `geometry` is posed at (0 as loaded).
+    pub posed_at: u32,
     pub lights: Lights,
     /// Degenerate triangles (zero area, non-finite) removed from the objects' meshes.
     pub dropped_degenerate: usize,
@@ -98,6 +109,29 @@ impl Scene {
     /// [`Scene::WITH_ASSETS`] needs its assets ([`Scene::named`] returns the error).
     pub fn builtin(name: &str) -> Option<Scene> {
         Some(Scene::named(name)?.unwrap_or_else(|e| panic!("built-in scene {name}: {e}")))
+    }
+
+    /// The scene with its objects posed at `frame`: itself where nothing moves or it shows that
+    /// pose already ([`Motion::settled`]), else a clone with the geometry of `frame`
+    /// ([`Motion::geometry_at`]).
+    pub fn at_frame(&self, frame: u32) -> Cow<'_, Scene> {
+        match &self.motion {
+            Some(motion) if motion.settled(self.posed_at) != motion.settled(frame) => {
+                Cow::Owned(Scene {
+                    geometry: motion.geometry_at(frame),
+                    posed_at: frame,
+                    ..self.clone()
+                })
+            }
+            _ => Cow::Borrowed(self),
+        }
+    }
+
+    /// The first moving object's name, `None` where nothing moves: for the one-line refusal of
+    /// what renders only scenes at rest.
+    pub fn moving_object(&self) -> Option<&str> {
+        let object = self.motion.as_ref()?.moving_objects().next()?;
+        Some(&self.objects[object as usize].name)
     }
 
     pub fn material_of_object(&self, object: u32) -> &Material {

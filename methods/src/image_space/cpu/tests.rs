@@ -258,6 +258,7 @@ fn factorisation_matches_the_dipole_bssrdf() {
     let x1 = ExitPoint::new(Vec3::ZERO, n1, n1, view, 0, &material);
     let g1 = GPixel {
         position: Vec3::ZERO,
+        previous: Vec3::ZERO,
         geometric_normal: n1,
         shading_normal: n1,
         object: 0,

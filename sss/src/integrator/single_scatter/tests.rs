@@ -294,8 +294,10 @@ fn hit_below(scene: &Scene, object: u32, above: Vec3) -> GPixel {
         .geometry
         .closest_hit_on_object(&ray, object)
         .expect("a surface below");
+    let position = scene.geometry.position(hit.prim, hit.bary);
     GPixel {
-        position: scene.geometry.position(hit.prim, hit.bary),
+        position,
+        previous: position,
         geometric_normal: Vec3::Y,
         shading_normal: Vec3::Y,
         object,

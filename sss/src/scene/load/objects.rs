@@ -15,9 +15,12 @@ use glam::{Affine3A, Quat, Vec3};
 
 use super::{Ctx, within_coordinates};
 use crate::InputError;
-use crate::limits::{MAX_EMISSION, MAX_SCENE_TRIANGLES};
+use crate::limits::{MAX_EMISSION, MAX_FRAMES, MAX_SCENE_TRIANGLES};
 use crate::material::{Lambert, Material};
-use crate::scene::format::{MaterialDesc, ObjectDesc, RotateDesc, ScaleDesc, TransformDesc};
+use crate::scene::format::{
+    KeyDesc, MaterialDesc, ObjectDesc, RotateDesc, ScaleDesc, TransformDesc,
+};
+use crate::scene::motion::{Key, Keyframes};
 use crate::scene::{Object, assets};
 
 /// The scene's materials while objects are placed: the file's (by name, in file order) and the
@@ -34,6 +37,8 @@ pub(in crate::scene) struct Materials<'a> {
 pub(in crate::scene) struct Placed {
     pub objects: Vec<Object>,
     pub meshes: Vec<TriangleMesh>,
+    /// Per object, its motion (`None` at rest).
+    pub keyframes: Vec<Option<Keyframes>>,
     /// Degenerate triangles removed.
     pub dropped: usize,
     triangles: u64,
@@ -83,6 +88,7 @@ impl Placed {
         }
         self.objects.push(Object { name, material });
         self.meshes.push(mesh);
+        self.keyframes.push(None);
         Ok(())
     }
 }
@@ -107,6 +113,7 @@ impl Ctx<'_> {
         let mut placed = Placed::default();
         for (i, desc) in descs.iter().enumerate() {
             let field = format!("objects[{i}]");
+            let first = placed.objects.len();
             let source = self.source(desc, &field)?;
             let xf = self.transform(&desc.transform, &format!("{field}.transform"))?;
             let is_gltf = |path: &Path| {
@@ -138,8 +145,97 @@ impl Ctx<'_> {
                     ));
                 }
             }
+            if let Some(keys) = &desc.motion {
+                self.motion(
+                    keys,
+                    &format!("{field}.motion"),
+                    first,
+                    &mut placed,
+                    materials,
+                )?;
+            }
         }
         Ok(placed)
+    }
+
+    /// The `motion` of the objects `first..` that one `[[objects]]` entry placed: its keys
+    /// checked, one pivot (the centre of their bounds) for all of them. Refused: no key, frames
+    /// not increasing or past [`MAX_FRAMES`], an emissive object, a pose past
+    /// [`MAX_COORDINATE`].
+    fn motion(
+        &self,
+        descs: &[KeyDesc],
+        field: &str,
+        first: usize,
+        placed: &mut Placed,
+        materials: &Materials,
+    ) -> Result<(), InputError> {
+        if descs.is_empty() {
+            return Err(self.err(field, "[]", "needs at least one key"));
+        }
+        if descs.len() as u64 > MAX_FRAMES as u64 {
+            return Err(self.err(
+                field,
+                format!("{} keys", descs.len()),
+                format!("more keys than frames ({MAX_FRAMES})"),
+            ));
+        }
+        for object in &placed.objects[first..] {
+            let material = &materials.list[object.material as usize];
+            if matches!(material, Material::Lambert(l) if l.is_emitter()) {
+                return Err(self.err(
+                    field,
+                    format!("{:?}", object.name),
+                    "an emissive object cannot move (its triangles are lights, placed once)",
+                ));
+            }
+        }
+        let (lo, hi) = placed.meshes[first..]
+            .iter()
+            .map(TriangleMesh::bounds)
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (a, b)| {
+                (lo.min(a), hi.max(b))
+            });
+        let pivot = 0.5 * (lo + hi);
+        let reach = pivot.abs().max_element() + (hi - lo).length();
+        let mut keys: Vec<Key> = Vec::with_capacity(descs.len());
+        for (k, desc) in descs.iter().enumerate() {
+            let at = |member: &str| format!("{field}[{k}].{member}");
+            if let Some(before) = keys.last().map(|key| key.frame)
+                && desc.frame <= before
+            {
+                return Err(self.err(
+                    at("frame"),
+                    desc.frame.to_string(),
+                    format!("must be greater than the previous key's frame {before}"),
+                ));
+            }
+            if desc.frame >= MAX_FRAMES {
+                return Err(self.err(
+                    at("frame"),
+                    desc.frame.to_string(),
+                    format!("must be below {MAX_FRAMES}"),
+                ));
+            }
+            let translation = self.vec3(&at("translate"), desc.translate.unwrap_or([0.0; 3]))?;
+            if reach + translation.abs().max_element() > MAX_COORDINATE {
+                return Err(self.err(
+                    at("translate"),
+                    format!("{translation}"),
+                    format!("moves a vertex beyond |coordinate| ≤ {MAX_COORDINATE:e}"),
+                ));
+            }
+            keys.push(Key {
+                frame: desc.frame,
+                rotation: self.rotation(desc.rotate, &at("rotate"))?,
+                translation,
+            });
+        }
+        let keyframes = Keyframes::new(pivot, keys);
+        for slot in &mut placed.keyframes[first..] {
+            *slot = Some(keyframes.clone());
+        }
+        Ok(())
     }
 
     /// The id of the file's material `name`, or an error at `{field}.material` listing them.

@@ -5,6 +5,7 @@ use crate::profile::ScaleFit;
 use crate::scene::Object;
 use crate::scene::Scene;
 use crate::scene::format::{RotateDesc, ScaleDesc, TransformDesc};
+use glam::Affine3A;
 
 const ORIGIN: &str = "tests/minimal.toml";
 
@@ -461,4 +462,64 @@ fn gltf_objects_keep_or_override_the_files_materials() {
     let missing = edit("material = \"wax\"\nshape", "shape");
     assert_rejected(&missing, "objects[0].material", "(missing)");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `motion` keys load as keyframes about the object's pivot (its placed bounds' centre); bad
+/// keys are refused in one line naming the key: none, frames not increasing or too large, a
+/// pose past the coordinate limit, an emissive object that moves. Control: the same keys on a
+/// scene without motion load it at rest.
+#[test]
+fn motion_keys_load_and_bad_keys_are_rejected() {
+    let ball = r#"shape = { type = "sphere", radius = 0.5 }"#;
+    let moving = |keys: &str| {
+        edit(
+            ball,
+            &format!("{ball}\ntransform = {{ translate = [1.0, 0.0, 0.0] }}\nmotion = {keys}"),
+        )
+    };
+    let scene = load(&moving(
+        "[{ frame = 0 }, { frame = 10, translate = [0.0, 2.0, 0.0], rotate = { axis = [0.0, 0.0, 1.0], degrees = 120.0 } }]",
+    ))
+    .unwrap();
+    let motion = scene.motion.as_ref().expect("the ball moves");
+    assert_eq!(scene.moving_object(), Some("ball"));
+    // Halfway: up by 1 and turned 60° about z through the pivot (1, 0, 0); the pivot's
+    // neighbour one unit along +x turns 60° toward +y.
+    let at5 = motion.transform(0, 5);
+    assert!(
+        (at5.transform_point3(Vec3::new(1.0, 0.0, 0.0)) - Vec3::new(1.0, 1.0, 0.0)).length() < 1e-5
+    );
+    let turned = at5.transform_point3(Vec3::new(2.0, 0.0, 0.0));
+    let want = Vec3::new(1.5, 1.0 + 0.75f32.sqrt(), 0.0);
+    assert!((turned - want).length() < 1e-5, "{turned}");
+    assert_eq!(motion.transform(0, 0), Affine3A::IDENTITY);
+    assert!(load(MINIMAL).unwrap().motion.is_none());
+
+    assert_rejected(&moving("[]"), "objects[0].motion", "[]");
+    assert_rejected(
+        &moving("[{ frame = 3 }, { frame = 3 }]"),
+        "objects[0].motion[1].frame",
+        "3",
+    );
+    assert_rejected(
+        &moving("[{ frame = 70000 }]"),
+        "objects[0].motion[0].frame",
+        "70000",
+    );
+    assert_rejected(
+        &moving("[{ frame = 0, translate = [1e9, 0.0, 0.0] }]"),
+        "objects[0].motion[0].translate",
+        "1000000000",
+    );
+    assert_rejected(
+        &moving("[{ frame = 0, rotate = { axis = [0.0, 0.0, 0.0], degrees = 10.0 } }]"),
+        "objects[0].motion[0].rotate.axis",
+        "0",
+    );
+    let glowing = moving("[{ frame = 0 }]").replace(
+        "albedo = [0.8, 0.6, 0.4]\nmfp = [0.1, 0.05, 0.02]",
+        "albedo = [0.8, 0.6, 0.4]\nmfp = [0.1, 0.05, 0.02]\n\n[[materials]]\nname = \"lamp\"\ntype = \"lambert\"\nalbedo = [1.0, 1.0, 1.0]\nemission = [1.0, 1.0, 1.0]",
+    );
+    let glowing = glowing.replacen("material = \"wax\"", "material = \"lamp\"", 1);
+    assert_rejected(&glowing, "objects[0].motion", "ball");
 }

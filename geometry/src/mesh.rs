@@ -90,6 +90,16 @@ impl TriangleMesh {
             })
     }
 
+    /// The bounds of all of `meshes` together; `(+∞, −∞)` when they are empty.
+    pub fn bounds_of(meshes: &[TriangleMesh]) -> (Vec3, Vec3) {
+        meshes
+            .iter()
+            .map(TriangleMesh::bounds)
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (a, b)| {
+                (lo.min(a), hi.max(b))
+            })
+    }
+
     pub fn triangle_count(&self) -> usize {
         self.indices.len()
     }

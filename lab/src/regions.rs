@@ -245,17 +245,22 @@ fn occluded(scene: &Scene, g: &GPixel, x3: Vec3) -> bool {
 mod tests {
     use super::*;
 
+    /// Built-in scene `name` at `width × height`.
+    fn builtin(name: &str, width: u32, height: u32) -> Scene {
+        let scene = Scene::builtin(name).expect("built-in");
+        Scene {
+            camera: scene.camera.with_resolution(width, height),
+            ..scene
+        }
+    }
+
     /// `half-shadow` (directional light straight down, occluder over x < 0): the classification
     /// matches the analytic shadow edge x = 0 for every translucent pixel farther than 1e-3 from
     /// it, and a directional light has no penumbra. Negative control: the same scene without
     /// its occluder must classify the x < 0 half as lit, i.e. fail the same check.
     #[test]
     fn half_shadow_matches_analytic_edge() {
-        let scene = Scene::builtin("half-shadow").expect("built-in");
-        let scene = Scene {
-            camera: scene.camera.with_resolution(24, 24),
-            ..scene
-        };
+        let scene = builtin("half-shadow", 24, 24);
         let gbuffer = GBuffer::render(&scene, 15);
         let regions = Regions::classify(&scene, &gbuffer, 7);
         assert_eq!(
@@ -311,11 +316,7 @@ mod tests {
     /// all present; they partition the translucent pixels; and Lambert pixels are in no region.
     #[test]
     fn bumpy_regions_partition_the_object() {
-        let scene = Scene::builtin("bumpy").expect("built-in");
-        let scene = Scene {
-            camera: scene.camera.with_resolution(40, 30),
-            ..scene
-        };
+        let scene = builtin("bumpy", 40, 30);
         let gbuffer = GBuffer::render(&scene, 15);
         let regions = Regions::classify(&scene, &gbuffer, 3);
         let counts = Region::VISIBILITY.map(|r| regions.count(r));
@@ -343,11 +344,7 @@ mod tests {
     /// pixels at 40×30, 3% at 256×192).
     #[test]
     fn disoccluded_pixels_are_those_temporal_reuse_cannot_reproject() {
-        let scene = Scene::builtin("bumpy").expect("built-in");
-        let scene = Scene {
-            camera: scene.camera.with_resolution(40, 30),
-            ..scene
-        };
+        let scene = builtin("bumpy", 40, 30);
         let gbuffer = GBuffer::render(&scene, 15);
         let regions = Regions::classify(&scene, &gbuffer, 3);
         let previous = GBuffer::render(&scene, 14);

@@ -73,12 +73,7 @@ pub fn scene_from_toml(text: &str, origin: &Path) -> Result<Scene, InputError> {
         dropped: dropped_degenerate,
         ..
     } = placed;
-    let (lo, hi) = meshes
-        .iter()
-        .map(TriangleMesh::bounds)
-        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (a, b)| {
-            (lo.min(a), hi.max(b))
-        });
+    let (lo, hi) = TriangleMesh::bounds_of(&meshes);
     let scene_radius = (0.5 * (hi - lo).length()).max(f32::MIN_POSITIVE);
     let total_power: f32 = lights.iter().map(|l| l.power(scene_radius)).sum();
     let lights = Lights::new(lights, scene_radius).ok_or_else(|| {

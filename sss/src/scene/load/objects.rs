@@ -190,12 +190,7 @@ impl Ctx<'_> {
                 ));
             }
         }
-        let (lo, hi) = placed.meshes[first..]
-            .iter()
-            .map(TriangleMesh::bounds)
-            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (a, b)| {
-                (lo.min(a), hi.max(b))
-            });
+        let (lo, hi) = TriangleMesh::bounds_of(&placed.meshes[first..]);
         let pivot = 0.5 * (lo + hi);
         let reach = pivot.abs().max_element() + (hi - lo).length();
         let mut keys: Vec<Key> = Vec::with_capacity(descs.len());
